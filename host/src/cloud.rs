@@ -1,0 +1,146 @@
+//! Point clouds and their validation.
+
+use nalgebra::{Point3, Vector3};
+use thiserror::Error;
+
+/// Why a cloud was rejected.
+#[derive(Debug, Error, PartialEq)]
+pub enum CloudError {
+    /// No points at all.
+    #[error("{0} cloud is empty")]
+    Empty(String),
+    /// A NaN or infinite coordinate.
+    #[error("{name} cloud has a non-finite coordinate at point {index} ({value})")]
+    NonFinite {
+        /// Which cloud.
+        name: String,
+        /// Index of the offending point.
+        index: usize,
+        /// The offending value.
+        value: f64,
+    },
+    /// More points than a limit allows.
+    #[error("{name} cloud has {count} points, more than the limit of {limit}")]
+    TooLarge {
+        /// Which cloud.
+        name: String,
+        /// Points in the cloud.
+        count: usize,
+        /// The limit.
+        limit: usize,
+    },
+    /// All points coincide: no extent to register against.
+    #[error("{0} cloud has no extent (all points coincide)")]
+    Degenerate(String),
+}
+
+/// A validated, non-empty cloud of finite points.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Cloud {
+    points: Vec<Point3<f64>>,
+}
+
+/// Largest cloud the tool accepts (memory and run-time guard).
+pub const MAX_POINTS: usize = 10_000_000;
+
+impl Cloud {
+    /// Validate `points` (named `name` in errors): non-empty, finite, not all coincident.
+    pub fn new(name: &str, points: Vec<Point3<f64>>) -> Result<Self, CloudError> {
+        if points.is_empty() {
+            return Err(CloudError::Empty(name.to_string()));
+        }
+        if points.len() > MAX_POINTS {
+            return Err(CloudError::TooLarge {
+                name: name.into(),
+                count: points.len(),
+                limit: MAX_POINTS,
+            });
+        }
+        for (index, p) in points.iter().enumerate() {
+            for &value in p.coords.iter() {
+                if !value.is_finite() {
+                    return Err(CloudError::NonFinite {
+                        name: name.into(),
+                        index,
+                        value,
+                    });
+                }
+            }
+        }
+        let c = Cloud { points };
+        if c.diagonal() == 0.0 && c.len() > 1 {
+            return Err(CloudError::Degenerate(name.to_string()));
+        }
+        Ok(c)
+    }
+
+    /// The points.
+    pub fn points(&self) -> &[Point3<f64>] {
+        &self.points
+    }
+
+    /// Take the points out.
+    pub fn into_points(self) -> Vec<Point3<f64>> {
+        self.points
+    }
+
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    /// Always false for a validated cloud (kept for API symmetry).
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// Mean of the points.
+    pub fn centroid(&self) -> Point3<f64> {
+        centroid(&self.points)
+    }
+
+    /// Length of the axis-aligned bounding box's diagonal.
+    pub fn diagonal(&self) -> f64 {
+        bbox_diagonal(&self.points)
+    }
+}
+
+/// Mean of a non-empty slice of points.
+pub fn centroid(points: &[Point3<f64>]) -> Point3<f64> {
+    let sum: Vector3<f64> = points.iter().map(|p| p.coords).sum();
+    Point3::from(sum / points.len() as f64)
+}
+
+/// Axis-aligned bounding-box diagonal of a slice of points (0 if empty).
+pub fn bbox_diagonal(points: &[Point3<f64>]) -> f64 {
+    if points.is_empty() {
+        return 0.0;
+    }
+    let mut lo = points[0].coords;
+    let mut hi = lo;
+    for p in points {
+        lo = lo.inf(&p.coords);
+        hi = hi.sup(&p.coords);
+    }
+    (hi - lo).norm()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rejects_bad_clouds() {
+        assert_eq!(
+            Cloud::new("scan", vec![]),
+            Err(CloudError::Empty("scan".into()))
+        );
+        let e = Cloud::new("model", vec![Point3::new(0.0, f64::NAN, 0.0)]).unwrap_err();
+        assert!(e.to_string().contains("non-finite"), "{e}");
+        let e = Cloud::new("m", vec![Point3::new(1.0, 1.0, 1.0); 3]).unwrap_err();
+        assert_eq!(e, CloudError::Degenerate("m".into()));
+        let c = Cloud::new("m", vec![Point3::origin(), Point3::new(3.0, 4.0, 0.0)]).unwrap();
+        assert_eq!(c.diagonal(), 5.0);
+        assert_eq!(c.centroid(), Point3::new(1.5, 2.0, 0.0));
+    }
+}

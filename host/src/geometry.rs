@@ -1,0 +1,256 @@
+//! Similarity poses and the Euler-angle convention.
+//!
+//! A [`Pose`] maps a scan point `m` to the model frame: `d = s R m + T`.
+//! Rotations use `R = Rz(psi) * Ry(theta) * Rx(phi)` (intrinsic z-y'-x'', the
+//! paper's (phi, theta, psi) about x, y, z). The 7-parameter form used by the
+//! particle filter is `[a, b, c, s, phi, theta, psi]` with `T = [a, b, c]` and
+//! angles in radians.
+
+use nalgebra::{Matrix3, Matrix4, Point3, Rotation3, Vector3};
+use serde::{Deserialize, Serialize};
+
+/// Index of each parameter in a [`Params`] vector.
+pub mod param {
+    /// Translation along x.
+    pub const A: usize = 0;
+    /// Translation along y.
+    pub const B: usize = 1;
+    /// Translation along z.
+    pub const C: usize = 2;
+    /// Scale factor.
+    pub const S: usize = 3;
+    /// Rotation about x [rad].
+    pub const PHI: usize = 4;
+    /// Rotation about y [rad].
+    pub const THETA: usize = 5;
+    /// Rotation about z [rad].
+    pub const PSI: usize = 6;
+    /// Names, in order, for tables.
+    pub const NAMES: [&str; 7] = ["tx", "ty", "tz", "scale", "phi", "theta", "psi"];
+}
+
+/// The 7 registration parameters `[a, b, c, s, phi, theta, psi]` (angles in radians).
+pub type Params = [f64; 7];
+
+/// A similarity transform `x -> s R x + T` taking scan coordinates to model coordinates.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pose {
+    /// Scale factor `s` (> 0).
+    pub scale: f64,
+    /// Proper rotation `R` (det = +1).
+    pub rotation: Matrix3<f64>,
+    /// Translation `T`.
+    pub translation: Vector3<f64>,
+}
+
+impl Default for Pose {
+    fn default() -> Self {
+        Self::identity()
+    }
+}
+
+/// `R = Rz(psi) Ry(theta) Rx(phi)`.
+pub fn rotation_from_euler(phi: f64, theta: f64, psi: f64) -> Matrix3<f64> {
+    let rx = Rotation3::from_axis_angle(&Vector3::x_axis(), phi);
+    let ry = Rotation3::from_axis_angle(&Vector3::y_axis(), theta);
+    let rz = Rotation3::from_axis_angle(&Vector3::z_axis(), psi);
+    (rz * ry * rx).into_inner()
+}
+
+/// Inverse of [`rotation_from_euler`]: `(phi, theta, psi)` with theta in [-pi/2, pi/2].
+pub fn euler_from_rotation(r: &Matrix3<f64>) -> (f64, f64, f64) {
+    let theta = (-r[(2, 0)]).clamp(-1.0, 1.0).asin();
+    if r[(2, 0)].abs() < 1.0 - 1e-12 {
+        let phi = r[(2, 1)].atan2(r[(2, 2)]);
+        let psi = r[(1, 0)].atan2(r[(0, 0)]);
+        (phi, theta, psi)
+    } else {
+        // Gimbal lock: only phi -/+ psi is defined; put it all in phi.
+        let psi = 0.0;
+        let phi = (-r[(1, 2)]).atan2(r[(1, 1)]);
+        (phi, theta, psi)
+    }
+}
+
+/// Wrap an angle to (-pi, pi].
+pub fn wrap_angle(a: f64) -> f64 {
+    let two_pi = std::f64::consts::TAU;
+    let mut x = a % two_pi;
+    if x <= -std::f64::consts::PI {
+        x += two_pi;
+    } else if x > std::f64::consts::PI {
+        x -= two_pi;
+    }
+    x
+}
+
+impl Pose {
+    /// The identity transform.
+    pub fn identity() -> Self {
+        Self {
+            scale: 1.0,
+            rotation: Matrix3::identity(),
+            translation: Vector3::zeros(),
+        }
+    }
+
+    /// Build from the 7 parameters `[a, b, c, s, phi, theta, psi]`.
+    pub fn from_params(p: &Params) -> Self {
+        Self {
+            scale: p[param::S],
+            rotation: rotation_from_euler(p[param::PHI], p[param::THETA], p[param::PSI]),
+            translation: Vector3::new(p[param::A], p[param::B], p[param::C]),
+        }
+    }
+
+    /// The 7 parameters `[a, b, c, s, phi, theta, psi]`.
+    pub fn to_params(&self) -> Params {
+        let (phi, theta, psi) = euler_from_rotation(&self.rotation);
+        let t = self.translation;
+        [t.x, t.y, t.z, self.scale, phi, theta, psi]
+    }
+
+    /// Euler angles `[phi, theta, psi]` in degrees.
+    pub fn euler_deg(&self) -> [f64; 3] {
+        let (phi, theta, psi) = euler_from_rotation(&self.rotation);
+        [phi.to_degrees(), theta.to_degrees(), psi.to_degrees()]
+    }
+
+    /// Apply to a point: `s R p + T`.
+    #[inline]
+    pub fn apply(&self, p: &Point3<f64>) -> Point3<f64> {
+        Point3::from(self.scale * (self.rotation * p.coords) + self.translation)
+    }
+
+    /// Apply to every point of a slice.
+    pub fn apply_all(&self, pts: &[Point3<f64>]) -> Vec<Point3<f64>> {
+        pts.iter().map(|p| self.apply(p)).collect()
+    }
+
+    /// `self ∘ other`: first `other`, then `self`.
+    pub fn compose(&self, other: &Pose) -> Pose {
+        Pose {
+            scale: self.scale * other.scale,
+            rotation: self.rotation * other.rotation,
+            translation: self.scale * (self.rotation * other.translation) + self.translation,
+        }
+    }
+
+    /// The inverse similarity.
+    pub fn inverse(&self) -> Pose {
+        let rt = self.rotation.transpose();
+        Pose {
+            scale: 1.0 / self.scale,
+            rotation: rt,
+            translation: -(rt * self.translation) / self.scale,
+        }
+    }
+
+    /// Homogeneous 4x4 matrix `[[sR, T], [0, 1]]`.
+    pub fn matrix4(&self) -> Matrix4<f64> {
+        let mut m = Matrix4::identity();
+        m.fixed_view_mut::<3, 3>(0, 0)
+            .copy_from(&(self.scale * self.rotation));
+        m.fixed_view_mut::<3, 1>(0, 3).copy_from(&self.translation);
+        m
+    }
+
+    /// Angle of the relative rotation `R_a^T R_b` [rad].
+    pub fn rotation_angle_to(&self, other: &Pose) -> f64 {
+        let rel = self.rotation.transpose() * other.rotation;
+        ((rel.trace() - 1.0) / 2.0).clamp(-1.0, 1.0).acos()
+    }
+
+    /// Rows of the rotation matrix, for JSON.
+    pub fn rotation_rows(&self) -> [[f64; 3]; 3] {
+        let r = &self.rotation;
+        [
+            [r[(0, 0)], r[(0, 1)], r[(0, 2)]],
+            [r[(1, 0)], r[(1, 1)], r[(1, 2)]],
+            [r[(2, 0)], r[(2, 1)], r[(2, 2)]],
+        ]
+    }
+
+    /// The JSON-facing record of this pose.
+    pub fn record(&self) -> PoseRecord {
+        PoseRecord {
+            scale: self.scale,
+            rotation: self.rotation_rows(),
+            translation: [self.translation.x, self.translation.y, self.translation.z],
+            euler_deg: self.euler_deg(),
+        }
+    }
+
+    /// Rebuild from a JSON record (the rotation matrix wins over the angles).
+    pub fn from_record(r: &PoseRecord) -> Pose {
+        let m = Matrix3::from_fn(|i, j| r.rotation[i][j]);
+        Pose {
+            scale: r.scale,
+            rotation: m,
+            translation: Vector3::from(r.translation),
+        }
+    }
+}
+
+/// A pose as written to JSON: the keys every `pficp` command uses.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct PoseRecord {
+    /// Scale factor.
+    pub scale: f64,
+    /// Rotation matrix, row-major.
+    pub rotation: [[f64; 3]; 3],
+    /// Translation.
+    pub translation: [f64; 3],
+    /// `[phi, theta, psi]` in degrees.
+    pub euler_deg: [f64; 3],
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn euler_round_trip() {
+        for &(a, b, c) in &[
+            (0.1, -0.3, 2.0),
+            (-0.5143, -0.3246, -0.5143),
+            (3.0, 1.2, -3.0),
+        ] {
+            let r = rotation_from_euler(a, b, c);
+            let (x, y, z) = euler_from_rotation(&r);
+            assert!((x - a).abs() < 1e-12 && (y - b).abs() < 1e-12 && (z - c).abs() < 1e-12);
+            assert!((r.determinant() - 1.0).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn convention_is_z_then_y_then_x() {
+        // A pure psi rotation turns x into y.
+        let r = rotation_from_euler(0.0, 0.0, std::f64::consts::FRAC_PI_2);
+        let v = r * Vector3::x();
+        assert!((v - Vector3::y()).norm() < 1e-12);
+        // R = Rz Ry Rx: applied to a vector, Rx acts first.
+        let r = rotation_from_euler(0.3, 0.2, 0.1);
+        let rx = rotation_from_euler(0.3, 0.0, 0.0);
+        let ry = rotation_from_euler(0.0, 0.2, 0.0);
+        let rz = rotation_from_euler(0.0, 0.0, 0.1);
+        assert!((r - rz * ry * rx).norm() < 1e-12);
+    }
+
+    #[test]
+    fn compose_and_inverse() {
+        let p = Pose::from_params(&[0.5, -1.0, 2.0, 0.7, 0.2, -0.4, 1.1]);
+        let q = Pose::from_params(&[-0.3, 0.1, 0.0, 1.3, -0.1, 0.3, -0.7]);
+        let x = Point3::new(0.3, -2.0, 1.5);
+        assert!((p.compose(&q).apply(&x) - p.apply(&q.apply(&x))).norm() < 1e-12);
+        assert!((p.inverse().apply(&p.apply(&x)) - x).norm() < 1e-12);
+        let back = Pose::from_params(&p.to_params());
+        assert!((back.matrix4() - p.matrix4()).norm() < 1e-12);
+    }
+
+    #[test]
+    fn wrap() {
+        assert!((wrap_angle(3.0 * std::f64::consts::PI) - std::f64::consts::PI).abs() < 1e-12);
+        assert!((wrap_angle(-0.5) + 0.5).abs() < 1e-15);
+    }
+}

@@ -1,0 +1,14 @@
+//! PF-ICP host library: point-cloud registration in f64.
+//!
+//! Entry points, one line each:
+//! - [`pf_icp::register`]: the paper's PF-ICP (k-means start, covariance, particle filter).
+//! - [`icp::icp`]: ICP (Algorithm 1), with optional Welsch or Cauchy robust weights.
+//! - [`sparse_icp::sparse_icp`] and [`em_icp::em_icp`]: the other baselines.
+//! - [`datasets`]: the built-in models 1 to 3 and their scans.
+//! - [`io`]: PLY, XYZ and CSV files.
+#![warn(missing_docs)]
+
+pub mod cloud;
+pub mod geometry;
+pub mod nn;
+pub mod svd_match;
