@@ -10,5 +10,6 @@
 
 pub mod cloud;
 pub mod geometry;
+pub mod icp;
 pub mod nn;
 pub mod svd_match;
