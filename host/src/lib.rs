@@ -9,7 +9,15 @@
 #![warn(missing_docs)]
 
 pub mod cloud;
+pub mod covariance;
+pub mod datasets;
+pub mod em_icp;
 pub mod geometry;
+pub mod hessian;
 pub mod icp;
+pub mod init;
+pub mod kmeans;
 pub mod nn;
+pub mod sparse_icp;
 pub mod svd_match;
+pub mod io;
