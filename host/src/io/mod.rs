@@ -1,0 +1,383 @@
+//! Point-cloud files: PLY (ascii and binary little endian), XYZ text and CSV.
+//!
+//! [`read_cloud`] picks the reader from the file extension and validates the
+//! points into a [`Cloud`]; [`write_cloud`] writes raw points in a chosen
+//! [`Format`]. The byte-level functions [`read_points_from_bytes`] and
+//! [`write_points_to_bytes`] do the work and never touch the file system.
+//! Every error is an [`IoError`] whose one-line message names the file.
+
+mod ply;
+mod text;
+
+use std::path::Path;
+
+use nalgebra::Point3;
+use thiserror::Error;
+
+use crate::cloud::{Cloud, CloudError};
+
+/// A point-cloud file format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// PLY, `format ascii 1.0`.
+    PlyAscii,
+    /// PLY, `format binary_little_endian 1.0` (written with `double` x y z).
+    PlyBinary,
+    /// Whitespace-separated `x y z` per line; `#` starts a comment.
+    Xyz,
+    /// Comma-separated values with an optional header line.
+    Csv,
+}
+
+/// What is wrong with the contents of a file (the file name is added by [`IoError`]).
+#[derive(Debug, Error, PartialEq)]
+pub enum ParseError {
+    /// The first line is not `ply`.
+    #[error("not a PLY file (first line is not `ply`)")]
+    NotPly,
+    /// The header never ends.
+    #[error("malformed PLY header: missing `end_header` line")]
+    MissingEndHeader,
+    /// No `format` line before `end_header`.
+    #[error("malformed PLY header: missing `format` line")]
+    MissingFormat,
+    /// A PLY format other than ascii and binary little endian.
+    #[error("unsupported PLY format `{0}` (only ascii and binary_little_endian are supported)")]
+    UnsupportedFormat(String),
+    /// A header line that is not understood.
+    #[error("malformed PLY header at line {line}: `{text}`")]
+    BadHeaderLine {
+        /// 1-based line number.
+        line: usize,
+        /// The line (possibly shortened).
+        text: String,
+    },
+    /// An `element` line whose count is not a non-negative integer.
+    #[error("malformed PLY header at line {line}: bad element count `{count}`")]
+    BadElementCount {
+        /// 1-based line number.
+        line: usize,
+        /// The count as written.
+        count: String,
+    },
+    /// A property type that is not one of the PLY scalar types.
+    #[error("malformed PLY header at line {line}: unsupported property type `{ty}`")]
+    UnsupportedType {
+        /// 1-based line number.
+        line: usize,
+        /// The type as written.
+        ty: String,
+    },
+    /// No `vertex` element.
+    #[error("malformed PLY header: no `vertex` element")]
+    MissingVertexElement,
+    /// The vertex element lacks one of x, y, z.
+    #[error("malformed PLY header: vertex element has no `{0}` property")]
+    MissingProperty(&'static str),
+    /// The vertex element has a list property.
+    #[error("malformed PLY header: list property `{0}` in the vertex element is unsupported")]
+    ListInVertex(String),
+    /// The body ends before all declared entries of an element were read.
+    #[error("truncated PLY body: read {read} of {declared} declared `{element}` entries")]
+    Truncated {
+        /// The element being read (`vertex` for the points).
+        element: String,
+        /// Entries read completely.
+        read: usize,
+        /// Entries declared in the header.
+        declared: usize,
+    },
+    /// A field that is not a number.
+    #[error("malformed number `{text}` at line {line}")]
+    BadNumber {
+        /// 1-based line number.
+        line: usize,
+        /// The field (possibly shortened).
+        text: String,
+    },
+    /// A line with too few fields.
+    #[error("too few columns at line {line}: found {found}, need at least {needed}")]
+    TooFewColumns {
+        /// 1-based line number.
+        line: usize,
+        /// Fields on the line.
+        found: usize,
+        /// Fields needed.
+        needed: usize,
+    },
+}
+
+/// Why a point-cloud file could not be read or written. Messages are one line
+/// and start with (or contain) the file name.
+#[derive(Debug, Error)]
+pub enum IoError {
+    /// The file could not be opened or read.
+    #[error("cannot read {file}: {source}")]
+    Read {
+        /// The file.
+        file: String,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// The file could not be created or written.
+    #[error("cannot write {file}: {source}")]
+    Write {
+        /// The file.
+        file: String,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// The extension does not name a known format.
+    #[error("{file}: unknown point-cloud format {ext} (expected .ply, .xyz, .txt, .pts or .csv)")]
+    UnknownFormat {
+        /// The file.
+        file: String,
+        /// The extension as written (or `(no extension)`).
+        ext: String,
+    },
+    /// The contents are malformed.
+    #[error("{file}: {problem}")]
+    Parse {
+        /// The file.
+        file: String,
+        /// What is wrong.
+        problem: ParseError,
+    },
+    /// The points were read but do not form a valid cloud (empty, NaN, ...).
+    #[error("{file}: {source}")]
+    Cloud {
+        /// The file.
+        file: String,
+        /// The validation error.
+        source: CloudError,
+    },
+}
+
+/// The format for a path's extension (case-insensitive): `.ply` gives
+/// [`Format::PlyBinary`] (readers detect the flavour from the header),
+/// `.xyz`, `.txt` and `.pts` give [`Format::Xyz`], `.csv` gives [`Format::Csv`].
+pub fn format_from_path(path: &Path) -> Result<Format, IoError> {
+    let ext = path.extension().map(|e| e.to_string_lossy().to_lowercase());
+    match ext.as_deref() {
+        Some("ply") => Ok(Format::PlyBinary),
+        Some("xyz" | "txt" | "pts") => Ok(Format::Xyz),
+        Some("csv") => Ok(Format::Csv),
+        other => Err(IoError::UnknownFormat {
+            file: path.display().to_string(),
+            ext: other.map_or("(no extension)".into(), |e| format!(".{e}")),
+        }),
+    }
+}
+
+/// Read a point-cloud file (format from its extension) and validate it as a
+/// [`Cloud`] called `name`.
+pub fn read_cloud(path: &Path, name: &str) -> Result<Cloud, IoError> {
+    let file = path.display().to_string();
+    let format = format_from_path(path)?;
+    let bytes = std::fs::read(path).map_err(|source| IoError::Read {
+        file: file.clone(),
+        source,
+    })?;
+    let points = read_points_from_bytes(&bytes, format).map_err(|problem| IoError::Parse {
+        file: file.clone(),
+        problem,
+    })?;
+    Cloud::new(name, points).map_err(|source| IoError::Cloud { file, source })
+}
+
+/// Write `points` to `path` in `format`, replacing any existing file. Points
+/// are written as given (no validation).
+pub fn write_cloud(path: &Path, points: &[Point3<f64>], format: Format) -> Result<(), IoError> {
+    std::fs::write(path, write_points_to_bytes(points, format)).map_err(|source| IoError::Write {
+        file: path.display().to_string(),
+        source,
+    })
+}
+
+/// Parse the points in `bytes`. Both PLY formats detect ascii or binary from
+/// the header. The points are not validated (see [`Cloud::new`]).
+pub fn read_points_from_bytes(
+    bytes: &[u8],
+    format: Format,
+) -> Result<Vec<Point3<f64>>, ParseError> {
+    match format {
+        Format::PlyAscii | Format::PlyBinary => ply::read(bytes),
+        Format::Xyz => text::read_xyz(bytes),
+        Format::Csv => text::read_csv(bytes),
+    }
+}
+
+/// Serialise `points` in `format`. Text formats round-trip every f64 exactly.
+pub fn write_points_to_bytes(points: &[Point3<f64>], format: Format) -> Vec<u8> {
+    match format {
+        Format::PlyAscii => ply::write_ascii(points),
+        Format::PlyBinary => ply::write_binary(points),
+        Format::Xyz => text::write_delimited(points, " ", None),
+        Format::Csv => text::write_delimited(points, ",", Some("x,y,z")),
+    }
+}
+
+/// Shortest text that parses back to exactly `v`: plain decimals for
+/// moderate magnitudes, scientific notation for very large or small ones.
+fn fmt_f64(v: f64) -> String {
+    let a = v.abs();
+    if a == 0.0 || (1e-5..1e16).contains(&a) || !v.is_finite() {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
+/// Parse one numeric field, reporting `line` on failure.
+fn parse_f64(field: &str, line: usize) -> Result<f64, ParseError> {
+    field.parse::<f64>().map_err(|_| ParseError::BadNumber {
+        line,
+        text: shorten(field),
+    })
+}
+
+/// At most 40 characters of `s`, for error messages.
+fn shorten(s: &str) -> String {
+    let mut out: String = s.chars().take(40).collect();
+    if s.chars().nth(40).is_some() {
+        out.push_str("...");
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample() -> Vec<Point3<f64>> {
+        vec![
+            Point3::new(0.1, -2.5, 3.0),
+            Point3::new(1e-300, 1.7976931348623157e308, -0.0),
+            Point3::new(std::f64::consts::PI, -1e-7, 123_456_789.123_456_79),
+            Point3::new(5e-324, 1e16, 0.30000000000000004),
+        ]
+    }
+
+    #[test]
+    fn every_format_round_trips_exactly_through_files() {
+        let dir = tempfile::tempdir().unwrap();
+        for (format, file) in [
+            (Format::PlyAscii, "a.ply"),
+            (Format::PlyBinary, "b.ply"),
+            (Format::Xyz, "c.xyz"),
+            (Format::Csv, "d.csv"),
+        ] {
+            let path = dir.path().join(file);
+            write_cloud(&path, &sample(), format).unwrap();
+            let cloud = read_cloud(&path, "scan").unwrap();
+            assert_eq!(cloud.points(), sample().as_slice(), "{format:?}");
+            for (a, b) in cloud.points().iter().zip(sample()) {
+                for (x, y) in a.coords.iter().zip(b.coords.iter()) {
+                    assert_eq!(x.to_bits(), y.to_bits(), "{format:?}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn fmt_f64_round_trips() {
+        for v in [
+            0.0,
+            -0.0,
+            1.0,
+            0.1,
+            1e-5,
+            9.99e-6,
+            1e16,
+            123.456,
+            5e-324,
+            f64::MAX,
+        ] {
+            let s = fmt_f64(v);
+            assert_eq!(s.parse::<f64>().unwrap().to_bits(), v.to_bits(), "{s}");
+        }
+        assert_eq!(fmt_f64(1.5), "1.5");
+        assert_eq!(fmt_f64(1e300), "1e300");
+    }
+
+    #[test]
+    fn format_from_extension() {
+        assert_eq!(
+            format_from_path(Path::new("a.PLY")).unwrap(),
+            Format::PlyBinary
+        );
+        assert_eq!(format_from_path(Path::new("a.txt")).unwrap(), Format::Xyz);
+        assert_eq!(format_from_path(Path::new("a.pts")).unwrap(), Format::Xyz);
+        assert_eq!(format_from_path(Path::new("d/a.Csv")).unwrap(), Format::Csv);
+        let e = format_from_path(Path::new("scan.obj"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("scan.obj") && e.contains("unknown") && e.contains(".obj"),
+            "{e}"
+        );
+        let e = format_from_path(Path::new("scan")).unwrap_err().to_string();
+        assert!(e.contains("no extension"), "{e}");
+    }
+
+    #[test]
+    fn missing_file_names_file_and_os_error() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("absent.xyz");
+        let e = read_cloud(&path, "scan").unwrap_err();
+        assert!(matches!(e, IoError::Read { .. }));
+        let msg = e.to_string();
+        assert!(
+            msg.contains("absent.xyz") && msg.contains("cannot read"),
+            "{msg}"
+        );
+        assert!(msg.to_lowercase().contains("no such file"), "{msg}");
+    }
+
+    #[test]
+    fn unwritable_path_is_a_write_error() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("no_dir").join("out.csv");
+        let e = write_cloud(&path, &sample(), Format::Csv)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("cannot write") && e.contains("out.csv"), "{e}");
+    }
+
+    #[test]
+    fn invalid_clouds_map_cloud_errors() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("nan.xyz");
+        std::fs::write(&path, "1 2 3\n4 NaN 6\n").unwrap();
+        let e = read_cloud(&path, "scan").unwrap_err();
+        assert!(matches!(e, IoError::Cloud { .. }));
+        let msg = e.to_string();
+        assert!(
+            msg.contains("nan.xyz") && msg.contains("non-finite"),
+            "{msg}"
+        );
+
+        let path = dir.path().join("inf.csv");
+        std::fs::write(&path, "x,y,z\n1,2,inf\n").unwrap();
+        let msg = read_cloud(&path, "scan").unwrap_err().to_string();
+        assert!(msg.contains("non-finite"), "{msg}");
+
+        let path = dir.path().join("empty.ply");
+        write_cloud(&path, &[], Format::PlyAscii).unwrap();
+        let msg = read_cloud(&path, "scan").unwrap_err().to_string();
+        assert!(msg.contains("empty.ply") && msg.contains("empty"), "{msg}");
+    }
+
+    #[test]
+    fn parse_errors_name_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("bad.xyz");
+        std::fs::write(&path, "1 2 3\n1 2 x3\n").unwrap();
+        let msg = read_cloud(&path, "scan").unwrap_err().to_string();
+        assert!(
+            msg.contains("bad.xyz") && msg.contains("line 2") && msg.contains("x3"),
+            "{msg}"
+        );
+        assert!(!msg.contains('\n'));
+    }
+}
