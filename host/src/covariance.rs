@@ -7,7 +7,7 @@
 //! the mean never suffers from the +-180 degree seam. The variance of the runs' MSD is
 //! the `Q` of the likelihood (Eq. 20).
 
-use crate::geometry::{wrap_angle, Params, Pose};
+use crate::geometry::{wrap_angle, Centred, Params, Pose};
 use crate::icp::{icp, IcpSettings};
 use crate::kmeans::Clustering;
 use crate::nn::NearestNeighbours;
@@ -29,6 +29,8 @@ pub struct IcpCovariance {
     pub msd_variance: f64,
     /// Number of subsets (`n_C`).
     pub runs: usize,
+    /// The pose each subset's ICP returned.
+    pub poses: Vec<Pose>,
 }
 
 impl IcpCovariance {
@@ -36,6 +38,41 @@ impl IcpCovariance {
     pub fn std_dev(&self) -> Params {
         self.variance.map(f64::sqrt)
     }
+
+    /// Mean and variance of the runs' parameters in the `frame` parameterisation, angles
+    /// unwrapped about `reference`'s.
+    pub fn stats_in(&self, frame: &Centred, reference: &Pose) -> (Params, Params) {
+        let p0 = frame.params(reference);
+        let params: Vec<Params> = self
+            .poses
+            .iter()
+            .map(|pose| {
+                let mut p = frame.params(pose);
+                for a in 4..7 {
+                    p[a] = p0[a] + wrap_angle(p[a] - p0[a]);
+                }
+                p
+            })
+            .collect();
+        mean_variance(&params)
+    }
+}
+
+fn mean_variance(params: &[Params]) -> (Params, Params) {
+    let n = params.len() as f64;
+    let mut mean = [0.0; 7];
+    for p in params {
+        for i in 0..7 {
+            mean[i] += p[i] / n;
+        }
+    }
+    let mut variance = [0.0; 7];
+    for p in params {
+        for i in 0..7 {
+            variance[i] += (p[i] - mean[i]).powi(2) / (n - 1.0).max(1.0);
+        }
+    }
+    (mean, variance)
 }
 
 /// Algorithm 5: `subsets` ICP runs on one-point-per-cluster subsets of `scan`.
@@ -49,8 +86,7 @@ pub fn approximate_icp_variance(
     settings: &IcpSettings,
 ) -> IcpCovariance {
     let subsets = subsets.max(2);
-    let p0 = init.to_params();
-    let runs: Vec<(Params, f64)> = (0..subsets)
+    let runs: Vec<(Pose, f64)> = (0..subsets)
         .into_par_iter()
         .map(|j| {
             let mut rng = ChaCha8Rng::seed_from_u64(
@@ -62,35 +98,22 @@ pub fn approximate_icp_variance(
                 .map(|m| scan[m[rng.gen_range(0..m.len())]])
                 .collect();
             let r = icp(nn, &subset, init, settings);
-            let mut p = r.pose.to_params();
-            for a in 4..7 {
-                p[a] = p0[a] + wrap_angle(p[a] - p0[a]);
-            }
-            (p, r.msd)
+            (r.pose, r.msd)
         })
         .collect();
     let n = runs.len() as f64;
-    let mut mean = [0.0; 7];
-    for (p, _) in &runs {
-        for i in 0..7 {
-            mean[i] += p[i] / n;
-        }
-    }
-    let mut variance = [0.0; 7];
-    for (p, _) in &runs {
-        for i in 0..7 {
-            variance[i] += (p[i] - mean[i]).powi(2) / (n - 1.0);
-        }
-    }
     let msd_mean = runs.iter().map(|r| r.1).sum::<f64>() / n;
     let msd_variance = runs.iter().map(|r| (r.1 - msd_mean).powi(2)).sum::<f64>() / (n - 1.0);
-    IcpCovariance {
-        mean,
-        variance,
+    let mut out = IcpCovariance {
+        mean: [0.0; 7],
+        variance: [0.0; 7],
         msd_mean,
         msd_variance,
         runs: runs.len(),
-    }
+        poses: runs.into_iter().map(|r| r.0).collect(),
+    };
+    (out.mean, out.variance) = out.stats_in(&Centred::origin(), init);
+    out
 }
 
 #[cfg(test)]

@@ -1,14 +1,15 @@
 //! Built-in models and their scans (paper section 4).
 //!
 //! - **Model 1**: 3-D continuous strings, spiral-like: four conical spiral strings wound
-//!   around a vertical axis that is off the origin. Rotating by a quarter turn about that
+//!   around a vertical axis that is off the origin, their radius wobbling as it grows. Rotating by a quarter turn about that
 //!   axis nearly maps the model onto itself, so ICP finds local minima in `psi`, `tx`, `ty`
 //!   (Table 4); the strings differ in length, so the true pose is the only exact fit.
 //! - **Model 2**: a 3-D surface mesh: an egg-crate height field on a rectangle (look-alikes
 //!   under translation by one period and rotation by half a turn) with one bump that
 //!   breaks the symmetry.
 //! - **Model 3**: a bottle: a surface of revolution (body, shoulder, neck) with a raised
-//!   label panel on one side; its scan is thin and uneven (Table 7).
+//!   label panel on one side and a slightly elliptic section; its scan is thin and uneven
+//!   (Table 7).
 //!
 //! The truth pose maps scan to model (`d = s R m + T`); the scan is made by the inverse
 //! of the truth, so a registration should return the Table 1 values themselves.
@@ -132,7 +133,8 @@ fn string_length(k: usize) -> f64 {
 /// Point at parameter `t` (0..string_length(k)) of string `k`.
 fn spiral_point(k: usize, t: f64) -> Point3<f64> {
     let a = TAU * k as f64 / STRINGS as f64 + t;
-    let r = 1.5 + 0.18 * t;
+    // Growing radius (spiral) with a wobble: sliding along a string costs distance.
+    let r = 1.5 + 0.18 * t + 0.12 * (4.0 * t).sin();
     Point3::new(
         SPIRAL_AXIS[0] + r * a.cos(),
         SPIRAL_AXIS[1] + r * a.sin(),
@@ -217,18 +219,20 @@ fn bottle_radius(z: f64) -> f64 {
     }
 }
 
-/// Raised label panel on one side: `+0.15` over 70 degrees of angle and 1.2 of height.
+/// Raised label panel on one side: `+0.2` over 70 degrees of angle and 1.2 of height.
 fn label_relief(angle: f64, z: f64) -> f64 {
     let a = crate::geometry::wrap_angle(angle - 0.3);
     if a.abs() < 35f64.to_radians() && (0.7..1.9).contains(&z) {
-        0.15
+        0.2
     } else {
         0.0
     }
 }
 
+/// The body's cross-section is slightly elliptic (a look-alike at half a turn, which the
+/// label breaks).
 fn bottle_point(angle: f64, z: f64) -> Point3<f64> {
-    let r = bottle_radius(z) + label_relief(angle, z);
+    let r = bottle_radius(z) * (1.0 + 0.12 * (2.0 * angle).cos()) + label_relief(angle, z);
     Point3::new(r * angle.cos(), r * angle.sin(), z)
 }
 

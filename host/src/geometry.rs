@@ -192,6 +192,46 @@ impl Pose {
     }
 }
 
+/// Parameters about a pair of centres: `d = s R (m - c_scan) + c_model + t`, with
+/// `x = [t, s, phi, theta, psi]`. Rotating about the clouds' centroids instead of the
+/// origin decouples rotation from translation, which the particle filter samples per
+/// parameter. With both centres at the origin this is the paper's parameterisation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Centred {
+    /// Centre of the scan `c_scan`.
+    pub scan: Point3<f64>,
+    /// Centre of the model `c_model`.
+    pub model: Point3<f64>,
+}
+
+impl Centred {
+    /// The paper's parameterisation (centres at the origin).
+    pub fn origin() -> Self {
+        Self {
+            scan: Point3::origin(),
+            model: Point3::origin(),
+        }
+    }
+
+    /// Parameters of `pose` in this frame.
+    pub fn params(&self, pose: &Pose) -> Params {
+        let mut p = pose.to_params();
+        let t =
+            pose.translation - self.model.coords + pose.scale * (pose.rotation * self.scan.coords);
+        p[param::A] = t.x;
+        p[param::B] = t.y;
+        p[param::C] = t.z;
+        p
+    }
+
+    /// The pose with parameters `x` in this frame.
+    pub fn pose(&self, x: &Params) -> Pose {
+        let mut pose = Pose::from_params(x);
+        pose.translation += self.model.coords - pose.scale * (pose.rotation * self.scan.coords);
+        pose
+    }
+}
+
 /// A pose as written to JSON: the keys every `pficp` command uses.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct PoseRecord {
@@ -246,6 +286,21 @@ mod tests {
         assert!((p.inverse().apply(&p.apply(&x)) - x).norm() < 1e-12);
         let back = Pose::from_params(&p.to_params());
         assert!((back.matrix4() - p.matrix4()).norm() < 1e-12);
+    }
+
+    #[test]
+    fn centred_parameters_round_trip() {
+        let c = Centred {
+            scan: Point3::new(1.0, 2.0, 3.0),
+            model: Point3::new(-1.0, 0.5, 4.0),
+        };
+        let p = Pose::from_params(&[0.5, -1.0, 2.0, 0.7, 0.2, -0.4, 1.1]);
+        let x = c.params(&p);
+        assert!((c.pose(&x).matrix4() - p.matrix4()).norm() < 1e-12);
+        // The scan centre lands on the model centre plus t.
+        let t = nalgebra::Vector3::new(x[0], x[1], x[2]);
+        assert!((p.apply(&c.scan) - (c.model + t)).norm() < 1e-12);
+        assert_eq!(Centred::origin().params(&p), p.to_params());
     }
 
     #[test]
