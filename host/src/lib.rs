@@ -18,6 +18,8 @@ pub mod icp;
 pub mod init;
 pub mod kmeans;
 pub mod nn;
+pub mod particle_filter;
+pub mod pf_icp;
 pub mod sparse_icp;
 pub mod svd_match;
 pub mod io;
