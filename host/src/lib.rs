@@ -17,6 +17,7 @@ pub mod hessian;
 pub mod icp;
 pub mod init;
 pub mod kmeans;
+pub mod methods;
 pub mod nn;
 pub mod particle_filter;
 pub mod pf_icp;
