@@ -8,6 +8,7 @@
 //! - [`io`]: PLY, XYZ and CSV files.
 #![warn(missing_docs)]
 
+pub mod cli;
 pub mod cloud;
 pub mod covariance;
 pub mod datasets;

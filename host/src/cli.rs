@@ -1,0 +1,116 @@
+//! Output formatting shared by the `pficp` subcommands.
+
+use crate::geometry::{Pose, PoseRecord};
+use crate::icp::Registration;
+use serde::Serialize;
+
+/// The JSON object `pficp register --json` prints.
+#[derive(Clone, Debug, Serialize)]
+pub struct RegisterReport {
+    /// Method name.
+    pub method: String,
+    /// Scale factor.
+    pub scale: f64,
+    /// Rotation, row-major.
+    pub rotation: [[f64; 3]; 3],
+    /// Translation.
+    pub translation: [f64; 3],
+    /// `[phi, theta, psi]` in degrees.
+    pub euler_deg: [f64; 3],
+    /// The 4x4 matrix `[[sR, T], [0, 1]]`, row-major.
+    pub matrix: [[f64; 4]; 4],
+    /// Mean squared closest-point distance over the whole scan.
+    pub msd: f64,
+    /// Iterations.
+    pub iterations: usize,
+    /// Wall time [s].
+    pub seconds: f64,
+}
+
+impl RegisterReport {
+    /// Build from a registration.
+    pub fn new(method: &str, r: &Registration, seconds: f64) -> Self {
+        let PoseRecord { scale, rotation, translation, euler_deg } = r.pose.record();
+        let m = r.pose.matrix4();
+        RegisterReport {
+            method: method.to_string(),
+            scale,
+            rotation,
+            translation,
+            euler_deg,
+            matrix: std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)])),
+            msd: r.msd,
+            iterations: r.iterations,
+            seconds,
+        }
+    }
+
+    /// The human-readable form.
+    pub fn text(&self) -> String {
+        let mut s = String::new();
+        s += &format!("method       {}\n", self.method);
+        s += &format!("scale        {:.6}\n", self.scale);
+        for (name, v) in ["phi", "theta", "psi"].iter().zip(self.euler_deg) {
+            s += &format!("{:<12} {:.4} deg\n", name, v);
+        }
+        for (name, v) in ["tx", "ty", "tz"].iter().zip(self.translation) {
+            s += &format!("{:<12} {:.6}\n", name, v);
+        }
+        s += "matrix (scan to model, d = s R m + T):\n";
+        for row in &self.matrix {
+            s += &format!("  [{:>12.6} {:>12.6} {:>12.6} {:>12.6}]\n", row[0], row[1], row[2], row[3]);
+        }
+        s += &format!("msd          {:.6e}\n", self.msd);
+        s += &format!("iterations   {}\n", self.iterations);
+        s += &format!("seconds      {:.3}\n", self.seconds);
+        s
+    }
+}
+
+/// A table of the 7 parameters for several poses (columns), angles in degrees.
+pub fn pose_table(columns: &[(&str, &Pose)]) -> String {
+    let mut s = format!("{:<12}", "parameter");
+    for (name, _) in columns {
+        s += &format!("{:>14}", name);
+    }
+    s += "\n";
+    let rows: [(&str, fn(&Pose) -> f64); 7] = [
+        ("phi (deg)", |p| p.euler_deg()[0]),
+        ("theta (deg)", |p| p.euler_deg()[1]),
+        ("psi (deg)", |p| p.euler_deg()[2]),
+        ("tx", |p| p.translation.x),
+        ("ty", |p| p.translation.y),
+        ("tz", |p| p.translation.z),
+        ("scale", |p| p.scale),
+    ];
+    for (label, f) in rows {
+        s += &format!("{:<12}", label);
+        for (_, p) in columns {
+            s += &format!("{:>14.4}", f(p));
+        }
+        s += "\n";
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn json_has_the_documented_keys() {
+        let pose = Pose::from_params(&[1.0, 2.0, 3.0, 0.5, 0.1, 0.2, 0.3]);
+        let r = Registration { pose, msd: 0.25, iterations: 7, errors: vec![] };
+        let v = serde_json::to_value(RegisterReport::new("icp", &r, 1.5)).unwrap();
+        for key in ["scale", "rotation", "translation", "euler_deg", "msd", "iterations", "seconds"] {
+            assert!(v.get(key).is_some(), "missing {key}");
+        }
+        assert_eq!(v["translation"][2], 3.0);
+        assert_eq!(v["matrix"][0][3], 1.0);
+        assert!((v["euler_deg"][2].as_f64().unwrap() - 0.3f64.to_degrees()).abs() < 1e-9);
+        let t = RegisterReport::new("icp", &r, 1.5).text();
+        assert!(t.contains("iterations   7"));
+        let tab = pose_table(&[("truth", &pose)]);
+        assert!(tab.contains("scale") && tab.contains("0.5000"));
+    }
+}
