@@ -232,7 +232,7 @@ fn label_relief(angle: f64, z: f64) -> f64 {
 /// The body's cross-section is slightly elliptic (a look-alike at half a turn, which the
 /// label breaks).
 fn bottle_point(angle: f64, z: f64) -> Point3<f64> {
-    let r = bottle_radius(z) * (1.0 + 0.12 * (2.0 * angle).cos()) + label_relief(angle, z);
+    let r = bottle_radius(z) * (1.0 + 0.25 * (2.0 * angle).cos()) + label_relief(angle, z);
     Point3::new(r * angle.cos(), r * angle.sin(), z)
 }
 
