@@ -74,7 +74,8 @@ pub fn pose_table(columns: &[(&str, &Pose)]) -> String {
         s += &format!("{:>14}", name);
     }
     s += "\n";
-    let rows: [(&str, fn(&Pose) -> f64); 7] = [
+    type Row = (&'static str, fn(&Pose) -> f64);
+    let rows: [Row; 7] = [
         ("phi (deg)", |p| p.euler_deg()[0]),
         ("theta (deg)", |p| p.euler_deg()[1]),
         ("psi (deg)", |p| p.euler_deg()[2]),

@@ -28,6 +28,8 @@ pub enum ScaleRule {
 
 /// Similarity `d ≈ s R m + T` from pairs, optionally weighted. Returns `None` when the
 /// pairs are degenerate (fewer than 3 effective points, zero weight or zero spread).
+// `!(x > 0.0)` on purpose: it is also true for NaN.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
 pub fn match_pairs(
     scan: &[Point3<f64>],
     model: &[Point3<f64>],
