@@ -1,9 +1,11 @@
 //! PF-ICP hardware side.
 //!
 //! - [`format`]: the fixed-point formats shared by host, reference and RTL.
+//! - [`pipeline`]: the cycle-accurate reference of the nearest-neighbour pipeline.
 //!
 //! The bit-exact reference of the pipeline, the wire protocol and (behind the `rtl`
 //! feature) the rust_hdl RTL land with the hardware issues.
 #![warn(missing_docs)]
 
 pub mod format;
+pub mod pipeline;
