@@ -13,6 +13,7 @@ pub mod cloud;
 pub mod covariance;
 pub mod datasets;
 pub mod em_icp;
+pub mod eval;
 pub mod geometry;
 pub mod hessian;
 pub mod icp;
