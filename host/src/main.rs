@@ -1,1 +1,424 @@
-fn main() {}
+//! `pficp`: register point clouds with PF-ICP or a baseline, make the built-in data,
+//! reproduce the paper's experiments.
+//!
+//! Results go to stdout; progress and errors to stderr. Any error exits non-zero with one
+//! line naming the problem.
+
+use anyhow::{bail, Context, Result};
+use clap::{Parser, Subcommand, ValueEnum};
+use pficp::cli::{pose_table, RegisterReport};
+use pficp::cloud::Cloud;
+use pficp::datasets::{self, ModelId, Sampling, ScanSpec};
+use pficp::init::InitMode;
+use pficp::io::{format_from_path, read_cloud, write_cloud};
+use pficp::methods::{self, Method, MethodSettings};
+use pficp::nn::NearestNeighbours;
+use pficp::pf_icp::PfIcpSettings;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+#[derive(Parser)]
+#[command(name = "pficp", version, about = "PF-ICP point-cloud registration (particle filter + ICP + k-means)")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Register the built-in model-1 scan (Table 1 transform) and print the pose table
+    /// against the truth and against plain ICP.
+    Demo,
+    /// Register a scan to a model: the pose maps scan to model, d = s R m + T.
+    Register(RegisterArgs),
+    /// Write a built-in model, its scan and the truth pose to files.
+    Gen(GenArgs),
+    /// Reproduce the paper's Tables 2 to 7, the success rates and the figures.
+    Eval(EvalArgs),
+    /// Time one PF-ICP registration per stage (model-1, 2,000 + 2,000 points, K = 100,
+    /// 50 particles, 50 iterations); build with --release.
+    Bench(BenchArgs),
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum MethodArg {
+    PfIcp,
+    Icp,
+    Welsch,
+    Cauchy,
+    SparseIcp,
+    EmIcp,
+}
+
+impl From<MethodArg> for Method {
+    fn from(m: MethodArg) -> Method {
+        match m {
+            MethodArg::PfIcp => Method::PfIcp,
+            MethodArg::Icp => Method::Icp,
+            MethodArg::Welsch => Method::Welsch,
+            MethodArg::Cauchy => Method::Cauchy,
+            MethodArg::SparseIcp => Method::SparseIcp,
+            MethodArg::EmIcp => Method::EmIcp,
+        }
+    }
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum InitArg {
+    Auto,
+    Index,
+    Nearest,
+}
+
+#[derive(clap::Args)]
+struct PfArgs {
+    /// Clusters K per cloud (PF-ICP).
+    #[arg(long, default_value_t = 100)]
+    clusters: usize,
+    /// Particles (PF-ICP).
+    #[arg(long, default_value_t = 50)]
+    particles: usize,
+    /// Iteration cap (the filter's for PF-ICP, the method's own otherwise).
+    #[arg(long, default_value_t = 50)]
+    iterations: usize,
+    /// Seed of every random choice.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Cluster pairing for PF-ICP's start: index (scan = model's points in order),
+    /// nearest (independent scan) or auto (try both).
+    #[arg(long, value_enum, default_value_t = InitArg::Auto)]
+    init: InitArg,
+}
+
+impl PfArgs {
+    fn settings(&self) -> Result<PfIcpSettings> {
+        if self.particles == 0 {
+            bail!("--particles must be at least 1");
+        }
+        if self.iterations == 0 {
+            bail!("--iterations must be at least 1");
+        }
+        if self.clusters == 0 {
+            bail!("--clusters must be at least 1");
+        }
+        Ok(PfIcpSettings {
+            clusters: self.clusters,
+            particles: self.particles,
+            iterations: self.iterations,
+            seed: self.seed,
+            init: match self.init {
+                InitArg::Auto => InitMode::Auto,
+                InitArg::Index => InitMode::Index,
+                InitArg::Nearest => InitMode::Nearest,
+            },
+            ..Default::default()
+        })
+    }
+}
+
+#[derive(clap::Args)]
+struct RegisterArgs {
+    /// Model cloud D (PLY, XYZ or CSV).
+    #[arg(long)]
+    model: PathBuf,
+    /// Scan cloud M (PLY, XYZ or CSV).
+    #[arg(long)]
+    scan: PathBuf,
+    /// Registration method.
+    #[arg(long, value_enum, default_value_t = MethodArg::PfIcp)]
+    method: MethodArg,
+    #[command(flatten)]
+    pf: PfArgs,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    json: bool,
+    /// Write the scan, transformed into the model frame, to this file.
+    #[arg(long)]
+    out_aligned: Option<PathBuf>,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum ModelArg {
+    #[value(name = "model-1")]
+    Model1,
+    #[value(name = "model-2")]
+    Model2,
+    #[value(name = "model-3")]
+    Model3,
+}
+
+impl From<ModelArg> for ModelId {
+    fn from(m: ModelArg) -> ModelId {
+        match m {
+            ModelArg::Model1 => ModelId::Model1,
+            ModelArg::Model2 => ModelId::Model2,
+            ModelArg::Model3 => ModelId::Model3,
+        }
+    }
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum SamplingArg {
+    /// The model's own points, same order (the paper's setting).
+    Paper,
+    /// Sampled independently from the same surface.
+    Independent,
+    /// Thin, uneven sampling (Table 7).
+    Thin,
+}
+
+#[derive(clap::Args)]
+struct GenArgs {
+    /// Which built-in model.
+    #[arg(long, value_enum)]
+    model: ModelArg,
+    /// Folder for <model>.ply, <model>-scan.ply and <model>-truth.json.
+    #[arg(long)]
+    out_dir: PathBuf,
+    /// Model points.
+    #[arg(long, default_value_t = 2000)]
+    points: usize,
+    /// Scan sampling.
+    #[arg(long, value_enum, default_value_t = SamplingArg::Paper)]
+    sampling: SamplingArg,
+    /// Scan points (independent and thin sampling).
+    #[arg(long, default_value_t = 2000)]
+    scan_points: usize,
+    /// Noise amplitude: U(0, noise) added to every scan coordinate.
+    #[arg(long, default_value_t = 0.0)]
+    noise: f64,
+    /// Use a random transform (angles +-45 deg, scale 0.7..1.3) instead of Table 1's.
+    #[arg(long)]
+    random_transform: bool,
+    /// Seed for sampling, noise and the random transform.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// File format: ply, xyz or csv.
+    #[arg(long, default_value = "ply")]
+    format: String,
+}
+
+#[derive(clap::Args)]
+struct EvalArgs {
+    /// Folder for the figures and results.json.
+    #[arg(long, default_value = "eval-out")]
+    out: PathBuf,
+    /// Random transforms per model for the success rates.
+    #[arg(long, default_value_t = 100)]
+    trials: usize,
+    /// Model points.
+    #[arg(long, default_value_t = 2000)]
+    points: usize,
+    /// Scan points of the independent scans.
+    #[arg(long, default_value_t = 2000)]
+    scan_points: usize,
+    /// Seed of the random transforms.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Skip the success rates (the slow part).
+    #[arg(long)]
+    no_success: bool,
+}
+
+#[derive(clap::Args)]
+struct BenchArgs {
+    /// Repetitions (the median is reported).
+    #[arg(long, default_value_t = 5)]
+    runs: usize,
+    /// Scan sampling: the paper's or an independent scan.
+    #[arg(long, value_enum, default_value_t = SamplingArg::Independent)]
+    sampling: SamplingArg,
+}
+
+fn main() {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Demo => demo(),
+        Command::Register(a) => register(&a),
+        Command::Gen(a) => gen(&a),
+        Command::Eval(a) => eval(&a),
+        Command::Bench(a) => bench(&a),
+    };
+    if let Err(e) = result {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
+    }
+}
+
+fn load(path: &Path, name: &str) -> Result<Cloud> {
+    Ok(read_cloud(path, name)?)
+}
+
+fn register(a: &RegisterArgs) -> Result<()> {
+    let settings = a.pf.settings()?;
+    let method: Method = a.method.into();
+    let model = load(&a.model, "model")?;
+    let scan = load(&a.scan, "scan")?;
+    if method == Method::PfIcp {
+        for (name, c) in [("model", &model), ("scan", &scan)] {
+            if c.len() < settings.clusters {
+                bail!(
+                    "{name} has {} points, fewer than the {} clusters asked for (--clusters)",
+                    c.len(),
+                    settings.clusters
+                );
+            }
+        }
+    }
+    if scan.len() < 3 || model.len() < 3 {
+        bail!("registration needs at least 3 points in each cloud (model {}, scan {})", model.len(), scan.len());
+    }
+    if let Some(out) = &a.out_aligned {
+        format_from_path(out)?;
+    }
+    eprintln!("registering {} scan points to {} model points with {}", scan.len(), model.len(), method.name());
+    let nn = NearestNeighbours::new(model.points());
+    let outcome = methods::run(method, &nn, scan.points(), &MethodSettings { pf: settings });
+    if let Some(pf) = &outcome.pf {
+        let t = &pf.times;
+        eprintln!(
+            "stages: clustering {:.3} s, covariance {:.3} s, filter {:.3} s, polish {:.3} s",
+            t.clustering.as_secs_f64(),
+            t.covariance.as_secs_f64(),
+            t.filter.as_secs_f64(),
+            t.polish.as_secs_f64()
+        );
+    }
+    let report = RegisterReport::new(method.name(), &outcome.registration, outcome.elapsed.as_secs_f64());
+    if a.json {
+        println!("{}", serde_json::to_string(&report)?);
+    } else {
+        print!("{}", report.text());
+    }
+    if let Some(out) = &a.out_aligned {
+        let aligned = outcome.registration.pose.apply_all(scan.points());
+        write_cloud(out, &aligned, format_from_path(out)?)?;
+        eprintln!("wrote the aligned scan to {}", out.display());
+    }
+    Ok(())
+}
+
+fn gen(a: &GenArgs) -> Result<()> {
+    let id: ModelId = a.model.into();
+    if a.points < 3 || a.scan_points < 3 {
+        bail!("--points and --scan-points must be at least 3");
+    }
+    if !(a.noise >= 0.0 && a.noise.is_finite()) {
+        bail!("--noise must be a finite number >= 0 (got {})", a.noise);
+    }
+    let ext = match a.format.as_str() {
+        "ply" | "xyz" | "csv" => a.format.as_str(),
+        other => bail!("unknown --format {other:?}: use ply, xyz or csv"),
+    };
+    let truth = if a.random_transform {
+        use rand::SeedableRng;
+        let diag = pficp::cloud::bbox_diagonal(&id.model_points(a.points));
+        datasets::random_truth(&mut rand_chacha::ChaCha8Rng::seed_from_u64(a.seed), 45.0, (0.7, 1.3), diag / 2.0)
+    } else {
+        id.table1_truth()
+    };
+    let sampling = match a.sampling {
+        SamplingArg::Paper => Sampling::Paper,
+        SamplingArg::Independent => Sampling::Independent { points: a.scan_points },
+        SamplingArg::Thin => Sampling::Thin { points: a.scan_points },
+    };
+    let ds = datasets::make(id, a.points, &truth, &ScanSpec { sampling, noise: a.noise, seed: a.seed });
+    std::fs::create_dir_all(&a.out_dir).with_context(|| format!("cannot create {}", a.out_dir.display()))?;
+    let model_path = a.out_dir.join(format!("{}.{ext}", id.name()));
+    let scan_path = a.out_dir.join(format!("{}-scan.{ext}", id.name()));
+    let truth_path = a.out_dir.join(format!("{}-truth.json", id.name()));
+    write_cloud(&model_path, &ds.model, format_from_path(&model_path)?)?;
+    write_cloud(&scan_path, &ds.scan, format_from_path(&scan_path)?)?;
+    let json = serde_json::to_string_pretty(&ds.truth.record())?;
+    std::fs::write(&truth_path, json + "\n").with_context(|| format!("cannot write {}", truth_path.display()))?;
+    for p in [&model_path, &scan_path, &truth_path] {
+        println!("{}", p.display());
+    }
+    Ok(())
+}
+
+fn demo() -> Result<()> {
+    let id = ModelId::Model1;
+    let truth = id.table1_truth();
+    let ds = datasets::make(id, 2000, &truth, &ScanSpec { sampling: Sampling::Paper, noise: 0.0, seed: 1 });
+    eprintln!("model-1: {} model points, scan = the model's points under the Table 1 transform", ds.model.len());
+    let nn = NearestNeighbours::new(&ds.model);
+    let settings = MethodSettings { pf: PfIcpSettings::default() };
+    let pf = methods::run(Method::PfIcp, &nn, &ds.scan, &settings);
+    let icp = methods::run(Method::Icp, &nn, &ds.scan, &settings);
+    println!("PF-ICP on model-1, scan-1 (Table 1 transform), K = 100, 50 particles");
+    print!("{}", pose_table(&[("truth", &truth), ("pf-icp", &pf.registration.pose), ("icp", &icp.registration.pose)]));
+    println!("{:<12}{:>14}{:>14.3e}{:>14.3e}", "MSD", "", pf.registration.msd, icp.registration.msd);
+    println!("{:<12}{:>14}{:>14}{:>14}", "iterations", "", pf.registration.iterations, icp.registration.iterations);
+    println!("{:<12}{:>14}{:>14.3}{:>14.3}", "seconds", "", pf.elapsed.as_secs_f64(), icp.elapsed.as_secs_f64());
+    Ok(())
+}
+
+fn eval(a: &EvalArgs) -> Result<()> {
+    let opts = pficp::eval::EvalOptions {
+        out_dir: a.out.clone(),
+        trials: a.trials,
+        model_points: a.points,
+        scan_points: a.scan_points,
+        seed: a.seed,
+        success: !a.no_success,
+        ..Default::default()
+    };
+    pficp::eval::run(&opts)?;
+    Ok(())
+}
+
+fn bench(a: &BenchArgs) -> Result<()> {
+    if a.runs == 0 {
+        bail!("--runs must be at least 1");
+    }
+    if cfg!(debug_assertions) {
+        eprintln!("warning: debug build; run `cargo run --release -p pficp-host -- bench` for real figures");
+    }
+    let id = ModelId::Model1;
+    let truth = id.table1_truth();
+    let sampling = match a.sampling {
+        SamplingArg::Paper => Sampling::Paper,
+        _ => Sampling::Independent { points: 2000 },
+    };
+    let ds = datasets::make(id, 2000, &truth, &ScanSpec { sampling, noise: 0.0, seed: 1 });
+    let settings = PfIcpSettings::default();
+    println!(
+        "bench: model-1, {} model points, {} scan points, K = {}, {} particles, {} iterations, {} threads",
+        ds.model.len(),
+        ds.scan.len(),
+        settings.clusters,
+        settings.particles,
+        settings.iterations,
+        rayon::current_num_threads()
+    );
+    let mut rows: Vec<[f64; 5]> = Vec::new();
+    for run in 0..a.runs {
+        let start = Instant::now();
+        let nn = NearestNeighbours::new(&ds.model);
+        let r = pficp::pf_icp::register(&nn, &ds.scan, &PfIcpSettings { seed: run as u64 + 1, ..settings.clone() });
+        let total = start.elapsed().as_secs_f64();
+        let t = r.times;
+        let row = [
+            t.clustering.as_secs_f64(),
+            t.covariance.as_secs_f64(),
+            t.filter.as_secs_f64(),
+            t.polish.as_secs_f64(),
+            total,
+        ];
+        eprintln!(
+            "run {}: total {:.3} s, rotation error {:.3} deg",
+            run + 1,
+            total,
+            r.registration.pose.rotation_angle_to(&truth).to_degrees()
+        );
+        rows.push(row);
+    }
+    let median = |i: usize| {
+        let mut v: Vec<f64> = rows.iter().map(|r| r[i]).collect();
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    println!("median of {} runs [s]: clustering {:.3}, covariance {:.3}, filter {:.3}, polish {:.3}, whole registration {:.3}", a.runs, median(0), median(1), median(2), median(3), median(4));
+    Ok(())
+}

@@ -1,7 +1,7 @@
 //! The registration methods the CLI and the experiments offer, behind one call.
 //!
 //! The baselines start where Algorithm 1 starts (identity: `R = I`, `T = 0`, `s = 1`) and
-//! ICP, Welsch and Cauchy use the paper's scale formula there;
+//! every baseline uses the paper's scale formula there (least squares collapses from a far start);
 //! PF-ICP makes its own start from the clusters. All methods get the same clouds and
 //! return the pose scan-to-model, the MSD over the whole scan, iterations and the error
 //! per iteration.
@@ -74,7 +74,7 @@ pub struct Outcome {
     pub pf: Option<Box<PfIcpResult>>,
 }
 
-/// ICP as a baseline: from the identity with the paper's scale formula (Algorithm 2's
+/// ICP as a baseline (Sparse ICP and EM-ICP likewise): from the identity with the paper's scale formula (Algorithm 2's
 /// ratio of spreads). The least-squares scale, exact for good pairs, collapses towards zero
 /// from a far start (the scan shrinks onto a patch of the model and the MSD with it).
 fn baseline(settings: IcpSettings, cap: usize) -> IcpSettings {
@@ -94,10 +94,24 @@ pub fn run(method: Method, nn: &NearestNeighbours, scan: &[Point3<f64>], setting
         Method::Icp => (icp(nn, scan, &id, &baseline(IcpSettings::default(), cap)), None),
         Method::Welsch => (icp(nn, scan, &id, &baseline(IcpSettings::welsch(), cap)), None),
         Method::Cauchy => (icp(nn, scan, &id, &baseline(IcpSettings::cauchy(), cap)), None),
-        Method::SparseIcp => {
-            (sparse_icp(nn, scan, &id, &SparseIcpSettings { max_iterations: cap, ..Default::default() }), None)
-        }
-        Method::EmIcp => (em_icp(nn, scan, &id, &EmIcpSettings { max_iterations: cap, ..Default::default() }), None),
+        Method::SparseIcp => (
+            sparse_icp(
+                nn,
+                scan,
+                &id,
+                &SparseIcpSettings { max_iterations: cap, scale: ScaleRule::Ratio, ..Default::default() },
+            ),
+            None,
+        ),
+        Method::EmIcp => (
+            em_icp(
+                nn,
+                scan,
+                &id,
+                &EmIcpSettings { max_iterations: cap, scale: ScaleRule::Ratio, ..Default::default() },
+            ),
+            None,
+        ),
     };
     Outcome { registration, elapsed: start.elapsed(), pf }
 }
