@@ -50,20 +50,12 @@ impl Cloud {
             return Err(CloudError::Empty(name.to_string()));
         }
         if points.len() > MAX_POINTS {
-            return Err(CloudError::TooLarge {
-                name: name.into(),
-                count: points.len(),
-                limit: MAX_POINTS,
-            });
+            return Err(CloudError::TooLarge { name: name.into(), count: points.len(), limit: MAX_POINTS });
         }
         for (index, p) in points.iter().enumerate() {
             for &value in p.coords.iter() {
                 if !value.is_finite() {
-                    return Err(CloudError::NonFinite {
-                        name: name.into(),
-                        index,
-                        value,
-                    });
+                    return Err(CloudError::NonFinite { name: name.into(), index, value });
                 }
             }
         }
@@ -131,10 +123,7 @@ mod tests {
 
     #[test]
     fn rejects_bad_clouds() {
-        assert_eq!(
-            Cloud::new("scan", vec![]),
-            Err(CloudError::Empty("scan".into()))
-        );
+        assert_eq!(Cloud::new("scan", vec![]), Err(CloudError::Empty("scan".into())));
         let e = Cloud::new("model", vec![Point3::new(0.0, f64::NAN, 0.0)]).unwrap_err();
         assert!(e.to_string().contains("non-finite"), "{e}");
         let e = Cloud::new("m", vec![Point3::new(1.0, 1.0, 1.0); 3]).unwrap_err();

@@ -89,14 +89,9 @@ pub fn approximate_icp_variance(
     let runs: Vec<(Pose, f64)> = (0..subsets)
         .into_par_iter()
         .map(|j| {
-            let mut rng = ChaCha8Rng::seed_from_u64(
-                seed ^ (0x9e37_79b9_7f4a_7c15u64.wrapping_mul(j as u64 + 1)),
-            );
-            let subset: Vec<Point3<f64>> = clusters
-                .members
-                .iter()
-                .map(|m| scan[m[rng.gen_range(0..m.len())]])
-                .collect();
+            let mut rng = ChaCha8Rng::seed_from_u64(seed ^ (0x9e37_79b9_7f4a_7c15u64.wrapping_mul(j as u64 + 1)));
+            let subset: Vec<Point3<f64>> =
+                clusters.members.iter().map(|m| scan[m[rng.gen_range(0..m.len())]]).collect();
             let r = icp(nn, &subset, init, settings);
             (r.pose, r.msd)
         })
@@ -128,29 +123,11 @@ mod tests {
         let truth = id.table1_truth();
         let mut spreads = Vec::new();
         for noise in [0.0, 0.1] {
-            let ds = make(
-                id,
-                800,
-                &truth,
-                &ScanSpec {
-                    sampling: Sampling::Independent { points: 800 },
-                    noise,
-                    seed: 2,
-                },
-            );
+            let ds =
+                make(id, 800, &truth, &ScanSpec { sampling: Sampling::Independent { points: 800 }, noise, seed: 2 });
             let nn = NearestNeighbours::new(&ds.model);
-            let cl = kmeans(
-                &ds.scan,
-                &KmeansSettings {
-                    k: 40,
-                    max_iterations: 50,
-                    seed: 1,
-                },
-            );
-            let s = IcpSettings {
-                max_iterations: 30,
-                ..Default::default()
-            };
+            let cl = kmeans(&ds.scan, &KmeansSettings { k: 40, max_iterations: 50, seed: 1 });
+            let s = IcpSettings { max_iterations: 30, ..Default::default() };
             let a = approximate_icp_variance(&nn, &ds.scan, &cl, &truth, 12, 7, &s);
             let b = approximate_icp_variance(&nn, &ds.scan, &cl, &truth, 12, 7, &s);
             assert_eq!(a.variance, b.variance);

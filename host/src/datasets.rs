@@ -50,12 +50,7 @@ impl ModelId {
 
     /// Parse `model-1`, `1`, `m1` and the like.
     pub fn parse(s: &str) -> Option<ModelId> {
-        match s
-            .trim()
-            .to_ascii_lowercase()
-            .trim_start_matches("model")
-            .trim_start_matches(['-', '_', 'm'])
-        {
+        match s.trim().to_ascii_lowercase().trim_start_matches("model").trim_start_matches(['-', '_', 'm']) {
             "1" => Some(ModelId::Model1),
             "2" => Some(ModelId::Model2),
             "3" => Some(ModelId::Model3),
@@ -68,24 +63,12 @@ impl ModelId {
     pub fn table1_truth(self) -> Pose {
         let deg = |x: f64| x.to_radians();
         match self {
-            ModelId::Model1 => Pose::from_params(&[
-                -0.9928,
-                -0.5570,
-                -0.4844,
-                0.7143,
-                deg(-29.4659),
-                deg(-18.6011),
-                deg(-29.4659),
-            ]),
-            ModelId::Model2 | ModelId::Model3 => Pose::from_params(&[
-                -2.2487,
-                -1.6495,
-                -3.3125,
-                0.8333,
-                deg(5.2258),
-                deg(-16.4071),
-                deg(-17.9510),
-            ]),
+            ModelId::Model1 => {
+                Pose::from_params(&[-0.9928, -0.5570, -0.4844, 0.7143, deg(-29.4659), deg(-18.6011), deg(-29.4659)])
+            }
+            ModelId::Model2 | ModelId::Model3 => {
+                Pose::from_params(&[-2.2487, -1.6495, -3.3125, 0.8333, deg(5.2258), deg(-16.4071), deg(-17.9510)])
+            }
         }
     }
 
@@ -107,10 +90,7 @@ impl ModelId {
             .map(|_| match self {
                 ModelId::Model1 => spiral_string_point_random(rng),
                 ModelId::Model2 => {
-                    let (x, y) = (
-                        rng.gen_range(-EGG_HALF_X..EGG_HALF_X),
-                        rng.gen_range(-EGG_HALF_Y..EGG_HALF_Y),
-                    );
+                    let (x, y) = (rng.gen_range(-EGG_HALF_X..EGG_HALF_X), rng.gen_range(-EGG_HALF_Y..EGG_HALF_Y));
                     Point3::new(x, y, egg_crate_height(x, y))
                 }
                 ModelId::Model3 => bottle_sample(rng),
@@ -135,11 +115,7 @@ fn spiral_point(k: usize, t: f64) -> Point3<f64> {
     let a = TAU * k as f64 / STRINGS as f64 + t;
     // Growing radius (spiral) with a wobble: sliding along a string costs distance.
     let r = 1.5 + 0.18 * t + 0.12 * (4.0 * t).sin();
-    Point3::new(
-        SPIRAL_AXIS[0] + r * a.cos(),
-        SPIRAL_AXIS[1] + r * a.sin(),
-        -1.4 + 0.5 * t,
-    )
+    Point3::new(SPIRAL_AXIS[0] + r * a.cos(), SPIRAL_AXIS[1] + r * a.sin(), -1.4 + 0.5 * t)
 }
 
 fn spiral_strings_even(n: usize) -> Vec<Point3<f64>> {
@@ -147,11 +123,7 @@ fn spiral_strings_even(n: usize) -> Vec<Point3<f64>> {
     let mut out = Vec::with_capacity(n);
     for k in 0..STRINGS {
         let len = string_length(k);
-        let nk = if k + 1 == STRINGS {
-            n - out.len()
-        } else {
-            ((n as f64) * len / total).round() as usize
-        };
+        let nk = if k + 1 == STRINGS { n - out.len() } else { ((n as f64) * len / total).round() as usize };
         for j in 0..nk {
             out.push(spiral_point(k, len * (j as f64 + 0.5) / nk as f64));
         }
@@ -328,20 +300,12 @@ pub fn make(id: ModelId, model_points: usize, truth: &Pose, spec: &ScanSpec) -> 
             q
         })
         .collect();
-    Dataset {
-        model,
-        scan,
-        truth: *truth,
-    }
+    Dataset { model, scan, truth: *truth }
 }
 
 /// Keep `n` points with a density that falls along x (uneven thinning for models 1, 2).
 fn thin_out(points: &[Point3<f64>], n: usize, rng: &mut impl Rng) -> Vec<Point3<f64>> {
-    let (lo, hi) = points
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
-            (lo.min(p.x), hi.max(p.x))
-        });
+    let (lo, hi) = points.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| (lo.min(p.x), hi.max(p.x)));
     let mut out = Vec::with_capacity(n);
     let mut i = 0;
     while out.len() < n {
@@ -357,19 +321,10 @@ fn thin_out(points: &[Point3<f64>], n: usize, rng: &mut impl Rng) -> Vec<Point3<
 
 /// A random transform for the success-rate experiment: each angle uniform in +-`max_angle_deg`,
 /// scale in `scale_range`, translation uniform in a ball of radius `max_translation`.
-pub fn random_truth(
-    rng: &mut impl Rng,
-    max_angle_deg: f64,
-    scale_range: (f64, f64),
-    max_translation: f64,
-) -> Pose {
+pub fn random_truth(rng: &mut impl Rng, max_angle_deg: f64, scale_range: (f64, f64), max_translation: f64) -> Pose {
     let a = max_angle_deg.to_radians();
     let t = loop {
-        let v = nalgebra::Vector3::new(
-            rng.gen_range(-1.0..1.0),
-            rng.gen_range(-1.0..1.0),
-            rng.gen_range(-1.0..1.0),
-        );
+        let v = nalgebra::Vector3::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0));
         if v.norm_squared() <= 1.0 {
             break v * max_translation;
         }
@@ -404,11 +359,7 @@ mod tests {
     #[test]
     fn paper_scan_maps_back_exactly() {
         let truth = ModelId::Model1.table1_truth();
-        let spec = ScanSpec {
-            sampling: Sampling::Paper,
-            noise: 0.0,
-            seed: 1,
-        };
+        let spec = ScanSpec { sampling: Sampling::Paper, noise: 0.0, seed: 1 };
         let ds = make(ModelId::Model1, 500, &truth, &spec);
         for (m, d) in ds.scan.iter().zip(&ds.model) {
             assert!((truth.apply(m) - d).norm() < 1e-12);
@@ -418,18 +369,10 @@ mod tests {
     #[test]
     fn noise_is_uniform_zero_to_amplitude() {
         let truth = Pose::identity();
-        let spec = ScanSpec {
-            sampling: Sampling::Paper,
-            noise: 0.1,
-            seed: 9,
-        };
+        let spec = ScanSpec { sampling: Sampling::Paper, noise: 0.1, seed: 9 };
         let ds = make(ModelId::Model2, 800, &truth, &spec);
-        let deltas: Vec<f64> = ds
-            .scan
-            .iter()
-            .zip(&ds.model)
-            .flat_map(|(m, d)| (m - d).iter().copied().collect::<Vec<_>>())
-            .collect();
+        let deltas: Vec<f64> =
+            ds.scan.iter().zip(&ds.model).flat_map(|(m, d)| (m - d).iter().copied().collect::<Vec<_>>()).collect();
         assert!(deltas.iter().all(|&x| (0.0..0.1).contains(&x)));
         let mean = deltas.iter().sum::<f64>() / deltas.len() as f64;
         assert!((mean - 0.05).abs() < 0.005, "{mean}");

@@ -139,38 +139,19 @@ fn soft_match(model: &[Point3<f64>], near: &[Closest], inv_2s2: f64) -> (Point3<
 /// pose; [`Registration::errors`] holds that MSD at the start of each iteration, then at
 /// the final pose (`errors.len() == iterations + 1`). It is not monotone while `sigma`
 /// is large, since EM-ICP minimises a smoothed criterion.
-pub fn em_icp(
-    nn: &NearestNeighbours,
-    scan: &[Point3<f64>],
-    init: &Pose,
-    settings: &EmIcpSettings,
-) -> Registration {
+pub fn em_icp(nn: &NearestNeighbours, scan: &[Point3<f64>], init: &Pose, settings: &EmIcpSettings) -> Registration {
     let model = nn.points();
     let n = scan.len();
     let mut pose = *init;
     let mut errors: Vec<f64> = Vec::with_capacity(settings.max_iterations + 1);
     if n == 0 {
-        return Registration {
-            pose,
-            msd: 0.0,
-            iterations: 0,
-            errors: vec![0.0],
-        };
+        return Registration { pose, msd: 0.0, iterations: 0, errors: vec![0.0] };
     }
     let k = settings.neighbours.max(1);
     let diagonal = bbox_diagonal(scan) * init.scale.abs();
-    let sigma_final = settings
-        .sigma_final
-        .unwrap_or(settings.sigma_final_fraction * diagonal);
-    let sigma0 = settings
-        .sigma0
-        .unwrap_or(settings.sigma0_fraction * diagonal)
-        .max(sigma_final);
-    let annealing = if settings.annealing > 0.0 && settings.annealing <= 1.0 {
-        settings.annealing
-    } else {
-        1.0
-    };
+    let sigma_final = settings.sigma_final.unwrap_or(settings.sigma_final_fraction * diagonal);
+    let sigma0 = settings.sigma0.unwrap_or(settings.sigma0_fraction * diagonal).max(sigma_final);
+    let annealing = if settings.annealing > 0.0 && settings.annealing <= 1.0 { settings.annealing } else { 1.0 };
     let mut sigma = sigma0;
     // Whether the pose now in hand came from an M-step at sigma_final.
     let mut at_final = false;
@@ -216,12 +197,7 @@ pub fn em_icp(
         at_final = sigma <= sigma_final;
         sigma = (sigma * annealing).max(sigma_final);
     }
-    Registration {
-        pose,
-        msd: *errors.last().unwrap_or(&0.0),
-        iterations,
-        errors,
-    }
+    Registration { pose, msd: *errors.last().unwrap_or(&0.0), iterations, errors }
 }
 
 #[cfg(test)]
@@ -242,12 +218,7 @@ mod tests {
     }
 
     fn random_unit(rng: &mut impl Rng) -> Vector3<f64> {
-        Vector3::new(
-            rng.gen_range(-1.0..1.0),
-            rng.gen_range(-1.0..1.0),
-            rng.gen_range(-1.0..1.0),
-        )
-        .normalize()
+        Vector3::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0)).normalize()
     }
 
     /// Every second model point, mapped into the scan frame, plus uniform noise.
@@ -312,10 +283,7 @@ mod tests {
             let (e_rot, i_rot) = (rot_deg(&e.pose, &t), rot_deg(&i.pose, &t));
             assert!(e_rot < 0.5, "trial {trial}: EM-ICP {e_rot} deg");
             assert!(scale_err(&e.pose, &t) < 0.005, "trial {trial}");
-            assert!(
-                e_rot <= i_rot + 0.05,
-                "trial {trial}: EM-ICP {e_rot} deg, ICP {i_rot} deg"
-            );
+            assert!(e_rot <= i_rot + 0.05, "trial {trial}: EM-ICP {e_rot} deg, ICP {i_rot} deg");
             em_total += e_rot;
             icp_total += i_rot;
         }
@@ -332,10 +300,7 @@ mod tests {
         for p in scan.iter_mut().skip(2).step_by(5) {
             *p = Point3::from(random_unit(&mut rng) * rng.gen_range(1.5..3.0));
         }
-        let s = EmIcpSettings {
-            weight: PointWeight::Mass,
-            ..Default::default()
-        };
+        let s = EmIcpSettings { weight: PointWeight::Mass, ..Default::default() };
         let r = em_icp(&nn, &scan, &Pose::identity(), &s);
         assert!(rot_deg(&r.pose, &t) < 0.5, "{}", rot_deg(&r.pose, &t));
         assert!(scale_err(&r.pose, &t) < 0.005);
@@ -350,37 +315,17 @@ mod tests {
         let scan = scan_of(&model, &t, 0.0, 6);
         let k = 40.0;
         let big: Vec<_> = model.iter().map(|p| p * k).collect();
-        let s = EmIcpSettings {
-            max_iterations: 6,
-            ..Default::default()
-        };
-        let a = em_icp(
-            &NearestNeighbours::new(&model),
-            &scan,
-            &Pose::identity(),
-            &s,
-        );
-        let init = Pose {
-            scale: k,
-            ..Pose::identity()
-        };
+        let s = EmIcpSettings { max_iterations: 6, ..Default::default() };
+        let a = em_icp(&NearestNeighbours::new(&model), &scan, &Pose::identity(), &s);
+        let init = Pose { scale: k, ..Pose::identity() };
         let b = em_icp(&NearestNeighbours::new(&big), &scan, &init, &s);
         assert!(rot_deg(&a.pose, &t) > 1e-3, "not a trivial comparison");
         assert!(a.pose.rotation_angle_to(&b.pose) < 1e-9);
         assert!((b.pose.scale / (k * a.pose.scale) - 1.0).abs() < 1e-9);
         // Explicit sigmas in model units override the fractions.
-        let explicit = EmIcpSettings {
-            sigma0: Some(0.1),
-            sigma_final: Some(0.1),
-            max_iterations: 3,
-            ..Default::default()
-        };
-        let c = em_icp(
-            &NearestNeighbours::new(&model),
-            &scan,
-            &Pose::identity(),
-            &explicit,
-        );
+        let explicit =
+            EmIcpSettings { sigma0: Some(0.1), sigma_final: Some(0.1), max_iterations: 3, ..Default::default() };
+        let c = em_icp(&NearestNeighbours::new(&model), &scan, &Pose::identity(), &explicit);
         assert!(c.pose.rotation_angle_to(&a.pose) > 1e-9);
     }
 
@@ -408,11 +353,7 @@ mod tests {
         let one = [Point3::new(0.1, 0.2, 0.3)];
         let r = em_icp(&nn, &one, &Pose::identity(), &s);
         assert!(r.msd.is_finite() && r.iterations == 0);
-        let zero_sigma = EmIcpSettings {
-            sigma0: Some(0.0),
-            sigma_final: Some(0.0),
-            ..Default::default()
-        };
+        let zero_sigma = EmIcpSettings { sigma0: Some(0.0), sigma_final: Some(0.0), ..Default::default() };
         let r = em_icp(&nn, &model, &Pose::identity(), &zero_sigma);
         assert!(r.msd < 1e-20);
     }

@@ -87,11 +87,7 @@ pub fn wrap_angle(a: f64) -> f64 {
 impl Pose {
     /// The identity transform.
     pub fn identity() -> Self {
-        Self {
-            scale: 1.0,
-            rotation: Matrix3::identity(),
-            translation: Vector3::zeros(),
-        }
+        Self { scale: 1.0, rotation: Matrix3::identity(), translation: Vector3::zeros() }
     }
 
     /// Build from the 7 parameters `[a, b, c, s, phi, theta, psi]`.
@@ -139,18 +135,13 @@ impl Pose {
     /// The inverse similarity.
     pub fn inverse(&self) -> Pose {
         let rt = self.rotation.transpose();
-        Pose {
-            scale: 1.0 / self.scale,
-            rotation: rt,
-            translation: -(rt * self.translation) / self.scale,
-        }
+        Pose { scale: 1.0 / self.scale, rotation: rt, translation: -(rt * self.translation) / self.scale }
     }
 
     /// Homogeneous 4x4 matrix `[[sR, T], [0, 1]]`.
     pub fn matrix4(&self) -> Matrix4<f64> {
         let mut m = Matrix4::identity();
-        m.fixed_view_mut::<3, 3>(0, 0)
-            .copy_from(&(self.scale * self.rotation));
+        m.fixed_view_mut::<3, 3>(0, 0).copy_from(&(self.scale * self.rotation));
         m.fixed_view_mut::<3, 1>(0, 3).copy_from(&self.translation);
         m
     }
@@ -164,11 +155,7 @@ impl Pose {
     /// Rows of the rotation matrix, for JSON.
     pub fn rotation_rows(&self) -> [[f64; 3]; 3] {
         let r = &self.rotation;
-        [
-            [r[(0, 0)], r[(0, 1)], r[(0, 2)]],
-            [r[(1, 0)], r[(1, 1)], r[(1, 2)]],
-            [r[(2, 0)], r[(2, 1)], r[(2, 2)]],
-        ]
+        [[r[(0, 0)], r[(0, 1)], r[(0, 2)]], [r[(1, 0)], r[(1, 1)], r[(1, 2)]], [r[(2, 0)], r[(2, 1)], r[(2, 2)]]]
     }
 
     /// The JSON-facing record of this pose.
@@ -184,11 +171,7 @@ impl Pose {
     /// Rebuild from a JSON record (the rotation matrix wins over the angles).
     pub fn from_record(r: &PoseRecord) -> Pose {
         let m = Matrix3::from_fn(|i, j| r.rotation[i][j]);
-        Pose {
-            scale: r.scale,
-            rotation: m,
-            translation: Vector3::from(r.translation),
-        }
+        Pose { scale: r.scale, rotation: m, translation: Vector3::from(r.translation) }
     }
 }
 
@@ -207,17 +190,13 @@ pub struct Centred {
 impl Centred {
     /// The paper's parameterisation (centres at the origin).
     pub fn origin() -> Self {
-        Self {
-            scan: Point3::origin(),
-            model: Point3::origin(),
-        }
+        Self { scan: Point3::origin(), model: Point3::origin() }
     }
 
     /// Parameters of `pose` in this frame.
     pub fn params(&self, pose: &Pose) -> Params {
         let mut p = pose.to_params();
-        let t =
-            pose.translation - self.model.coords + pose.scale * (pose.rotation * self.scan.coords);
+        let t = pose.translation - self.model.coords + pose.scale * (pose.rotation * self.scan.coords);
         p[param::A] = t.x;
         p[param::B] = t.y;
         p[param::C] = t.z;
@@ -251,11 +230,7 @@ mod tests {
 
     #[test]
     fn euler_round_trip() {
-        for &(a, b, c) in &[
-            (0.1, -0.3, 2.0),
-            (-0.5143, -0.3246, -0.5143),
-            (3.0, 1.2, -3.0),
-        ] {
+        for &(a, b, c) in &[(0.1, -0.3, 2.0), (-0.5143, -0.3246, -0.5143), (3.0, 1.2, -3.0)] {
             let r = rotation_from_euler(a, b, c);
             let (x, y, z) = euler_from_rotation(&r);
             assert!((x - a).abs() < 1e-12 && (y - b).abs() < 1e-12 && (z - c).abs() < 1e-12);
@@ -290,10 +265,7 @@ mod tests {
 
     #[test]
     fn centred_parameters_round_trip() {
-        let c = Centred {
-            scan: Point3::new(1.0, 2.0, 3.0),
-            model: Point3::new(-1.0, 0.5, 4.0),
-        };
+        let c = Centred { scan: Point3::new(1.0, 2.0, 3.0), model: Point3::new(-1.0, 0.5, 4.0) };
         let p = Pose::from_params(&[0.5, -1.0, 2.0, 0.7, 0.2, -0.4, 1.1]);
         let x = c.params(&p);
         assert!((c.pose(&x).matrix4() - p.matrix4()).norm() < 1e-12);

@@ -165,11 +165,7 @@ fn rotation_derivatives(phi: f64, theta: f64, psi: f64) -> RotationDerivatives {
             dd[j][k] = product(n);
         }
     }
-    RotationDerivatives {
-        r: product([0; 3]),
-        d,
-        dd,
-    }
+    RotationDerivatives { r: product([0; 3]), d, dd }
 }
 
 /// Per-point pieces of the derivatives of `r^T P r`, with `r = s R m + T - y`.
@@ -182,17 +178,10 @@ struct PointTerms {
     c: SMatrix<f64, 7, 3>,
 }
 
-fn point_terms(
-    rd: &RotationDerivatives,
-    s: f64,
-    m: &Vector3<f64>,
-    r: &Vector3<f64>,
-    p: &Matrix3<f64>,
-) -> PointTerms {
+fn point_terms(rd: &RotationDerivatives, s: f64, m: &Vector3<f64>, r: &Vector3<f64>, p: &Matrix3<f64>) -> PointTerms {
     // J = dr/dx (3x7).
     let mut jac = SMatrix::<f64, 3, 7>::zeros();
-    jac.fixed_view_mut::<3, 3>(0, 0)
-        .copy_from(&Matrix3::identity());
+    jac.fixed_view_mut::<3, 3>(0, 0).copy_from(&Matrix3::identity());
     jac.set_column(3, &(rd.r * m));
     for k in 0..3 {
         jac.set_column(4 + k, &(s * (rd.d[k] * m)));
@@ -221,11 +210,7 @@ fn point_terms(
             b[(4 + k, c)] += row[c];
         }
     }
-    PointTerms {
-        h: 2.0 * h,
-        b: 2.0 * b,
-        c: -2.0 * jt_p,
-    }
+    PointTerms { h: 2.0 * h, b: 2.0 * b, c: -2.0 * jt_p }
 }
 
 /// Normal-space projector of the model at point `y` from the PCA of its neighbours.
@@ -235,10 +220,7 @@ fn surface_projector(nn: &NearestNeighbours, y: &Point3<f64>, k: usize, flat: f6
         return Matrix3::identity();
     }
     let model = nn.points();
-    let mean = near
-        .iter()
-        .fold(Vector3::zeros(), |a, c| a + model[c.index].coords)
-        / near.len() as f64;
+    let mean = near.iter().fold(Vector3::zeros(), |a, c| a + model[c.index].coords) / near.len() as f64;
     let cov = near.iter().fold(Matrix3::zeros(), |a, c| {
         let d = model[c.index].coords - mean;
         a + d * d.transpose()
@@ -299,12 +281,7 @@ pub fn hessian_covariance_with(
     let n = x.len();
     // RMS radius of the transformed scan: the length that puts angles on a par with shifts.
     let centroid = x.iter().fold(Vector3::zeros(), |a, p| a + p.coords) / n.max(1) as f64;
-    let length = (x
-        .iter()
-        .map(|p| (p.coords - centroid).norm_squared())
-        .sum::<f64>()
-        / n.max(1) as f64)
-        .sqrt();
+    let length = (x.iter().map(|p| (p.coords - centroid).norm_squared()).sum::<f64>() / n.max(1) as f64).sqrt();
     let fallback = unobservable(length, s);
     let params: Params = pose.to_params();
     if n < 3 || !positive(s) || !positive(length) || !params.iter().all(|v| v.is_finite()) {
@@ -321,9 +298,7 @@ pub fn hessian_covariance_with(
         let y = model[nn.closest(xi).index];
         let p = match settings.metric {
             Metric::PointToPoint => Matrix3::identity(),
-            Metric::PointToSurface => {
-                surface_projector(nn, &y, settings.neighbours, settings.flatness)
-            }
+            Metric::PointToSurface => surface_projector(nn, &y, settings.neighbours, settings.flatness),
         };
         let r = xi - y;
         res2 += r.dot(&(p * r));
@@ -333,9 +308,7 @@ pub fn hessian_covariance_with(
         bb += t.b * t.b.transpose();
         cc += t.c * t.c.transpose();
     }
-    let sigma2 = settings
-        .noise_variance
-        .unwrap_or(if dof > 0.0 { res2 / dof } else { 0.0 });
+    let sigma2 = settings.noise_variance.unwrap_or(if dof > 0.0 { res2 / dof } else { 0.0 });
     let (var_m, var_y) = match settings.measurements {
         Measurements::Scan => (sigma2 / (s * s), 0.0),
         Measurements::ScanAndModel => (sigma2 / (2.0 * s * s), sigma2 / 2.0),
@@ -343,15 +316,7 @@ pub fn hessian_covariance_with(
     let middle = bb * var_m + cc * var_y;
 
     // Scale the parameters to lengths: x~ = D x.
-    let dscale = SMatrix::<f64, 7, 1>::from_column_slice(&[
-        1.0,
-        1.0,
-        1.0,
-        length / s,
-        length,
-        length,
-        length,
-    ]);
+    let dscale = SMatrix::<f64, 7, 1>::from_column_slice(&[1.0, 1.0, 1.0, length / s, length, length, length]);
     let hs = Covariance::from_fn(|i, j| h[(i, j)] / (dscale[i] * dscale[j]));
     let ms = Covariance::from_fn(|i, j| middle[(i, j)] / (dscale[i] * dscale[j]));
     if !hs.iter().chain(ms.iter()).all(|v| v.is_finite()) {
@@ -408,17 +373,14 @@ mod tests {
 
     /// A smooth, curved, non-symmetric surface patch.
     fn surface_at(u: f64, v: f64) -> Point3<f64> {
-        let w =
-            0.35 * (2.0 * u).sin() * (1.5 * v).cos() + 0.3 * u * u - 0.2 * u * v + 0.25 * v * v * v;
+        let w = 0.35 * (2.0 * u).sin() * (1.5 * v).cos() + 0.3 * u * u - 0.2 * u * v + 0.25 * v * v * v;
         Point3::new(1.3 * u, v, w)
     }
 
     /// Dense model grid over `[-1, 1]^2`.
     fn surface_model(side: usize) -> Vec<Point3<f64>> {
         let g = |i: usize| -1.0 + 2.0 * i as f64 / (side - 1) as f64;
-        (0..side)
-            .flat_map(|i| (0..side).map(move |j| surface_at(g(i), g(j))))
-            .collect()
+        (0..side).flat_map(|i| (0..side).map(move |j| surface_at(g(i), g(j)))).collect()
     }
 
     /// `n` random points of the surface with Gaussian noise, mapped into the scan frame.
@@ -440,32 +402,19 @@ mod tests {
     }
 
     fn pp_settings() -> HessianSettings {
-        HessianSettings {
-            metric: Metric::PointToPoint,
-            ..Default::default()
-        }
+        HessianSettings { metric: Metric::PointToPoint, ..Default::default() }
     }
 
     #[test]
     fn analytic_derivatives_match_central_differences() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
-        let mut v = || {
-            Vector3::new(
-                rng.gen_range(-1.0..1.0),
-                rng.gen_range(-1.0..1.0),
-                rng.gen_range(-1.0..1.0),
-            )
-        };
+        let mut v = || Vector3::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0));
         let x0: Params = [0.3, -0.2, 0.1, 1.3, 0.4, -0.7, 1.1];
         let m = v();
         let y = v();
         let n = v().normalize();
         let t = v().normalize();
-        for p in [
-            Matrix3::identity(),
-            n * n.transpose(),
-            Matrix3::identity() - t * t.transpose(),
-        ] {
+        for p in [Matrix3::identity(), n * n.transpose(), Matrix3::identity() - t * t.transpose()] {
             // J for one point as a function of the 7 parameters, m and y (13 variables).
             let j = |z: &[f64; 13]| {
                 let x: Params = std::array::from_fn(|k| z[k]);
@@ -486,8 +435,7 @@ mod tests {
                     z[b] += db;
                     j(&z)
                 };
-                (at(hstep, hstep) - at(hstep, -hstep) - at(-hstep, hstep) + at(-hstep, -hstep))
-                    / (4.0 * hstep * hstep)
+                (at(hstep, hstep) - at(hstep, -hstep) - at(-hstep, hstep) + at(-hstep, -hstep)) / (4.0 * hstep * hstep)
             };
             let rd = rotation_derivatives(x0[4], x0[5], x0[6]);
             let pose = Pose::from_params(&x0);
@@ -496,22 +444,13 @@ mod tests {
             for a in 0..7 {
                 for b in 0..7 {
                     let (num, ana) = (d2(a, b), terms.h[(a, b)]);
-                    assert!(
-                        (num - ana).abs() < 1e-5 * (1.0 + ana.abs()),
-                        "H[{a},{b}]: {num} vs {ana}"
-                    );
+                    assert!((num - ana).abs() < 1e-5 * (1.0 + ana.abs()), "H[{a},{b}]: {num} vs {ana}");
                 }
                 for c in 0..3 {
                     let (num, ana) = (d2(a, 7 + c), terms.b[(a, c)]);
-                    assert!(
-                        (num - ana).abs() < 1e-5 * (1.0 + ana.abs()),
-                        "B[{a},{c}]: {num} vs {ana}"
-                    );
+                    assert!((num - ana).abs() < 1e-5 * (1.0 + ana.abs()), "B[{a},{c}]: {num} vs {ana}");
                     let (num, ana) = (d2(a, 10 + c), terms.c[(a, c)]);
-                    assert!(
-                        (num - ana).abs() < 1e-5 * (1.0 + ana.abs()),
-                        "C[{a},{c}]: {num} vs {ana}"
-                    );
+                    assert!((num - ana).abs() < 1e-5 * (1.0 + ana.abs()), "C[{a},{c}]: {num} vs {ana}");
                 }
             }
         }
@@ -534,12 +473,7 @@ mod tests {
             let r = icp(&nn, &scan, &t, &IcpSettings::default());
             let est = r.pose.to_params();
             let sd = std_devs(&hessian_covariance(&nn, &scan, &r.pose));
-            let pp = std_devs(&hessian_covariance_with(
-                &nn,
-                &scan,
-                &r.pose,
-                &pp_settings(),
-            ));
+            let pp = std_devs(&hessian_covariance_with(&nn, &scan, &r.pose, &pp_settings()));
             for i in 0..7 {
                 sq_err[i] += (est[i] - tp[i]).powi(2) / trials as f64;
                 pred[i] += sd[i] / trials as f64;
@@ -548,16 +482,8 @@ mod tests {
         }
         for i in 0..7 {
             let ratio = pred[i] / sq_err[i].sqrt();
-            assert!(
-                (0.6..1.7).contains(&ratio),
-                "param {i}: predicted/empirical {ratio}"
-            );
-            assert!(
-                pred_pp[i] < 0.6 * pred[i],
-                "param {i}: point-to-point {} vs {}",
-                pred_pp[i],
-                pred[i]
-            );
+            assert!((0.6..1.7).contains(&ratio), "param {i}: predicted/empirical {ratio}");
+            assert!(pred_pp[i] < 0.6 * pred[i], "param {i}: point-to-point {} vs {}", pred_pp[i], pred[i]);
         }
     }
 
@@ -613,21 +539,15 @@ mod tests {
         assert!(sd[6] > 30.0 * sd[4], "psi {} phi {}", sd[6], sd[4]);
         assert!(sd[6] > 30.0 * sd[5], "psi {} theta {}", sd[6], sd[5]);
         // Frozen point-to-point pairs pin psi: the symmetry is invisible to that variant.
-        let pp = std_devs(&hessian_covariance_with(
-            &nn,
-            &scan,
-            &Pose::identity(),
-            &pp_settings(),
-        ));
+        let pp = std_devs(&hessian_covariance_with(&nn, &scan, &Pose::identity(), &pp_settings()));
         assert!(pp[6] < 3.0 * pp[4], "{pp:?}");
     }
 
     #[test]
     fn singular_hessian_gives_large_finite_variances() {
         // A plane: shifts along it and turns about its normal are unobservable.
-        let plane: Vec<_> = (0..30)
-            .flat_map(|i| (0..30).map(move |j| Point3::new(i as f64 * 0.1, j as f64 * 0.1, 0.0)))
-            .collect();
+        let plane: Vec<_> =
+            (0..30).flat_map(|i| (0..30).map(move |j| Point3::new(i as f64 * 0.1, j as f64 * 0.1, 0.0))).collect();
         let nn = NearestNeighbours::new(&plane);
         let scan: Vec<_> = plane
             .iter()
@@ -647,17 +567,10 @@ mod tests {
             assert!(sd[i] < 0.01, "param {i}: {sd:?}");
         }
         // Degenerate inputs.
-        for pts in [
-            vec![],
-            vec![Point3::new(0.5, 0.5, 0.0)],
-            vec![Point3::new(0.5, 0.5, 0.0); 10],
-        ] {
+        for pts in [vec![], vec![Point3::new(0.5, 0.5, 0.0)], vec![Point3::new(0.5, 0.5, 0.0); 10]] {
             let cov = hessian_covariance(&nn, &pts, &Pose::identity());
             let sd = std_devs(&cov);
-            assert!(
-                cov.iter().all(|v| v.is_finite()) && sd.iter().all(|&v| v >= 1.0),
-                "{sd:?}"
-            );
+            assert!(cov.iter().all(|v| v.is_finite()) && sd.iter().all(|&v| v >= 1.0), "{sd:?}");
         }
         let mut bad = Covariance::identity();
         bad[(2, 2)] = f64::NAN;
@@ -677,19 +590,13 @@ mod tests {
         assert_eq!(a, b);
         // Splitting the same residual variance between scan and model changes little
         // for a well-conditioned pose, and an explicit variance scales the result.
-        let both = HessianSettings {
-            measurements: Measurements::ScanAndModel,
-            ..Default::default()
-        };
+        let both = HessianSettings { measurements: Measurements::ScanAndModel, ..Default::default() };
         let c = hessian_covariance_with(&nn, &scan, &t, &both);
         for i in 0..7 {
             let ratio = c[(i, i)] / a[(i, i)];
             assert!((0.5..2.0).contains(&ratio), "param {i}: {ratio}");
         }
-        let fixed = |v: f64| HessianSettings {
-            noise_variance: Some(v),
-            ..Default::default()
-        };
+        let fixed = |v: f64| HessianSettings { noise_variance: Some(v), ..Default::default() };
         let d1 = hessian_covariance_with(&nn, &scan, &t, &fixed(1e-4));
         let d4 = hessian_covariance_with(&nn, &scan, &t, &fixed(4e-4));
         assert!((d4 - d1 * 4.0).norm() <= 1e-9 * d4.norm());

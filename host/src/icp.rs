@@ -56,19 +56,11 @@ impl Default for IcpSettings {
 impl IcpSettings {
     /// Settings for the Welsch-weighted variant.
     pub fn welsch() -> Self {
-        Self {
-            robust: Robust::Welsch,
-            robust_k: 2.0,
-            ..Self::default()
-        }
+        Self { robust: Robust::Welsch, robust_k: 2.0, ..Self::default() }
     }
     /// Settings for the Cauchy-weighted variant.
     pub fn cauchy() -> Self {
-        Self {
-            robust: Robust::Cauchy,
-            robust_k: 1.0,
-            ..Self::default()
-        }
+        Self { robust: Robust::Cauchy, robust_k: 1.0, ..Self::default() }
     }
 }
 
@@ -123,12 +115,7 @@ pub fn msd(nn: &NearestNeighbours, scan: &[Point3<f64>], pose: &Pose) -> f64 {
 }
 
 /// Run ICP from `init`.
-pub fn icp(
-    nn: &NearestNeighbours,
-    scan: &[Point3<f64>],
-    init: &Pose,
-    settings: &IcpSettings,
-) -> Registration {
+pub fn icp(nn: &NearestNeighbours, scan: &[Point3<f64>], init: &Pose, settings: &IcpSettings) -> Registration {
     let model = nn.points();
     let mut pose = *init;
     let mut errors: Vec<f64> = Vec::with_capacity(settings.max_iterations + 1);
@@ -143,12 +130,7 @@ pub fn icp(
         };
         errors.push(e);
         if converged || e <= settings.msd_threshold || iterations >= settings.max_iterations {
-            return Registration {
-                pose,
-                msd: e,
-                iterations,
-                errors,
-            };
+            return Registration { pose, msd: e, iterations, errors };
         }
         targets.clear();
         targets.extend(closest.iter().map(|c| model[c.index]));
@@ -156,14 +138,7 @@ pub fn icp(
         let w = robust_weights(&r, settings.robust, settings.robust_k);
         match match_pairs(scan, &targets, w.as_deref(), settings.scale) {
             Some(next) => pose = next,
-            None => {
-                return Registration {
-                    pose,
-                    msd: e,
-                    iterations,
-                    errors,
-                }
-            }
+            None => return Registration { pose, msd: e, iterations, errors },
         }
         iterations += 1;
     }
@@ -188,22 +163,12 @@ mod tests {
         let truth = Pose::from_params(&[0.2, -0.1, 0.05, 0.9, 0.05, -0.04, 0.08]);
         let scan = truth.inverse().apply_all(&model);
         let nn = NearestNeighbours::new(&model);
-        for s in [
-            IcpSettings::default(),
-            IcpSettings::welsch(),
-            IcpSettings::cauchy(),
-        ] {
+        for s in [IcpSettings::default(), IcpSettings::welsch(), IcpSettings::cauchy()] {
             let r = icp(&nn, &scan, &Pose::identity(), &s);
             assert!(r.msd < 1e-12, "{:?}: msd {}", s.robust, r.msd);
             assert!(r.pose.rotation_angle_to(&truth) < 1e-5);
             assert!((r.pose.scale - truth.scale).abs() < 1e-6);
-            assert!(
-                r.errors
-                    .windows(2)
-                    .all(|w| w[1] <= w[0] * (1.0 + 1e-9) + 1e-24),
-                "{:?}",
-                r.errors
-            );
+            assert!(r.errors.windows(2).all(|w| w[1] <= w[0] * (1.0 + 1e-9) + 1e-24), "{:?}", r.errors);
             assert_eq!(r.errors.len(), r.iterations + 1);
         }
     }
@@ -214,10 +179,7 @@ mod tests {
         let truth = Pose::from_params(&[1.0, 1.0, 0.0, 1.2, 0.3, 0.2, 0.5]);
         let scan = truth.inverse().apply_all(&model);
         let nn = NearestNeighbours::new(&model);
-        let s = IcpSettings {
-            max_iterations: 3,
-            ..Default::default()
-        };
+        let s = IcpSettings { max_iterations: 3, ..Default::default() };
         let r = icp(&nn, &scan, &Pose::identity(), &s);
         assert_eq!(r.iterations, 3);
     }

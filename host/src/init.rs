@@ -71,15 +71,7 @@ fn principal_axes(points: &[Point3<f64>]) -> (Matrix3<f64>, Vector3<f64>) {
         eig.eigenvectors.column(idx[1]),
         eig.eigenvectors.column(idx[2]),
     ]);
-    (
-        axes,
-        Vector3::new(
-            eig.eigenvalues[idx[0]],
-            eig.eigenvalues[idx[1]],
-            eig.eigenvalues[idx[2]],
-        )
-        .map(|v| v.max(0.0)),
-    )
+    (axes, Vector3::new(eig.eigenvalues[idx[0]], eig.eigenvalues[idx[1]], eig.eigenvalues[idx[2]]).map(|v| v.max(0.0)))
 }
 
 fn rms_radius(points: &[Point3<f64>]) -> f64 {
@@ -92,12 +84,7 @@ fn rotation_candidates(scan: &[Point3<f64>], model: &[Point3<f64>]) -> Vec<Matri
     let (em, sm) = principal_axes(scan);
     let (ed, sd) = principal_axes(model);
     let mut out = Vec::new();
-    for signs in [
-        [1.0, 1.0, 1.0],
-        [1.0, -1.0, -1.0],
-        [-1.0, 1.0, -1.0],
-        [-1.0, -1.0, 1.0],
-    ] {
+    for signs in [[1.0, 1.0, 1.0], [1.0, -1.0, -1.0], [-1.0, 1.0, -1.0], [-1.0, -1.0, 1.0]] {
         let flip = Matrix3::from_diagonal(&Vector3::from(signs));
         let mut r = ed * flip * em.transpose();
         if r.determinant() < 0.0 {
@@ -110,14 +97,12 @@ fn rotation_candidates(scan: &[Point3<f64>], model: &[Point3<f64>]) -> Vec<Matri
         // Sweep about an axis whose two partners have near-equal spread (in either cloud).
         for axis in 0..3 {
             let (a, b) = ((axis + 1) % 3, (axis + 2) % 3);
-            let near =
-                |s: &Vector3<f64>| s[a.min(b)] <= NEAR_EQUAL_SPREAD * s[a.max(b)].max(1e-300);
+            let near = |s: &Vector3<f64>| s[a.min(b)] <= NEAR_EQUAL_SPREAD * s[a.max(b)].max(1e-300);
             if near(&sm) || near(&sd) {
                 let u = Unit::new_normalize(ed.column(axis).into_owned());
                 let steps = (360.0 / SWEEP_STEP_DEG) as usize;
                 for k in 1..steps {
-                    let rot =
-                        Rotation3::from_axis_angle(&u, (k as f64 * SWEEP_STEP_DEG).to_radians());
+                    let rot = Rotation3::from_axis_angle(&u, (k as f64 * SWEEP_STEP_DEG).to_radians());
                     out.push(rot.into_inner() * r);
                 }
             }
@@ -129,10 +114,8 @@ fn rotation_candidates(scan: &[Point3<f64>], model: &[Point3<f64>]) -> Vec<Matri
 /// Refine `pose` by ICP between cluster centroids (nearest-centroid pairing).
 fn centroid_icp(scan_c: &[Point3<f64>], model_nn: &NearestNeighbours, mut pose: Pose) -> Pose {
     for _ in 0..CENTROID_ICP_ITERATIONS {
-        let targets: Vec<Point3<f64>> = scan_c
-            .iter()
-            .map(|m| model_nn.points()[model_nn.closest(&pose.apply(m)).index])
-            .collect();
+        let targets: Vec<Point3<f64>> =
+            scan_c.iter().map(|m| model_nn.points()[model_nn.closest(&pose.apply(m)).index]).collect();
         match match_pairs(scan_c, &targets, None, ScaleRule::Ratio) {
             Some(p) => pose = p,
             None => break,
@@ -152,11 +135,7 @@ pub fn initial_pose(
     mode: InitMode,
 ) -> InitialPose {
     let model = nn.points();
-    let ks = KmeansSettings {
-        k: clusters,
-        max_iterations: 100,
-        seed,
-    };
+    let ks = KmeansSettings { k: clusters, max_iterations: 100, seed };
     let (scan_clusters, model_clusters) = rayon::join(|| kmeans(scan, &ks), || kmeans(model, &ks));
     let cost = |p: &Pose| nn.sum_dist2(&p.apply_all(cost_sample)) / cost_sample.len() as f64;
     let mut candidates: Vec<(Pose, Pairing)> = Vec::new();
@@ -164,12 +143,7 @@ pub fn initial_pose(
         && scan.len() == model.len()
         && scan_clusters.centroids.len() == model_clusters.centroids.len()
     {
-        if let Some(p) = match_pairs(
-            &scan_clusters.centroids,
-            &model_clusters.centroids,
-            None,
-            ScaleRule::Ratio,
-        ) {
+        if let Some(p) = match_pairs(&scan_clusters.centroids, &model_clusters.centroids, None, ScaleRule::Ratio) {
             candidates.push((p, Pairing::Index));
         }
     }
@@ -179,39 +153,20 @@ pub fn initial_pose(
         let s = rms_radius(model) / rms_radius(scan).max(1e-300);
         let starts: Vec<Pose> = rotation_candidates(scan, model)
             .into_iter()
-            .map(|r| Pose {
-                scale: s,
-                rotation: r,
-                translation: mu_d.coords - s * (r * mu_m.coords),
-            })
+            .map(|r| Pose { scale: s, rotation: r, translation: mu_d.coords - s * (r * mu_m.coords) })
             .collect();
-        let refined: Vec<Pose> = starts
-            .par_iter()
-            .map(|p| centroid_icp(&scan_clusters.centroids, &centroid_nn, *p))
-            .collect();
+        let refined: Vec<Pose> =
+            starts.par_iter().map(|p| centroid_icp(&scan_clusters.centroids, &centroid_nn, *p)).collect();
         candidates.extend(refined.into_iter().map(|p| (p, Pairing::Nearest)));
     }
-    let scored: Vec<(f64, usize)> = candidates
-        .par_iter()
-        .enumerate()
-        .map(|(i, (p, _))| (cost(p), i))
-        .collect();
+    let scored: Vec<(f64, usize)> = candidates.par_iter().enumerate().map(|(i, (p, _))| (cost(p), i)).collect();
     let (best_cost, best) = scored
         .into_iter()
         .filter(|(c, _)| c.is_finite())
         .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)))
         .unwrap_or((f64::INFINITY, 0));
-    let (pose, pairing) = candidates
-        .get(best)
-        .copied()
-        .unwrap_or((Pose::identity(), Pairing::Nearest));
-    InitialPose {
-        pose,
-        pairing,
-        scan_clusters,
-        model_clusters,
-        cost: best_cost,
-    }
+    let (pose, pairing) = candidates.get(best).copied().unwrap_or((Pose::identity(), Pairing::Nearest));
+    InitialPose { pose, pairing, scan_clusters, model_clusters, cost: best_cost }
 }
 
 #[cfg(test)]
@@ -222,16 +177,7 @@ mod tests {
     #[test]
     fn index_pairing_is_exact_in_the_paper_setting() {
         let id = ModelId::Model1;
-        let ds = make(
-            id,
-            600,
-            &id.table1_truth(),
-            &ScanSpec {
-                sampling: Sampling::Paper,
-                noise: 0.0,
-                seed: 1,
-            },
-        );
+        let ds = make(id, 600, &id.table1_truth(), &ScanSpec { sampling: Sampling::Paper, noise: 0.0, seed: 1 });
         let nn = NearestNeighbours::new(&ds.model);
         let init = initial_pose(&nn, &ds.scan, &ds.scan, 30, 5, InitMode::Auto);
         assert_eq!(init.pairing, Pairing::Index);
@@ -246,19 +192,11 @@ mod tests {
             id,
             1500,
             &id.table1_truth(),
-            &ScanSpec {
-                sampling: Sampling::Independent { points: 1200 },
-                noise: 0.0,
-                seed: 3,
-            },
+            &ScanSpec { sampling: Sampling::Independent { points: 1200 }, noise: 0.0, seed: 3 },
         );
         let nn = NearestNeighbours::new(&ds.model);
         let init = initial_pose(&nn, &ds.scan, &ds.scan[..400], 60, 5, InitMode::Auto);
         assert_eq!(init.pairing, Pairing::Nearest);
-        assert!(
-            init.pose.rotation_angle_to(&ds.truth).to_degrees() < 10.0,
-            "{:?}",
-            init.pose.euler_deg()
-        );
+        assert!(init.pose.rotation_angle_to(&ds.truth).to_degrees() < 10.0, "{:?}", init.pose.euler_deg());
     }
 }

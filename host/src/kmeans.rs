@@ -54,10 +54,7 @@ pub fn kmeans(points: &[Point3<f64>], settings: &KmeansSettings) -> Clustering {
     // k-means++ seeding.
     let mut centroids = Vec::with_capacity(k);
     centroids.push(points[rng.gen_range(0..n)]);
-    let mut d2: Vec<f64> = points
-        .iter()
-        .map(|p| (p - centroids[0]).norm_squared())
-        .collect();
+    let mut d2: Vec<f64> = points.iter().map(|p| (p - centroids[0]).norm_squared()).collect();
     while centroids.len() < k {
         let total: f64 = d2.iter().sum();
         let pick = if total > 0.0 {
@@ -83,10 +80,7 @@ pub fn kmeans(points: &[Point3<f64>], settings: &KmeansSettings) -> Clustering {
     // Lloyd iterations.
     let mut labels = vec![usize::MAX; n];
     for _ in 0..settings.max_iterations.max(1) {
-        let next: Vec<usize> = points
-            .par_iter()
-            .map(|p| nearest(&centroids, p).0)
-            .collect();
+        let next: Vec<usize> = points.par_iter().map(|p| nearest(&centroids, p).0).collect();
         let changed = next != labels;
         labels = next;
         let mut sums = vec![nalgebra::Vector3::zeros(); k];
@@ -119,11 +113,7 @@ pub fn kmeans(points: &[Point3<f64>], settings: &KmeansSettings) -> Clustering {
 }
 
 /// Order clusters by their lowest member index and drop any that ended empty.
-fn sequential_sort(
-    points: &[Point3<f64>],
-    centroids: Vec<Point3<f64>>,
-    labels: Vec<usize>,
-) -> Clustering {
+fn sequential_sort(points: &[Point3<f64>], centroids: Vec<Point3<f64>>, labels: Vec<usize>) -> Clustering {
     let k = centroids.len();
     let mut members = vec![Vec::new(); k];
     for (i, &l) in labels.iter().enumerate() {
@@ -135,19 +125,10 @@ fn sequential_sort(
     for (new, &old) in order.iter().enumerate() {
         relabel[old] = new;
     }
-    let members: Vec<Vec<usize>> = order
-        .iter()
-        .map(|&j| std::mem::take(&mut members[j]))
-        .collect();
-    let centroids = members
-        .iter()
-        .map(|m| crate::cloud::centroid(&m.iter().map(|&i| points[i]).collect::<Vec<_>>()))
-        .collect();
-    Clustering {
-        centroids,
-        labels: labels.iter().map(|&l| relabel[l]).collect(),
-        members,
-    }
+    let members: Vec<Vec<usize>> = order.iter().map(|&j| std::mem::take(&mut members[j])).collect();
+    let centroids =
+        members.iter().map(|m| crate::cloud::centroid(&m.iter().map(|&i| points[i]).collect::<Vec<_>>())).collect();
+    Clustering { centroids, labels: labels.iter().map(|&l| relabel[l]).collect(), members }
 }
 
 /// How clusters of the scan are paired with clusters of the model.
@@ -167,19 +148,11 @@ mod tests {
 
     fn blobs() -> Vec<Point3<f64>> {
         let mut rng = ChaCha8Rng::seed_from_u64(3);
-        let centres = [
-            Point3::new(0.0, 0.0, 0.0),
-            Point3::new(5.0, 0.0, 0.0),
-            Point3::new(0.0, 5.0, 1.0),
-        ];
+        let centres = [Point3::new(0.0, 0.0, 0.0), Point3::new(5.0, 0.0, 0.0), Point3::new(0.0, 5.0, 1.0)];
         (0..300)
             .map(|i| {
                 let c = centres[i % 3];
-                c + nalgebra::Vector3::new(
-                    rng.gen_range(-0.5..0.5),
-                    rng.gen_range(-0.5..0.5),
-                    rng.gen_range(-0.5..0.5),
-                )
+                c + nalgebra::Vector3::new(rng.gen_range(-0.5..0.5), rng.gen_range(-0.5..0.5), rng.gen_range(-0.5..0.5))
             })
             .collect()
     }
@@ -187,14 +160,7 @@ mod tests {
     #[test]
     fn finds_separated_blobs_and_sorts_sequentially() {
         let pts = blobs();
-        let c = kmeans(
-            &pts,
-            &KmeansSettings {
-                k: 3,
-                max_iterations: 50,
-                seed: 1,
-            },
-        );
+        let c = kmeans(&pts, &KmeansSettings { k: 3, max_iterations: 50, seed: 1 });
         assert_eq!(c.members.len(), 3);
         for (j, m) in c.members.iter().enumerate() {
             assert_eq!(m.len(), 100);
@@ -208,11 +174,7 @@ mod tests {
         let pts = blobs();
         let pose = Pose::from_params(&[1.0, -2.0, 0.5, 0.7, 0.3, -0.2, 1.0]);
         let moved = pose.apply_all(&pts);
-        let s = KmeansSettings {
-            k: 20,
-            max_iterations: 100,
-            seed: 42,
-        };
+        let s = KmeansSettings { k: 20, max_iterations: 100, seed: 42 };
         let a = kmeans(&pts, &s);
         let b = kmeans(&moved, &s);
         assert_eq!(a.labels, b.labels);
@@ -224,14 +186,7 @@ mod tests {
     #[test]
     fn more_clusters_than_points_is_clamped() {
         let pts = blobs()[..5].to_vec();
-        let c = kmeans(
-            &pts,
-            &KmeansSettings {
-                k: 50,
-                max_iterations: 10,
-                seed: 0,
-            },
-        );
+        let c = kmeans(&pts, &KmeansSettings { k: 50, max_iterations: 10, seed: 0 });
         assert!(c.members.len() <= 5);
         assert_eq!(c.labels.len(), 5);
     }

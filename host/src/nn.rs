@@ -42,15 +42,8 @@ impl NearestNeighbours {
     /// Closest model point to `q`.
     #[inline]
     pub fn closest(&self, q: &Point3<f64>) -> Closest {
-        let nn = self
-            .tree
-            .query(&[q.x, q.y, q.z])
-            .nearest_one::<SquaredEuclidean<f64>>()
-            .execute();
-        Closest {
-            index: nn.item as usize,
-            dist2: nn.distance,
-        }
+        let nn = self.tree.query(&[q.x, q.y, q.z]).nearest_one::<SquaredEuclidean<f64>>().execute();
+        Closest { index: nn.item as usize, dist2: nn.distance }
     }
 
     /// Closest model point to each query, in order (parallel for large batches).
@@ -74,10 +67,7 @@ impl NearestNeighbours {
             .nearest_n::<SquaredEuclidean<f64>>(k)
             .execute()
             .into_iter()
-            .map(|nn| Closest {
-                index: nn.item as usize,
-                dist2: nn.distance,
-            })
+            .map(|nn| Closest { index: nn.item as usize, dist2: nn.distance })
             .collect()
     }
 
@@ -98,9 +88,7 @@ mod tests {
 
     #[test]
     fn grid_with_repeated_coordinates() {
-        let model: Vec<_> = (0..60)
-            .flat_map(|i| (0..40).map(move |j| Point3::new(i as f64, j as f64, 0.0)))
-            .collect();
+        let model: Vec<_> = (0..60).flat_map(|i| (0..40).map(move |j| Point3::new(i as f64, j as f64, 0.0))).collect();
         let nn = NearestNeighbours::new(&model);
         let c = nn.closest(&Point3::new(10.2, 20.9, 0.5));
         assert_eq!(model[c.index], Point3::new(10.0, 21.0, 0.0));
@@ -112,21 +100,12 @@ mod tests {
     #[test]
     fn matches_brute_force() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
-        let mut pt = || {
-            Point3::new(
-                rng.gen_range(-1.0..1.0),
-                rng.gen_range(-1.0..1.0),
-                rng.gen_range(-1.0..1.0),
-            )
-        };
+        let mut pt = || Point3::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0));
         let model: Vec<_> = (0..500).map(|_| pt()).collect();
         let queries: Vec<_> = (0..700).map(|_| pt()).collect();
         let nn = NearestNeighbours::new(&model);
         for (q, c) in queries.iter().zip(nn.closest_all(&queries)) {
-            let best = model
-                .iter()
-                .map(|m| (m - q).norm_squared())
-                .fold(f64::INFINITY, f64::min);
+            let best = model.iter().map(|m| (m - q).norm_squared()).fold(f64::INFINITY, f64::min);
             assert!((best - c.dist2).abs() < 1e-12);
             assert!(((model[c.index] - q).norm_squared() - best).abs() < 1e-12);
         }
@@ -136,13 +115,7 @@ mod tests {
     fn nearest_k_matches_brute_force() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
         let model: Vec<_> = (0..300)
-            .map(|_| {
-                Point3::new(
-                    rng.gen_range(-1.0..1.0),
-                    rng.gen_range(-1.0..1.0),
-                    rng.gen_range(-1.0..1.0),
-                )
-            })
+            .map(|_| Point3::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0)))
             .collect();
         let nn = NearestNeighbours::new(&model);
         let q = Point3::new(0.1, -0.2, 0.3);

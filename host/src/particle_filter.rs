@@ -134,9 +134,7 @@ fn weighted_estimate(obj: &dyn Objective, particles: &[Vec<f64>], w: &[f64]) -> 
                 let (s, c) = particles
                     .iter()
                     .zip(w)
-                    .fold((0.0, 0.0), |(s, c), (p, &wi)| {
-                        (s + wi * p[d].sin(), c + wi * p[d].cos())
-                    });
+                    .fold((0.0, 0.0), |(s, c), (p, &wi)| (s + wi * p[d].sin(), c + wi * p[d].cos()));
                 s.atan2(c)
             } else {
                 particles.iter().zip(w).map(|(p, &wi)| wi * p[d]).sum()
@@ -145,12 +143,7 @@ fn weighted_estimate(obj: &dyn Objective, particles: &[Vec<f64>], w: &[f64]) -> 
         .collect()
 }
 
-fn weighted_sigma(
-    obj: &dyn Objective,
-    particles: &[Vec<f64>],
-    w: &[f64],
-    centre: &[f64],
-) -> Vec<f64> {
+fn weighted_sigma(obj: &dyn Objective, particles: &[Vec<f64>], w: &[f64], centre: &[f64]) -> Vec<f64> {
     (0..obj.dim())
         .map(|d| {
             let v: f64 = particles
@@ -170,12 +163,7 @@ fn weighted_sigma(
 }
 
 /// Run the filter from `init` with initial standard deviations `sigma0`.
-pub fn run(
-    obj: &dyn Objective,
-    init: &[f64],
-    sigma0: &[f64],
-    settings: &FilterSettings,
-) -> FilterResult {
+pub fn run(obj: &dyn Objective, init: &[f64], sigma0: &[f64], settings: &FilterSettings) -> FilterResult {
     let dim = obj.dim();
     assert_eq!(init.len(), dim);
     assert_eq!(sigma0.len(), dim);
@@ -189,9 +177,7 @@ pub fn run(
     // First draw: uniform over the region.
     let mut particles: Vec<Vec<f64>> = (0..n)
         .map(|_| {
-            let mut x: Vec<f64> = (0..dim)
-                .map(|d| centre[d] + half(&sigma, d) * rng.gen_range(-1.0..=1.0))
-                .collect();
+            let mut x: Vec<f64> = (0..dim).map(|d| centre[d] + half(&sigma, d) * rng.gen_range(-1.0..=1.0)).collect();
             obj.constrain(&mut x);
             x
         })
@@ -219,19 +205,9 @@ pub fn run(
         // Weigh.
         let costs: Vec<f64> = particles.par_iter().map(|x| obj.cost(x)).collect();
         let (imin, cmin) =
-            costs
-                .iter()
-                .copied()
-                .enumerate()
-                .fold(
-                    (0, f64::INFINITY),
-                    |a, (i, c)| if c < a.1 { (i, c) } else { a },
-                );
+            costs.iter().copied().enumerate().fold((0, f64::INFINITY), |a, (i, c)| if c < a.1 { (i, c) } else { a });
         let excess: Vec<f64> = costs.iter().map(|c| c - cmin).collect();
-        let q_k = settings
-            .q
-            .max(crate::icp::median(&excess) / 6.0)
-            .max(1e-300);
+        let q_k = settings.q.max(crate::icp::median(&excess) / 6.0).max(1e-300);
         let mut w: Vec<f64> = excess.iter().map(|e| (-e / (2.0 * q_k)).exp()).collect();
         let total: f64 = w.iter().sum();
         w.iter_mut().for_each(|x| *x /= total);
@@ -285,13 +261,7 @@ pub fn run(
         let picks = systematic_resample(&w, rng.gen_range(0.0..1.0), n);
         particles = picks.into_iter().map(|i| particles[i].clone()).collect();
     }
-    FilterResult {
-        estimate: best.1,
-        cost: best.0,
-        iterations,
-        history,
-        particles,
-    }
+    FilterResult { estimate: best.1, cost: best.0, iterations, history, particles }
 }
 
 #[cfg(test)]
@@ -337,11 +307,7 @@ mod tests {
         // Start in the false basin; 3.0 rad and -3.0 rad are close on the circle.
         let r = run(&Bowl, &[-1.0, -3.2], &[1.5, 1.5], &settings(1));
         assert!((r.estimate[0] - 1.0).abs() < 0.05, "{:?}", r.estimate);
-        assert!(
-            crate::geometry::wrap_angle(r.estimate[1] - 3.0).abs() < 0.05,
-            "{:?}",
-            r.estimate
-        );
+        assert!(crate::geometry::wrap_angle(r.estimate[1] - 3.0).abs() < 0.05, "{:?}", r.estimate);
         assert!(r.iterations < 40, "threshold stop expected");
     }
 

@@ -180,10 +180,7 @@ impl Objective for PoseObjective<'_> {
             return None;
         }
         let start = self.pose(x);
-        let s = IcpSettings {
-            max_iterations: self.refine_iterations,
-            ..Default::default()
-        };
+        let s = IcpSettings { max_iterations: self.refine_iterations, ..Default::default() };
         let r = icp(self.nn, self.sample, &start, &s);
         Some((self.frame.params(&r.pose).to_vec(), r.msd))
     }
@@ -193,33 +190,21 @@ impl Objective for PoseObjective<'_> {
 }
 
 /// Register `scan` to the model behind `nn` with PF-ICP.
-pub fn register(
-    nn: &NearestNeighbours,
-    scan: &[Point3<f64>],
-    settings: &PfIcpSettings,
-) -> PfIcpResult {
+pub fn register(nn: &NearestNeighbours, scan: &[Point3<f64>], settings: &PfIcpSettings) -> PfIcpResult {
     let model = nn.points();
     let diag = crate::cloud::bbox_diagonal(model);
     let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
     let sample: Vec<Point3<f64>> = if scan.len() > settings.weight_points {
-        scan.choose_multiple(&mut rng, settings.weight_points)
-            .copied()
-            .collect()
+        scan.choose_multiple(&mut rng, settings.weight_points).copied().collect()
     } else {
         scan.to_vec()
     };
-    let k = settings
-        .clusters
-        .min(scan.len().min(model.len()) / 10)
-        .max(3);
+    let k = settings.clusters.min(scan.len().min(model.len()) / 10).max(3);
 
     let t0 = Instant::now();
     let initial = initial_pose(nn, scan, &sample, k, settings.seed, settings.init);
     let t1 = Instant::now();
-    let cov_settings = IcpSettings {
-        max_iterations: 30,
-        ..Default::default()
-    };
+    let cov_settings = IcpSettings { max_iterations: 30, ..Default::default() };
     let covariance = approximate_icp_variance(
         nn,
         scan,
@@ -231,26 +216,15 @@ pub fn register(
     );
     let t2 = Instant::now();
 
-    let frame = Centred {
-        scan: crate::cloud::centroid(scan),
-        model: crate::cloud::centroid(model),
-    };
+    let frame = Centred { scan: crate::cloud::centroid(scan), model: crate::cloud::centroid(model) };
     let init_params = frame.params(&initial.pose);
     let (_, variance) = covariance.stats_in(&frame, &initial.pose);
     let cap = sigma_cap(diag, initial.pose.scale);
     let floor = sigma_floor(diag, initial.pose.scale);
     let prior = start_prior(initial.pairing, diag, initial.pose.scale);
-    let sigma0: Vec<f64> = variance
-        .iter()
-        .enumerate()
-        .map(|(d, v)| v.sqrt().max(prior[d]).max(floor[d]).min(cap[d]))
-        .collect();
-    let objective = PoseObjective {
-        nn,
-        sample: &sample,
-        frame,
-        refine_iterations: settings.icp_per_iteration,
-    };
+    let sigma0: Vec<f64> =
+        variance.iter().enumerate().map(|(d, v)| v.sqrt().max(prior[d]).max(floor[d]).min(cap[d])).collect();
+    let objective = PoseObjective { nn, sample: &sample, frame, refine_iterations: settings.icp_per_iteration };
     let filter_settings = FilterSettings {
         particles: settings.particles,
         iterations: settings.iterations,
@@ -266,31 +240,18 @@ pub fn register(
     let filter_pose = frame.pose(filtered.estimate.as_slice().try_into().expect("7 states"));
     let t3 = Instant::now();
 
-    let polish = IcpSettings {
-        max_iterations: settings.polish_iterations,
-        ..Default::default()
-    };
+    let polish = IcpSettings { max_iterations: settings.polish_iterations, ..Default::default() };
     let polished = icp(nn, scan, &filter_pose, &polish);
     let t4 = Instant::now();
     let mut errors: Vec<f64> = filtered.history.iter().map(|h| h.cost).collect();
     errors.push(polished.msd);
     PfIcpResult {
-        registration: Registration {
-            pose: polished.pose,
-            msd: polished.msd,
-            iterations: filtered.iterations,
-            errors,
-        },
+        registration: Registration { pose: polished.pose, msd: polished.msd, iterations: filtered.iterations, errors },
         initial,
         covariance,
         filter_pose,
         filter_history: filtered.history.clone(),
-        times: StageTimes {
-            clustering: t1 - t0,
-            covariance: t2 - t1,
-            filter: t3 - t2,
-            polish: t4 - t3,
-        },
+        times: StageTimes { clustering: t1 - t0, covariance: t2 - t1, filter: t3 - t2, polish: t4 - t3 },
     }
 }
 
@@ -306,19 +267,10 @@ mod tests {
             id,
             600,
             &id.table1_truth(),
-            &ScanSpec {
-                sampling: Sampling::Independent { points: 500 },
-                noise: 0.0,
-                seed: 4,
-            },
+            &ScanSpec { sampling: Sampling::Independent { points: 500 }, noise: 0.0, seed: 4 },
         );
         let nn = NearestNeighbours::new(&ds.model);
-        let s = PfIcpSettings {
-            clusters: 30,
-            particles: 20,
-            iterations: 8,
-            ..Default::default()
-        };
+        let s = PfIcpSettings { clusters: 30, particles: 20, iterations: 8, ..Default::default() };
         let a = register(&nn, &ds.scan, &s);
         let b = register(&nn, &ds.scan, &s);
         assert_eq!(a.registration.pose, b.registration.pose);

@@ -169,12 +169,7 @@ pub fn sparse_icp(
     let mut pose = *init;
     let mut errors: Vec<f64> = Vec::with_capacity(settings.max_iterations + 1);
     if n == 0 {
-        return Registration {
-            pose,
-            msd: 0.0,
-            iterations: 0,
-            errors: vec![0.0],
-        };
+        return Registration { pose, msd: 0.0, iterations: 0, errors: vec![0.0] };
     }
 
     let mut x = pose.apply_all(scan);
@@ -230,22 +225,13 @@ pub fn sparse_icp(
         }
         iterations += 1;
         closest = nn.closest_all(&x);
-        let moved = x
-            .iter()
-            .zip(&before)
-            .map(|(a, b)| (a - b).norm())
-            .fold(0.0, f64::max);
+        let moved = x.iter().zip(&before).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max);
         if failed || moved <= stop {
             errors.push(closest.iter().map(|c| c.dist2).sum::<f64>() / n as f64);
             break;
         }
     }
-    Registration {
-        pose,
-        msd: *errors.last().unwrap_or(&0.0),
-        iterations,
-        errors,
-    }
+    Registration { pose, msd: *errors.last().unwrap_or(&0.0), iterations, errors }
 }
 
 #[cfg(test)]
@@ -272,11 +258,7 @@ mod tests {
             .iter()
             .step_by(2)
             .map(|p| {
-                let e = Vector3::new(
-                    rng.gen_range(-1.0..1.0),
-                    rng.gen_range(-1.0..1.0),
-                    rng.gen_range(-1.0..1.0),
-                );
+                let e = Vector3::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0));
                 inv.apply(&(p + noise * e))
             })
             .collect()
@@ -287,12 +269,8 @@ mod tests {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
         let mut scan = clean.to_vec();
         for p in scan.iter_mut().skip(2).step_by(5) {
-            let dir = Vector3::new(
-                rng.gen_range(-1.0..1.0),
-                rng.gen_range(-1.0..1.0),
-                rng.gen_range(-1.0..1.0),
-            )
-            .normalize();
+            let dir =
+                Vector3::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0)).normalize();
             *p = Point3::from(dir * rng.gen_range(1.5..3.0));
         }
         scan
@@ -324,9 +302,7 @@ mod tests {
                         norm_p + mu / 2.0 * ((1.0 - a) * len).powi(2)
                     };
                     let a = z.norm() / len;
-                    let best = (0..=20000)
-                        .map(|k| f(k as f64 / 20000.0))
-                        .fold(f64::INFINITY, f64::min);
+                    let best = (0..=20000).map(|k| f(k as f64 / 20000.0)).fold(f64::INFINITY, f64::min);
                     assert!(f(a) <= best + 1e-7, "p {p} mu {mu} |h| {len}: a {a}");
                     assert!(a == 0.0 || (z.normalize() - h.normalize()).norm() < 1e-12);
                 }
@@ -365,15 +341,9 @@ mod tests {
         let big: Vec<_> = model.iter().map(|p| p * k).collect();
         let nn = NearestNeighbours::new(&model);
         let nn_big = NearestNeighbours::new(&big);
-        let s = SparseIcpSettings {
-            max_iterations: 4,
-            ..Default::default()
-        };
+        let s = SparseIcpSettings { max_iterations: 4, ..Default::default() };
         let a = sparse_icp(&nn, &scan, &Pose::identity(), &s);
-        let init = Pose {
-            scale: k,
-            ..Pose::identity()
-        };
+        let init = Pose { scale: k, ..Pose::identity() };
         let b = sparse_icp(&nn_big, &scan, &init, &s);
         assert!(rot_deg(&a.pose, &t) > 1e-3, "not a trivial comparison");
         assert!(a.pose.rotation_angle_to(&b.pose) < 1e-9);
@@ -391,14 +361,8 @@ mod tests {
             let pl = icp(&nn, &scan, &Pose::identity(), &IcpSettings::default());
             let (sp_rot, pl_rot) = (rot_deg(&sp.pose, &t), rot_deg(&pl.pose, &t));
             let (sp_scale, pl_scale) = (scale_err(&sp.pose, &t), scale_err(&pl.pose, &t));
-            assert!(
-                sp_rot < 0.5,
-                "noise {noise}: sparse rotation error {sp_rot} deg"
-            );
-            assert!(
-                sp_scale < 0.005,
-                "noise {noise}: sparse scale error {sp_scale}"
-            );
+            assert!(sp_rot < 0.5, "noise {noise}: sparse rotation error {sp_rot} deg");
+            assert!(sp_scale < 0.005, "noise {noise}: sparse scale error {sp_scale}");
             assert!(
                 pl_rot > 1.0 + 2.0 * sp_rot || pl_scale > 0.02 + 2.0 * sp_scale,
                 "noise {noise}: icp {pl_rot} deg / {pl_scale}, sparse {sp_rot} deg / {sp_scale}"

@@ -90,11 +90,7 @@ pub fn match_pairs(
     if !(s > 0.0) || !s.is_finite() {
         return None;
     }
-    Some(Pose {
-        scale: s,
-        rotation: r,
-        translation: mu_d - s * (r * mu_m),
-    })
+    Some(Pose { scale: s, rotation: r, translation: mu_d - s * (r * mu_m) })
 }
 
 #[cfg(test)]

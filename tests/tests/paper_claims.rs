@@ -26,7 +26,13 @@ fn paper_case(id: ModelId, clusters: usize) {
         let r = run(m, &nn, &ds.scan, &settings);
         let psi_err = (r.registration.pose.euler_deg()[2] - truth.euler_deg()[2]).abs();
         assert!(psi_err > 2.0, "{}: {} got psi right ({psi_err:.2} deg off)", id.name(), m.name());
-        assert!(r.registration.msd > 100.0 * pf.registration.msd.max(1e-12), "{}: {} msd {}", id.name(), m.name(), r.registration.msd);
+        assert!(
+            r.registration.msd > 100.0 * pf.registration.msd.max(1e-12),
+            "{}: {} msd {}",
+            id.name(),
+            m.name(),
+            r.registration.msd
+        );
     }
 }
 
@@ -53,7 +59,12 @@ fn independent_scans_sample_of_the_success_rate() {
         let mut failures = Vec::new();
         for trial in 0..8u64 {
             let truth = random_truth(&mut rng, 45.0, (0.7, 1.3), diag / 2.0);
-            let ds = make(id, 1500, &truth, &ScanSpec { sampling: Sampling::Independent { points: 1500 }, noise: 0.0, seed: trial });
+            let ds = make(
+                id,
+                1500,
+                &truth,
+                &ScanSpec { sampling: Sampling::Independent { points: 1500 }, noise: 0.0, seed: trial },
+            );
             let settings = MethodSettings { pf: PfIcpSettings { seed: trial, ..Default::default() } };
             let r = run(Method::PfIcp, &nn, &ds.scan, &settings);
             if !Tolerance::SUCCESS.accepts(&r.registration.pose, &truth, diag) {

@@ -174,32 +174,22 @@ pub fn format_from_path(path: &Path) -> Result<Format, IoError> {
 pub fn read_cloud(path: &Path, name: &str) -> Result<Cloud, IoError> {
     let file = path.display().to_string();
     let format = format_from_path(path)?;
-    let bytes = std::fs::read(path).map_err(|source| IoError::Read {
-        file: file.clone(),
-        source,
-    })?;
-    let points = read_points_from_bytes(&bytes, format).map_err(|problem| IoError::Parse {
-        file: file.clone(),
-        problem,
-    })?;
+    let bytes = std::fs::read(path).map_err(|source| IoError::Read { file: file.clone(), source })?;
+    let points =
+        read_points_from_bytes(&bytes, format).map_err(|problem| IoError::Parse { file: file.clone(), problem })?;
     Cloud::new(name, points).map_err(|source| IoError::Cloud { file, source })
 }
 
 /// Write `points` to `path` in `format`, replacing any existing file. Points
 /// are written as given (no validation).
 pub fn write_cloud(path: &Path, points: &[Point3<f64>], format: Format) -> Result<(), IoError> {
-    std::fs::write(path, write_points_to_bytes(points, format)).map_err(|source| IoError::Write {
-        file: path.display().to_string(),
-        source,
-    })
+    std::fs::write(path, write_points_to_bytes(points, format))
+        .map_err(|source| IoError::Write { file: path.display().to_string(), source })
 }
 
 /// Parse the points in `bytes`. Both PLY formats detect ascii or binary from
 /// the header. The points are not validated (see [`Cloud::new`]).
-pub fn read_points_from_bytes(
-    bytes: &[u8],
-    format: Format,
-) -> Result<Vec<Point3<f64>>, ParseError> {
+pub fn read_points_from_bytes(bytes: &[u8], format: Format) -> Result<Vec<Point3<f64>>, ParseError> {
     match format {
         Format::PlyAscii | Format::PlyBinary => ply::read(bytes),
         Format::Xyz => text::read_xyz(bytes),
@@ -230,10 +220,7 @@ fn fmt_f64(v: f64) -> String {
 
 /// Parse one numeric field, reporting `line` on failure.
 fn parse_f64(field: &str, line: usize) -> Result<f64, ParseError> {
-    field.parse::<f64>().map_err(|_| ParseError::BadNumber {
-        line,
-        text: shorten(field),
-    })
+    field.parse::<f64>().map_err(|_| ParseError::BadNumber { line, text: shorten(field) })
 }
 
 /// At most 40 characters of `s`, for error messages.
@@ -261,12 +248,9 @@ mod tests {
     #[test]
     fn every_format_round_trips_exactly_through_files() {
         let dir = tempfile::tempdir().unwrap();
-        for (format, file) in [
-            (Format::PlyAscii, "a.ply"),
-            (Format::PlyBinary, "b.ply"),
-            (Format::Xyz, "c.xyz"),
-            (Format::Csv, "d.csv"),
-        ] {
+        for (format, file) in
+            [(Format::PlyAscii, "a.ply"), (Format::PlyBinary, "b.ply"), (Format::Xyz, "c.xyz"), (Format::Csv, "d.csv")]
+        {
             let path = dir.path().join(file);
             write_cloud(&path, &sample(), format).unwrap();
             let cloud = read_cloud(&path, "scan").unwrap();
@@ -281,18 +265,7 @@ mod tests {
 
     #[test]
     fn fmt_f64_round_trips() {
-        for v in [
-            0.0,
-            -0.0,
-            1.0,
-            0.1,
-            1e-5,
-            9.99e-6,
-            1e16,
-            123.456,
-            5e-324,
-            f64::MAX,
-        ] {
+        for v in [0.0, -0.0, 1.0, 0.1, 1e-5, 9.99e-6, 1e16, 123.456, 5e-324, f64::MAX] {
             let s = fmt_f64(v);
             assert_eq!(s.parse::<f64>().unwrap().to_bits(), v.to_bits(), "{s}");
         }
@@ -302,20 +275,12 @@ mod tests {
 
     #[test]
     fn format_from_extension() {
-        assert_eq!(
-            format_from_path(Path::new("a.PLY")).unwrap(),
-            Format::PlyBinary
-        );
+        assert_eq!(format_from_path(Path::new("a.PLY")).unwrap(), Format::PlyBinary);
         assert_eq!(format_from_path(Path::new("a.txt")).unwrap(), Format::Xyz);
         assert_eq!(format_from_path(Path::new("a.pts")).unwrap(), Format::Xyz);
         assert_eq!(format_from_path(Path::new("d/a.Csv")).unwrap(), Format::Csv);
-        let e = format_from_path(Path::new("scan.obj"))
-            .unwrap_err()
-            .to_string();
-        assert!(
-            e.contains("scan.obj") && e.contains("unknown") && e.contains(".obj"),
-            "{e}"
-        );
+        let e = format_from_path(Path::new("scan.obj")).unwrap_err().to_string();
+        assert!(e.contains("scan.obj") && e.contains("unknown") && e.contains(".obj"), "{e}");
         let e = format_from_path(Path::new("scan")).unwrap_err().to_string();
         assert!(e.contains("no extension"), "{e}");
     }
@@ -327,10 +292,7 @@ mod tests {
         let e = read_cloud(&path, "scan").unwrap_err();
         assert!(matches!(e, IoError::Read { .. }));
         let msg = e.to_string();
-        assert!(
-            msg.contains("absent.xyz") && msg.contains("cannot read"),
-            "{msg}"
-        );
+        assert!(msg.contains("absent.xyz") && msg.contains("cannot read"), "{msg}");
         assert!(msg.to_lowercase().contains("no such file"), "{msg}");
     }
 
@@ -338,9 +300,7 @@ mod tests {
     fn unwritable_path_is_a_write_error() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("no_dir").join("out.csv");
-        let e = write_cloud(&path, &sample(), Format::Csv)
-            .unwrap_err()
-            .to_string();
+        let e = write_cloud(&path, &sample(), Format::Csv).unwrap_err().to_string();
         assert!(e.contains("cannot write") && e.contains("out.csv"), "{e}");
     }
 
@@ -352,10 +312,7 @@ mod tests {
         let e = read_cloud(&path, "scan").unwrap_err();
         assert!(matches!(e, IoError::Cloud { .. }));
         let msg = e.to_string();
-        assert!(
-            msg.contains("nan.xyz") && msg.contains("non-finite"),
-            "{msg}"
-        );
+        assert!(msg.contains("nan.xyz") && msg.contains("non-finite"), "{msg}");
 
         let path = dir.path().join("inf.csv");
         std::fs::write(&path, "x,y,z\n1,2,inf\n").unwrap();
@@ -374,10 +331,7 @@ mod tests {
         let path = dir.path().join("bad.xyz");
         std::fs::write(&path, "1 2 3\n1 2 x3\n").unwrap();
         let msg = read_cloud(&path, "scan").unwrap_err().to_string();
-        assert!(
-            msg.contains("bad.xyz") && msg.contains("line 2") && msg.contains("x3"),
-            "{msg}"
-        );
+        assert!(msg.contains("bad.xyz") && msg.contains("line 2") && msg.contains("x3"), "{msg}");
         assert!(!msg.contains('\n'));
     }
 }

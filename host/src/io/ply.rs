@@ -120,26 +120,13 @@ struct Header {
 /// Read the vertex positions of a PLY file of either supported encoding.
 pub(super) fn read(bytes: &[u8]) -> Result<Vec<Point3<f64>>, ParseError> {
     let header = parse_header(bytes)?;
-    let v = header
-        .elements
-        .iter()
-        .position(|e| e.name == "vertex")
-        .ok_or(ParseError::MissingVertexElement)?;
+    let v = header.elements.iter().position(|e| e.name == "vertex").ok_or(ParseError::MissingVertexElement)?;
     let vertex = &header.elements[v];
-    if let Some(p) = vertex
-        .props
-        .iter()
-        .find(|p| matches!(p.kind, Kind::List { .. }))
-    {
+    if let Some(p) = vertex.props.iter().find(|p| matches!(p.kind, Kind::List { .. })) {
         return Err(ParseError::ListInVertex(p.name.clone()));
     }
-    let find = |axis: &'static str| {
-        vertex
-            .props
-            .iter()
-            .position(|p| p.name == axis)
-            .ok_or(ParseError::MissingProperty(axis))
-    };
+    let find =
+        |axis: &'static str| vertex.props.iter().position(|p| p.name == axis).ok_or(ParseError::MissingProperty(axis));
     let xyz = [find("x")?, find("y")?, find("z")?];
     let body = bytes.get(header.body_start..).unwrap_or_default();
     let before = &header.elements[..v];
@@ -162,10 +149,7 @@ fn parse_header(bytes: &[u8]) -> Result<Header, ParseError> {
         pos += len.map_or(rest.len(), |l| l + 1);
         line_no += 1;
         let line = String::from_utf8_lossy(raw);
-        let bad_line = || ParseError::BadHeaderLine {
-            line: line_no,
-            text: shorten(line.trim()),
-        };
+        let bad_line = || ParseError::BadHeaderLine { line: line_no, text: shorten(line.trim()) };
         let tokens: Vec<&str> = line.split_whitespace().collect();
         if line_no == 1 {
             if tokens != ["ply"] {
@@ -183,32 +167,14 @@ fn parse_header(bytes: &[u8]) -> Result<Header, ParseError> {
                 });
             }
             ["element", name, count] => {
-                let count = count.parse().map_err(|_| ParseError::BadElementCount {
-                    line: line_no,
-                    count: shorten(count),
-                })?;
-                elements.push(Element {
-                    name: name.to_string(),
-                    count,
-                    props: Vec::new(),
-                });
+                let count =
+                    count.parse().map_err(|_| ParseError::BadElementCount { line: line_no, count: shorten(count) })?;
+                elements.push(Element { name: name.to_string(), count, props: Vec::new() });
             }
             ["property", "list", len, item, name] => {
-                let kind = Kind::List {
-                    len: scalar(len, line_no)?,
-                    item: scalar(item, line_no)?,
-                };
-                if matches!(
-                    kind,
-                    Kind::List {
-                        len: Scalar::F32 | Scalar::F64,
-                        ..
-                    }
-                ) {
-                    return Err(ParseError::UnsupportedType {
-                        line: line_no,
-                        ty: format!("list length {len}"),
-                    });
+                let kind = Kind::List { len: scalar(len, line_no)?, item: scalar(item, line_no)? };
+                if matches!(kind, Kind::List { len: Scalar::F32 | Scalar::F64, .. }) {
+                    return Err(ParseError::UnsupportedType { line: line_no, ty: format!("list length {len}") });
                 }
                 push_property(&mut elements, name, kind).ok_or_else(bad_line)?;
             }
@@ -227,37 +193,23 @@ fn parse_header(bytes: &[u8]) -> Result<Header, ParseError> {
             _ => return Err(bad_line()),
         }
     }
-    Err(if line_no == 0 {
-        ParseError::NotPly
-    } else {
-        ParseError::MissingEndHeader
-    })
+    Err(if line_no == 0 { ParseError::NotPly } else { ParseError::MissingEndHeader })
 }
 
 /// The scalar type named `ty` on header line `line`.
 fn scalar(ty: &str, line: usize) -> Result<Scalar, ParseError> {
-    Scalar::parse(ty).ok_or_else(|| ParseError::UnsupportedType {
-        line,
-        ty: shorten(ty),
-    })
+    Scalar::parse(ty).ok_or_else(|| ParseError::UnsupportedType { line, ty: shorten(ty) })
 }
 
 /// Add a property to the last element; `None` if there is no element yet.
 fn push_property(elements: &mut [Element], name: &str, kind: Kind) -> Option<()> {
-    elements.last_mut()?.props.push(Property {
-        name: name.to_string(),
-        kind,
-    });
+    elements.last_mut()?.props.push(Property { name: name.to_string(), kind });
     Some(())
 }
 
 /// The truncation error for `element` after `read` complete entries.
 fn truncated(element: &Element, read: usize) -> ParseError {
-    ParseError::Truncated {
-        element: element.name.clone(),
-        read,
-        declared: element.count,
-    }
+    ParseError::Truncated { element: element.name.clone(), read, declared: element.count }
 }
 
 /// Ascii body: one entry a non-blank line. `header_lines` numbers lines.
@@ -269,11 +221,8 @@ fn read_ascii(
     xyz: [usize; 3],
 ) -> Result<Vec<Point3<f64>>, ParseError> {
     let text = String::from_utf8_lossy(body);
-    let mut lines = text
-        .lines()
-        .enumerate()
-        .map(|(i, l)| (header_lines + 1 + i, l))
-        .filter(|(_, l)| !l.trim().is_empty());
+    let mut lines =
+        text.lines().enumerate().map(|(i, l)| (header_lines + 1 + i, l)).filter(|(_, l)| !l.trim().is_empty());
     for element in before.iter().filter(|e| !e.props.is_empty()) {
         for read in 0..element.count {
             lines.next().ok_or_else(|| truncated(element, read))?;
@@ -284,11 +233,7 @@ fn read_ascii(
         let (line, text) = lines.next().ok_or_else(|| truncated(vertex, read))?;
         let fields: Vec<&str> = text.split_whitespace().collect();
         if fields.len() < vertex.props.len() {
-            return Err(ParseError::TooFewColumns {
-                line,
-                found: fields.len(),
-                needed: vertex.props.len(),
-            });
+            return Err(ParseError::TooFewColumns { line, found: fields.len(), needed: vertex.props.len() });
         }
         let value = |i: usize| parse_f64(fields.get(i).copied().unwrap_or_default(), line);
         points.push(Point3::new(value(xyz[0])?, value(xyz[1])?, value(xyz[2])?));
@@ -323,10 +268,7 @@ fn read_binary(
         let record = records.next().ok_or_else(|| truncated(vertex, read))?;
         let mut c = [0.0; 3];
         for (slot, &i) in c.iter_mut().zip(xyz.iter()) {
-            let (off, s) = offsets
-                .get(i)
-                .copied()
-                .ok_or_else(|| truncated(vertex, read))?;
+            let (off, s) = offsets.get(i).copied().ok_or_else(|| truncated(vertex, read))?;
             let bytes = record.get(off..).unwrap_or_default();
             *slot = s.read_le(bytes).ok_or_else(|| truncated(vertex, read))?;
         }
@@ -356,8 +298,7 @@ fn skip_binary(body: &[u8], pos: usize, element: &Element) -> Result<usize, Pars
                     let n = body.get(pos..).and_then(|b| len.read_le(b));
                     pos += len.size();
                     // Negative lengths are rejected as truncation: nothing valid follows.
-                    n.filter(|n| *n >= 0.0)
-                        .and_then(|n| (n as usize).checked_mul(item.size()))
+                    n.filter(|n| *n >= 0.0).and_then(|n| (n as usize).checked_mul(item.size()))
                 }
             };
             pos = size
@@ -381,12 +322,7 @@ fn header(format: &str, n: usize) -> String {
 pub(super) fn write_ascii(points: &[Point3<f64>]) -> Vec<u8> {
     let mut out = header("ascii", points.len());
     for p in points {
-        out.push_str(&format!(
-            "{} {} {}\n",
-            fmt_f64(p.x),
-            fmt_f64(p.y),
-            fmt_f64(p.z)
-        ));
+        out.push_str(&format!("{} {} {}\n", fmt_f64(p.x), fmt_f64(p.y), fmt_f64(p.z)));
     }
     out.into_bytes()
 }
@@ -429,10 +365,7 @@ mod tests {
             3 0.1 0.2 0.3\n\
             0 3 2 255 1 0 0\n\n0 6 5 1 4 0 0 extra\n1 -9 -8 7 -7 1 1\n3 0 1 2\n";
         let pts = read(text.as_bytes()).unwrap();
-        assert_eq!(
-            pts,
-            vec![p(1.0, 2.0, 3.0), p(4.0, 5.0, 6.0), p(-7.0, -8.0, -9.0)]
-        );
+        assert_eq!(pts, vec![p(1.0, 2.0, 3.0), p(4.0, 5.0, 6.0), p(-7.0, -8.0, -9.0)]);
     }
 
     #[test]
@@ -453,10 +386,7 @@ mod tests {
             b.extend_from_slice(&7u16.to_le_bytes());
         }
         b.extend_from_slice(&[3, 0, 0, 0, 0, 1, 0, 0, 0, 2, 0, 0, 0]);
-        assert_eq!(
-            read(&b).unwrap(),
-            vec![p(0.25, -1.5, 7.0), p(1e300, 2.0, -3.0)]
-        );
+        assert_eq!(read(&b).unwrap(), vec![p(0.25, -1.5, 7.0), p(1e300, 2.0, -3.0)]);
     }
 
     #[test]
@@ -481,32 +411,17 @@ mod tests {
         let e = err(ASCII_HEADER.replace("vertex 2", "vertex many").as_bytes());
         assert!(e.contains("bad element count"), "{e}");
         let e = err(ASCII_HEADER.replace("float y", "quad y").as_bytes());
-        assert!(
-            e.contains("unsupported property type `quad`") && e.contains("line 5"),
-            "{e}"
-        );
-        let e = err(ASCII_HEADER
-            .replace("float y", "list uchar float y")
-            .as_bytes());
+        assert!(e.contains("unsupported property type `quad`") && e.contains("line 5"), "{e}");
+        let e = err(ASCII_HEADER.replace("float y", "list uchar float y").as_bytes());
         assert!(e.contains("list property `y`"), "{e}");
-        let e = err(ASCII_HEADER
-            .replace("ascii", "binary_big_endian")
-            .as_bytes());
-        assert!(
-            e.contains("unsupported PLY format `binary_big_endian`"),
-            "{e}"
-        );
+        let e = err(ASCII_HEADER.replace("ascii", "binary_big_endian").as_bytes());
+        assert!(e.contains("unsupported PLY format `binary_big_endian`"), "{e}");
         let e = err(ASCII_HEADER.replace("format ascii 1.0\n", "").as_bytes());
         assert!(e.contains("missing `format`"), "{e}");
         let e = err(ASCII_HEADER.replace("vertex", "point").as_bytes());
         assert!(e.contains("no `vertex` element"), "{e}");
-        let e = err(ASCII_HEADER
-            .replace("end_header", "bogus line\nend_header")
-            .as_bytes());
-        assert!(
-            e.contains("malformed PLY header at line 7: `bogus line`"),
-            "{e}"
-        );
+        let e = err(ASCII_HEADER.replace("end_header", "bogus line\nend_header").as_bytes());
+        assert!(e.contains("malformed PLY header at line 7: `bogus line`"), "{e}");
         let e = err(b"ply\nformat ascii 1.0\nproperty float x\nend_header\n");
         assert!(e.contains("line 3"), "{e}");
         assert!(err(b"xyz\n1 2 3\n").contains("not a PLY file"));
@@ -516,10 +431,7 @@ mod tests {
     #[test]
     fn body_errors() {
         let e = err(format!("{ASCII_HEADER}1 2 3\n").as_bytes());
-        assert!(
-            e.contains("truncated") && e.contains("read 1 of 2 declared `vertex`"),
-            "{e}"
-        );
+        assert!(e.contains("truncated") && e.contains("read 1 of 2 declared `vertex`"), "{e}");
         let e = err(format!("{ASCII_HEADER}1 2 3\n4 5\n").as_bytes());
         assert!(e.contains("too few columns at line 9"), "{e}");
         let e = err(format!("{ASCII_HEADER}1 2 3\n4 five 6\n").as_bytes());
@@ -529,10 +441,7 @@ mod tests {
         assert!(e.contains("truncated") && e.contains("read 1 of 3"), "{e}");
         let mut b = ASCII_HEADER
             .replace("ascii", "binary_little_endian")
-            .replace(
-                "element vertex",
-                "element pre 1\nproperty list char int l\nelement vertex",
-            )
+            .replace("element vertex", "element pre 1\nproperty list char int l\nelement vertex")
             .into_bytes();
         b.push(0xff); // list length -1
         assert!(err(&b).contains("read 0 of 1 declared `pre`"));
@@ -546,10 +455,7 @@ mod tests {
         assert!(e.contains(&format!("read 1 of {big}")), "{e}");
         let b = h(&big).replace("ascii", "binary_little_endian");
         assert!(err(b.as_bytes()).contains("read 0 of"));
-        let b = b.replace(
-            "element vertex",
-            &format!("element e {big}\nproperty int i\nelement vertex"),
-        );
+        let b = b.replace("element vertex", &format!("element e {big}\nproperty int i\nelement vertex"));
         assert!(err(b.as_bytes()).contains("declared `e`"));
     }
 

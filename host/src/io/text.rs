@@ -50,10 +50,7 @@ pub(super) fn read_csv(bytes: &[u8]) -> Result<Vec<Point3<f64>>, ParseError> {
 /// Trim spaces and one pair of surrounding double quotes.
 fn unquote(field: &str) -> &str {
     let f = field.trim();
-    f.strip_prefix('"')
-        .and_then(|g| g.strip_suffix('"'))
-        .unwrap_or(f)
-        .trim()
+    f.strip_prefix('"').and_then(|g| g.strip_suffix('"')).unwrap_or(f).trim()
 }
 
 /// A header line has no numeric field.
@@ -72,11 +69,7 @@ fn point_at(fields: &[&str], columns: [usize; 3], line: usize) -> Result<Point3<
     let needed = columns.iter().max().map_or(3, |&m| m + 1);
     let mut xyz = [0.0; 3];
     for (slot, &c) in xyz.iter_mut().zip(columns.iter()) {
-        let field = fields.get(c).ok_or(ParseError::TooFewColumns {
-            line,
-            found: fields.len(),
-            needed,
-        })?;
+        let field = fields.get(c).ok_or(ParseError::TooFewColumns { line, found: fields.len(), needed })?;
         *slot = parse_f64(field, line)?;
     }
     Ok(Point3::from(xyz))
@@ -113,22 +106,13 @@ mod tests {
     fn xyz_skips_comments_blanks_and_extra_columns() {
         let text = "# header comment\n\n1 2 3 0.5 255\n  4\t5 6 # trailing\r\n   \n7 8 9\n";
         let pts = read_xyz(text.as_bytes()).unwrap();
-        assert_eq!(
-            pts,
-            vec![p(1.0, 2.0, 3.0), p(4.0, 5.0, 6.0), p(7.0, 8.0, 9.0)]
-        );
+        assert_eq!(pts, vec![p(1.0, 2.0, 3.0), p(4.0, 5.0, 6.0), p(7.0, 8.0, 9.0)]);
     }
 
     #[test]
     fn xyz_errors_give_line_numbers() {
         let e = read_xyz(b"1 2 3\n\n1 2 three\n").unwrap_err();
-        assert_eq!(
-            e,
-            ParseError::BadNumber {
-                line: 3,
-                text: "three".into()
-            }
-        );
+        assert_eq!(e, ParseError::BadNumber { line: 3, text: "three".into() });
         assert!(e.to_string().contains("malformed number") && e.to_string().contains("line 3"));
         let e = read_xyz(b"1 2 3\n4 5\n").unwrap_err().to_string();
         assert!(e.contains("too few columns") && e.contains("line 2"), "{e}");
@@ -151,10 +135,7 @@ mod tests {
     #[test]
     fn csv_errors() {
         let e = read_csv(b"x,y,z\n1,2,3\n1,,3\n").unwrap_err().to_string();
-        assert!(
-            e.contains("malformed number") && e.contains("line 3"),
-            "{e}"
-        );
+        assert!(e.contains("malformed number") && e.contains("line 3"), "{e}");
         let e = read_csv(b"x,y,z\n1,2\n").unwrap_err().to_string();
         assert!(e.contains("too few columns") && e.contains("line 2"), "{e}");
         let e = read_csv(b"a,x,y,z\n1,2,3\n").unwrap_err().to_string();
@@ -166,10 +147,7 @@ mod tests {
 
     #[test]
     fn write_then_read_is_exact() {
-        let pts = vec![
-            p(0.1, -0.0, 1e-300),
-            p(f64::MAX, f64::MIN_POSITIVE, 2.0 / 3.0),
-        ];
+        let pts = vec![p(0.1, -0.0, 1e-300), p(f64::MAX, f64::MIN_POSITIVE, 2.0 / 3.0)];
         assert_eq!(read_xyz(&write_delimited(&pts, " ", None)).unwrap(), pts);
         let csv = write_delimited(&pts, ",", Some("x,y,z"));
         assert!(csv.starts_with(b"x,y,z\n"));
