@@ -14,6 +14,7 @@ pub mod covariance;
 pub mod datasets;
 pub mod em_icp;
 pub mod eval;
+pub mod fixed;
 pub mod geometry;
 pub mod hessian;
 pub mod icp;

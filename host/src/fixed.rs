@@ -1,0 +1,127 @@
+//! The bridge between the host's f64 clouds and the board's fixed-point formats
+//! (`pficp_fpga::format`, docs/fixed-point.md).
+//!
+//! Each cloud is normalised by its own similarity: `x_n = (x - c) / r`, with `c` the
+//! centroid and `r` the largest distance from it, so every normalised point lies in the
+//! unit ball (Q3.13 holds [-4, 4)). A pose `d = s R m + T` between the original clouds
+//! becomes `d_n = (s r_m / r_d) R m_n + (s R c_m + T - c_d) / r_d` between the normalised
+//! ones, and squared distances scale by `1 / r_d^2`.
+
+use crate::geometry::Pose;
+use nalgebra::{Point3, Vector3};
+use pficp_fpga::format::{self, FxPoint, FxPose};
+
+/// The similarity that normalises one cloud: `x_n = (x - centre) / radius`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Normalisation {
+    /// Centroid of the cloud.
+    pub centre: Point3<f64>,
+    /// Largest distance of a point from the centroid (> 0).
+    pub radius: f64,
+}
+
+impl Normalisation {
+    /// The normalisation of `points` (non-empty; a single point gets radius 1).
+    pub fn of(points: &[Point3<f64>]) -> Self {
+        let centre = crate::cloud::centroid(points);
+        let radius = points.iter().map(|p| (p - centre).norm()).fold(0.0, f64::max);
+        Normalisation { centre, radius: if radius > 0.0 { radius } else { 1.0 } }
+    }
+
+    /// Normalise and quantise a cloud to Q3.13.
+    pub fn quantise(&self, points: &[Point3<f64>]) -> Vec<FxPoint> {
+        points.iter().map(|p| format::point(((p - self.centre) / self.radius).into())).collect()
+    }
+
+    /// A quantised point back in the original frame.
+    pub fn restore(&self, p: FxPoint) -> Point3<f64> {
+        self.centre
+            + Vector3::new(format::coord_to_f64(p[0]), format::coord_to_f64(p[1]), format::coord_to_f64(p[2]))
+                * self.radius
+    }
+}
+
+/// The pose between normalised clouds for a pose between the original ones.
+pub fn normalised_pose(pose: &Pose, scan: &Normalisation, model: &Normalisation) -> Pose {
+    Pose {
+        scale: pose.scale * scan.radius / model.radius,
+        rotation: pose.rotation,
+        translation: (pose.scale * (pose.rotation * scan.centre.coords) + pose.translation - model.centre.coords)
+            / model.radius,
+    }
+}
+
+/// The pose between the original clouds for a pose between the normalised ones.
+pub fn original_pose(pose_n: &Pose, scan: &Normalisation, model: &Normalisation) -> Pose {
+    let scale = pose_n.scale * model.radius / scan.radius;
+    Pose {
+        scale,
+        rotation: pose_n.rotation,
+        translation: model.radius * pose_n.translation + model.centre.coords
+            - scale * (pose_n.rotation * scan.centre.coords),
+    }
+}
+
+/// Quantise a normalised pose: `M = s R` in Q3.15, `T` in Q5.13.
+pub fn quantise_pose(pose_n: &Pose) -> FxPose {
+    let m = pose_n.scale * pose_n.rotation;
+    let rows = [m[(0, 0)], m[(0, 1)], m[(0, 2)], m[(1, 0)], m[(1, 1)], m[(1, 2)], m[(2, 0)], m[(2, 1)], m[(2, 2)]];
+    let t = pose_n.translation;
+    FxPose::from_f64(&rows, &[t.x, t.y, t.z])
+}
+
+/// Bound on the error of one transformed, quantised point against the exact transform of
+/// the exact normalised point, per coordinate (normalised units), for a pose of scale
+/// `s` (normalised) and points in the unit ball: the scan point's quantisation through
+/// `M` (`s * 3 * 2^-14`), `M`'s (`3 * 2^-16`), `T`'s (`2^-14`) and the output rounding
+/// (`2^-14`), plus the model point's quantisation (`2^-14`).
+pub fn coordinate_error_bound(s: f64) -> f64 {
+    let half = |frac: u32| 0.5 / (1u64 << frac) as f64;
+    s * 3.0 * half(format::COORD_FRAC)
+        + 3.0 * half(format::MATRIX_FRAC)
+        + half(format::TRANSLATION_FRAC)
+        + half(format::COORD_FRAC)
+        + half(format::COORD_FRAC)
+}
+
+/// Bound on `|cost_fixed - cost_exact|` (normalised units squared) for scan points whose
+/// exact nearest distances are `distances`: each point's squared distance moves by at
+/// most `2 d e + e^2` with `e = sqrt(3) * coordinate_error_bound(s)` (the minimum over
+/// the model moves no more than the largest move of its candidates).
+pub fn cost_error_bound(distances: &[f64], s: f64) -> f64 {
+    let e = 3f64.sqrt() * coordinate_error_bound(s);
+    distances.iter().map(|d| 2.0 * d * e + e * e).sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pose_round_trips_through_normalisation() {
+        let scan = Normalisation { centre: Point3::new(1.0, -2.0, 0.5), radius: 3.0 };
+        let model = Normalisation { centre: Point3::new(-0.3, 0.2, 4.0), radius: 5.0 };
+        let pose = Pose::from_params(&[0.4, -1.0, 2.0, 0.8, 0.1, -0.3, 0.6]);
+        let n = normalised_pose(&pose, &scan, &model);
+        let back = original_pose(&n, &scan, &model);
+        assert!((back.matrix4() - pose.matrix4()).norm() < 1e-12);
+        // Normalised scan point maps to the normalised model point.
+        let m = Point3::new(0.7, 0.1, -1.2);
+        let d = pose.apply(&m);
+        let m_n = Point3::from((m - scan.centre) / scan.radius);
+        let d_n = Point3::from((d - model.centre) / model.radius);
+        assert!((n.apply(&m_n) - d_n).norm() < 1e-12);
+    }
+
+    #[test]
+    fn normalised_cloud_fits_the_unit_ball() {
+        let pts: Vec<_> = (0..50).map(|i| Point3::new(i as f64, (i * i) as f64 * 0.1, -3.0)).collect();
+        let n = Normalisation::of(&pts);
+        for q in n.quantise(&pts) {
+            let r = q.iter().map(|&c| format::coord_to_f64(c).powi(2)).sum::<f64>().sqrt();
+            assert!(r <= 1.0 + 1e-3);
+        }
+        let p = n.restore(n.quantise(&pts)[7]);
+        assert!((p - pts[7]).norm() <= n.radius * 2e-4);
+    }
+}
