@@ -2,6 +2,7 @@
 //!
 //! - [`format`]: the fixed-point formats shared by host, reference and RTL.
 //! - [`pipeline`]: the cycle-accurate reference of the nearest-neighbour pipeline.
+//! - [`weights`]: the cycle-accurate reference of the weight stage (minimum cost, exp table).
 //!
 //! The bit-exact reference of the pipeline, the wire protocol and (behind the `rtl`
 //! feature) the rust_hdl RTL land with the hardware issues.
@@ -9,3 +10,4 @@
 
 pub mod format;
 pub mod pipeline;
+pub mod weights;
