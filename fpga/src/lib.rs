@@ -3,11 +3,13 @@
 //! - [`format`]: the fixed-point formats shared by host, reference and RTL.
 //! - [`pipeline`]: the cycle-accurate reference of the nearest-neighbour pipeline.
 //! - [`weights`]: the cycle-accurate reference of the weight stage (minimum cost, exp table).
+//! - [`particle_weights`]: the two wired together, as the RTL top.
 //!
 //! The bit-exact reference of the pipeline, the wire protocol and (behind the `rtl`
 //! feature) the rust_hdl RTL land with the hardware issues.
 #![warn(missing_docs)]
 
 pub mod format;
+pub mod particle_weights;
 pub mod pipeline;
 pub mod weights;
