@@ -1,0 +1,166 @@
+//! Real Verilator and Yosys runs (Verilator 5.006, Yosys 0.23). These tests do not skip when
+//! the tools are missing: they fail with the install hint (`apt-get install -y verilator yosys`).
+
+use hdl_gen::{lint, lint_file, synthesise, write_verilog, SynthOptions, INSTALL_HINT, VERILOG_FILE};
+use std::path::PathBuf;
+use std::process::Command;
+
+fn tiny() -> String {
+    std::fs::read_to_string(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/tiny_top.v")).unwrap()
+}
+
+fn fresh_dir(name: &str) -> PathBuf {
+    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+/// Unwraps, printing the whole error (which carries the install hint if a tool is missing).
+fn ok<T>(r: anyhow::Result<T>) -> T {
+    r.unwrap_or_else(|e| panic!("{e:#}\n(the HDL tools are required: {INSTALL_HINT})"))
+}
+
+#[test]
+fn lint_and_synthesise_tiny_design() {
+    let dir = fresh_dir("hdl-gen-tiny");
+    let v = tiny();
+    let report = ok(lint(&v, &dir));
+    assert!(report.is_clean(), "{}", report.output);
+    assert_eq!(report.file, dir.join(VERILOG_FILE));
+
+    let t = std::time::Instant::now();
+    let r = ok(synthesise(&v, &dir, &SynthOptions::default()));
+    assert!(t.elapsed().as_secs() < 60, "yosys took {:?}", t.elapsed());
+    assert_eq!(r.dsp, 1, "the registered 18 x 18 multiplier is one DSP48A1: {:?}", r.cells_by_type);
+    assert!(r.bram16 >= 1.0, "the 1024 x 48 RAM is block RAM: {:?}", r.cells_by_type);
+    assert!(r.depth > 0, "logic depth");
+    assert_eq!(r.depth_path.len(), r.depth + 1);
+    assert!(r.depth_path[1..].iter().all(|s| s.cell_type.is_some()), "{:?}", r.depth_path);
+    assert!(r.carry4 > 0 && r.lut > 0 && r.ff > 0);
+    assert!(r.sta_ps.is_some());
+    assert!(r.yosys_version.starts_with("Yosys "), "{}", r.yosys_version);
+    for f in ["yosys.log", "synth.ys", "yosys_stat.json", "yosys_ltp.txt", "yosys_sta.txt", "yosys_cells.txt"] {
+        assert!(dir.join(f).is_file(), "{f}");
+    }
+    let log = std::fs::read_to_string(dir.join("yosys.log")).unwrap();
+    assert!(log.contains("Executing SYNTH_XILINX pass"), "the log is complete");
+}
+
+#[test]
+fn io_pads_option_keeps_the_buffers() {
+    let dir = fresh_dir("hdl-gen-tiny-pads");
+    let r = ok(synthesise(&tiny(), &dir, &SynthOptions { io_pads: true, ..SynthOptions::default() }));
+    assert!(r.io_buffers > 100 && r.bufg == 1, "{:?}", r.cells_by_type);
+    assert_eq!(r.dsp, 1);
+}
+
+/// Each waiver is needed: without them, Verilator -Wall reports exactly WIDTH and DECLFILENAME.
+#[test]
+fn waivers_are_needed_and_sufficient() {
+    let dir = fresh_dir("hdl-gen-no-waivers");
+    std::fs::create_dir_all(&dir).unwrap();
+    let raw = dir.join(VERILOG_FILE);
+    std::fs::write(&raw, tiny()).unwrap();
+    let r = ok(lint_file(&raw));
+    assert!(!r.is_clean());
+    let mut codes: Vec<&str> = r.messages.iter().filter_map(|m| m.code.as_deref()).collect();
+    codes.sort();
+    codes.dedup();
+    assert_eq!(codes, ["DECLFILENAME", "WIDTH"], "{}", r.output);
+    let waived = write_verilog(&tiny(), &dir).unwrap();
+    assert!(ok(lint_file(&waived)).is_clean());
+}
+
+#[test]
+fn lint_failure_shows_verilator_output() {
+    let dir = fresh_dir("hdl-gen-lint-fail");
+    let bad = "module top(input wire clock, input wire [3:0] d, output reg [3:0] q);\n\
+               wire [3:0] spare_bits;\n\
+               always @(posedge clock) q <= d;\nendmodule\n";
+    let err = format!("{:#}", lint(bad, &dir).unwrap_err());
+    assert!(err.contains("Verilator lint of"), "{err}");
+    assert!(err.contains("%Warning-UNUSEDSIGNAL"), "{err}");
+    assert!(err.contains("spare_bits"), "{err}");
+}
+
+#[test]
+fn yosys_failure_is_reported() {
+    let dir = fresh_dir("hdl-gen-yosys-fail");
+    let err = format!(
+        "{:#}",
+        synthesise("module top(input wire a;\nendmodule\n", &dir, &SynthOptions::default()).unwrap_err()
+    );
+    assert!(err.contains("Yosys failed"), "{err}");
+    assert!(err.contains("ERROR"), "{err}");
+    assert!(err.contains("yosys -l yosys.log -s synth.ys"), "{err}");
+}
+
+fn hdl_gen(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_hdl-gen")).args(args).output().unwrap();
+    (out.status.success(), String::from_utf8_lossy(&out.stdout).into(), String::from_utf8_lossy(&out.stderr).into())
+}
+
+#[test]
+fn cli_on_a_verilog_file() {
+    let dir = fresh_dir("hdl-gen-cli");
+    let file = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/tiny_top.v");
+    let (okay, stdout, stderr) = hdl_gen(&["--out", dir.to_str().unwrap(), "--verilog", file.to_str().unwrap()]);
+    assert!(okay, "{stdout}\n{stderr}");
+    assert!(stdout.contains("lint: clean"), "{stdout}");
+    assert!(stdout.contains("| DSP48A1 | 1 | 58 | 1.7 % |"), "{stdout}");
+    assert!(stdout.contains("**within limits**"), "{stdout}");
+    let md = std::fs::read_to_string(dir.join("resources.md")).unwrap();
+    assert!(stdout.contains(&md));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("resources.json")).unwrap()).unwrap();
+    assert_eq!(json["resources"]["dsp"], 1);
+    assert_eq!(json["limits"]["max_dsp"], 58);
+    assert!(std::fs::read_to_string(dir.join(VERILOG_FILE)).unwrap().contains("/* verilator lint_off WIDTH */"));
+}
+
+#[test]
+fn cli_fails_over_limits_but_writes_the_report() {
+    let dir = fresh_dir("hdl-gen-cli-limits");
+    let file = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/tiny_top.v");
+    let (okay, stdout, stderr) = hdl_gen(&[
+        "--out",
+        dir.to_str().unwrap(),
+        "--verilog",
+        file.to_str().unwrap(),
+        "--no-lint",
+        "--max-dsp",
+        "0",
+        "--max-bram",
+        "2.5",
+    ]);
+    assert!(!okay, "{stdout}\n{stderr}");
+    assert!(stderr.contains("exceeds the limits: DSP48A1 1 > --max-dsp 0; RAMB16BWER 3 > --max-bram 2.5"), "{stderr}");
+    assert!(!stdout.contains("lint: clean"));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("resources.json")).unwrap()).unwrap();
+    assert_eq!(json["limits"]["violations"].as_array().unwrap().len(), 2);
+}
+
+#[test]
+fn cli_rejects_unsupported_lanes() {
+    let dir = fresh_dir("hdl-gen-cli-lanes");
+    let (okay, _, stderr) = hdl_gen(&["--out", dir.to_str().unwrap(), "--lanes", "3"]);
+    assert!(!okay);
+    assert!(stderr.contains("--lanes 3 is not supported"), "{stderr}");
+}
+
+/// The generated pipeline (pficp_fpga::rtl::pipeline_verilog) lints clean with only the two
+/// waivers, and fits the limits (1 lane keeps the test short).
+#[test]
+fn cli_generated_pipeline_one_lane() {
+    let dir = fresh_dir("hdl-gen-cli-pipeline");
+    let (okay, stdout, stderr) = hdl_gen(&["--out", dir.to_str().unwrap(), "--lanes", "1"]);
+    assert!(okay, "{stdout}\n{stderr}");
+    assert!(stdout.contains("pficp_fpga::rtl::pipeline_verilog(1)"), "{stdout}");
+    assert!(stdout.contains("lint: clean"), "{stdout}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("resources.json")).unwrap()).unwrap();
+    assert!(json["resources"]["dsp"].as_u64().unwrap() >= 3, "a lane has 3 multipliers: {json}");
+    assert!(json["resources"]["bram16"].as_f64().unwrap() >= 1.0, "model RAM: {json}");
+    assert!(json["resources"]["depth"].as_u64().unwrap() > 0);
+}
