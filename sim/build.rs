@@ -1,0 +1,486 @@
+//! Builds the Verilator models of the nearest-neighbour pipeline:
+//!
+//! 1. Verilog of `NnPipeline<P>` from `pficp_fpga::rtl::pipeline_verilog(P)` (build-dependency
+//!    with feature `rtl`), for every `P` in [`DEFAULT_LANES`] (or `PFICP_SIM_LANES=4,16`).
+//! 2. `verilator --cc --build --trace --prefix VpipeP` per lane count (`$OUT_DIR/vpipeP/`).
+//! 3. The Verilator runtime (`verilated.o`, `verilated_threads.o`, `verilated_vcd_c.o`), built
+//!    once with the generated makefile and cached in `target/verilator-runtime/<key>/` (the
+//!    objects depend only on the Verilator version and the flags, not on the design).
+//! 4. A C shim per model, generated from the `VL_IN*/VL_OUT*` port lines of `VpipeP.h` after
+//!    checking them against the ports of docs/pipeline.md: `set_inputs` (a packed `u64` array,
+//!    masked to the port widths), `get_outputs`, `tick`, VCD open/close.
+//! 5. One static archive (shims + models + runtime) via `cc`, and `$OUT_DIR/models.rs` with the
+//!    Rust declarations, included by `src/lib.rs`.
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Instant;
+
+/// Lane counts verilated unless `PFICP_SIM_LANES` says otherwise: 4 for fast tests, 16 (the
+/// design point).
+const DEFAULT_LANES: [usize; 2] = [4, 16];
+
+/// The ports of `top` (docs/pipeline.md), in the order of the packed input/output arrays the
+/// shim exchanges with Rust: (name, is_input, width). `clock` is driven by `tick`.
+const PORTS: [(&str, bool, usize); 17] = [
+    ("clock", true, 1),
+    ("model_we", true, 1),
+    ("model_waddr", true, 12),
+    ("model_wdata", true, 48),
+    ("model_count", true, 13),
+    ("start", true, 1),
+    ("pose", true, 216),
+    ("scan_valid", true, 1),
+    ("scan_data", true, 48),
+    ("scan_last", true, 1),
+    ("scan_ready", false, 1),
+    ("busy", false, 1),
+    ("nn_valid", false, 1),
+    ("nn_index", false, 12),
+    ("nn_dist", false, 34),
+    ("cost_valid", false, 1),
+    ("cost", false, 48),
+];
+
+/// Make flags for the model and the runtime.
+const OPT_MODEL: &str = "OPT_FAST=-O2 OPT_SLOW=-O1";
+const OPT_RUNTIME: &str = "OPT_GLOBAL=-O2";
+const RUNTIME_OBJECTS: [&str; 3] = ["verilated.o", "verilated_threads.o", "verilated_vcd_c.o"];
+
+fn run(cmd: &mut Command, what: &str) {
+    let out = cmd.output().unwrap_or_else(|e| panic!("{what}: cannot run {cmd:?}: {e}"));
+    if !out.status.success() {
+        panic!(
+            "{what} failed ({}): {cmd:?}\n--- stdout ---\n{}\n--- stderr ---\n{}",
+            out.status,
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+}
+
+/// `verilator --version`, or a build failure that says how to install it.
+fn verilator_version() -> String {
+    match Command::new("verilator").arg("--version").output() {
+        Ok(o) if o.status.success() => String::from_utf8_lossy(&o.stdout).trim().to_string(),
+        Ok(o) => panic!(
+            "pficp-sim needs Verilator 5: `verilator --version` failed ({}): {}",
+            o.status,
+            String::from_utf8_lossy(&o.stderr)
+        ),
+        Err(e) => panic!(
+            "pficp-sim needs Verilator 5 on PATH ({e}). Install it: apt-get install -y verilator \
+             (Debian/Ubuntu), or set PATH to a Verilator 5 build."
+        ),
+    }
+}
+
+/// `$VERILATOR_ROOT/include` as the installed Verilator reports it.
+fn verilator_include() -> PathBuf {
+    let o = Command::new("verilator").args(["--getenv", "VERILATOR_ROOT"]).output().expect("verilator --getenv");
+    let root = String::from_utf8_lossy(&o.stdout).trim().to_string();
+    let inc = PathBuf::from(&root).join("include");
+    assert!(inc.join("verilated.h").exists(), "no verilated.h under {} (VERILATOR_ROOT = {root:?})", inc.display());
+    inc
+}
+
+/// FNV-1a (stable across Rust versions, unlike `DefaultHasher`).
+fn fnv1a(parts: &[&str]) -> u64 {
+    let mut h: u64 = 0xcbf29ce484222325;
+    for p in parts {
+        for b in p.bytes().chain(std::iter::once(0)) {
+            h ^= b as u64;
+            h = h.wrapping_mul(0x100000001b3);
+        }
+    }
+    h
+}
+
+/// `target/` from `target/<profile>/build/pficp-sim-<hash>/out`, if the layout is the usual one.
+fn target_dir(out: &Path) -> Option<PathBuf> {
+    let t = out.ancestors().nth(4)?;
+    t.join("CACHEDIR.TAG").exists().then(|| t.to_path_buf())
+}
+
+#[derive(Debug)]
+struct Port {
+    input: bool,
+    name: String,
+    width: usize,
+    /// 32-bit words of a `VlWide` port (> 64 bits), else 0.
+    words: usize,
+}
+
+/// Parse `VL_IN8(&clock,0,0);`, `VL_OUT64(&cost,47,0);`, `VL_INW(&pose,215,0,7);` lines.
+fn parse_ports(hdr: &str) -> Vec<Port> {
+    let mut ports = vec![];
+    for line in hdr.lines() {
+        let l = line.trim();
+        let (input, rest) = if let Some(r) = l.strip_prefix("VL_IN") {
+            (true, r)
+        } else if let Some(r) = l.strip_prefix("VL_OUT") {
+            (false, r)
+        } else {
+            continue;
+        };
+        let Some(open) = rest.find("(&") else { continue };
+        let args: Vec<&str> = rest[open + 2..].trim_end_matches(';').trim_end_matches(')').split(',').collect();
+        let num = |s: &str| -> usize { s.trim().parse().unwrap_or_else(|_| panic!("cannot parse port line {l:?}")) };
+        let (msb, lsb) = (num(args[1]), num(args[2]));
+        let words = if args.len() > 3 { num(args[3]) } else { 0 };
+        ports.push(Port { input, name: args[0].trim().to_string(), width: msb - lsb + 1, words });
+    }
+    ports
+}
+
+/// The header's ports must be exactly [`PORTS`]; returns them in [`PORTS`] order.
+fn check_ports(parsed: Vec<Port>, header: &Path) -> Vec<Port> {
+    let mut problems = vec![];
+    for (name, input, width) in PORTS {
+        match parsed.iter().find(|p| p.name == name) {
+            None => problems.push(format!("missing port {name}")),
+            Some(p) if p.input != input || p.width != width => problems.push(format!(
+                "port {name}: expected {} [{}:0], the Verilog has {} [{}:0]",
+                if input { "input" } else { "output" },
+                width - 1,
+                if p.input { "input" } else { "output" },
+                p.width - 1
+            )),
+            Some(p) if (p.width > 64) != (p.words > 0) || (p.words > 0 && p.words != p.width.div_ceil(32)) => {
+                problems.push(format!("port {name}: unexpected VlWide word count {}", p.words))
+            }
+            Some(_) => {}
+        }
+    }
+    for p in &parsed {
+        if !PORTS.iter().any(|q| q.0 == p.name) {
+            problems.push(format!("unexpected port {}", p.name));
+        }
+        if !p.input && p.width > 64 {
+            problems.push(format!("output {} is wider than 64 bits", p.name));
+        }
+    }
+    if !problems.is_empty() {
+        panic!(
+            "the ports of {} do not match docs/pipeline.md (sim/build.rs PORTS):\n  {}",
+            header.display(),
+            problems.join("\n  ")
+        );
+    }
+    let mut parsed = parsed;
+    PORTS
+        .iter()
+        .map(|(n, ..)| {
+            let k = parsed.iter().position(|p| p.name == *n).unwrap();
+            parsed.swap_remove(k)
+        })
+        .collect()
+}
+
+fn mask(bits: usize) -> u64 {
+    if bits >= 64 {
+        u64::MAX
+    } else {
+        (1u64 << bits) - 1
+    }
+}
+
+/// The C++ shim of one model; returns (input u64 words, output u64 words).
+fn gen_shim(prefix: &str, ports: &[Port], cpp: &Path) -> (usize, usize) {
+    let f = prefix.to_lowercase();
+    let mut c = format!(
+        r#"// Generated by sim/build.rs from {prefix}.h: do not edit.
+#include <cstdint>
+#include "{prefix}.h"
+#include "verilated.h"
+#include "verilated_vcd_c.h"
+namespace {{
+struct H {{ VerilatedContext* ctx; {prefix}* top; VerilatedVcdC* tfp; }};
+}}
+extern "C" {{
+void* pficp_{f}_new() {{
+  H* h = new H;
+  h->ctx = new VerilatedContext;
+  h->ctx->traceEverOn(true);
+  h->ctx->randReset(0);
+  h->top = new {prefix}(h->ctx, "top");
+  h->tfp = nullptr;
+  h->top->clock = 0;
+  h->top->eval();
+  return h;
+}}
+void pficp_{f}_free(void* p) {{
+  H* h = static_cast<H*>(p);
+  h->top->final();
+  if (h->tfp) {{ h->tfp->close(); delete h->tfp; }}
+  delete h->top;
+  delete h->ctx;
+  delete h;
+}}
+// Clock low, eval, dump at t - 5; clock high (the rising edge), eval, dump at t.
+void pficp_{f}_tick(void* p, uint64_t t) {{
+  H* h = static_cast<H*>(p);
+  h->top->clock = 0;
+  h->ctx->time(t - 5);
+  h->top->eval();
+  if (h->tfp) h->tfp->dump(t - 5);
+  h->top->clock = 1;
+  h->ctx->time(t);
+  h->top->eval();
+  if (h->tfp) h->tfp->dump(t);
+}}
+// Opens a VCD and dumps the current state at time t. Returns 0 on success.
+int pficp_{f}_trace_open(void* p, const char* path, uint64_t t) {{
+  H* h = static_cast<H*>(p);
+  if (h->tfp) {{ h->tfp->close(); delete h->tfp; }}
+  h->tfp = new VerilatedVcdC;
+  h->top->trace(h->tfp, 99);
+  h->tfp->open(path);
+  if (!h->tfp->isOpen()) {{ delete h->tfp; h->tfp = nullptr; return 1; }}
+  h->tfp->dump(t);
+  return 0;
+}}
+void pficp_{f}_trace_flush(void* p) {{
+  H* h = static_cast<H*>(p);
+  if (h->tfp) h->tfp->flush();
+}}
+void pficp_{f}_trace_close(void* p) {{
+  H* h = static_cast<H*>(p);
+  if (h->tfp) {{ h->tfp->close(); delete h->tfp; h->tfp = nullptr; }}
+}}
+"#
+    );
+    // Inputs: one u64 per port of <= 64 bits, ceil(width / 64) little-endian u64 for wider
+    // ports; every value masked to the port width (Verilator needs clean upper bits).
+    writeln!(c, "void pficp_{f}_set_inputs(void* p, const uint64_t* in) {{").unwrap();
+    writeln!(c, "  {prefix}* t = static_cast<H*>(p)->top;").unwrap();
+    let mut k = 0;
+    for p in ports.iter().filter(|p| p.input && p.name != "clock") {
+        let n = &p.name;
+        if p.words == 0 {
+            writeln!(c, "  t->{n} = in[{k}] & 0x{:x}ULL;", mask(p.width)).unwrap();
+            k += 1;
+        } else {
+            for i in 0..p.words {
+                let bits = (p.width - 32 * i).min(32);
+                writeln!(c, "  t->{n}[{i}] = (uint32_t)(in[{}] >> {}) & 0x{:x}u;", k + i / 2, 32 * (i % 2), mask(bits))
+                    .unwrap();
+            }
+            k += p.width.div_ceil(64);
+        }
+    }
+    writeln!(c, "}}").unwrap();
+    let n_in = k;
+    writeln!(c, "void pficp_{f}_get_outputs(void* p, uint64_t* out) {{").unwrap();
+    writeln!(c, "  const {prefix}* t = static_cast<H*>(p)->top;").unwrap();
+    let mut k = 0;
+    for p in ports.iter().filter(|p| !p.input) {
+        writeln!(c, "  out[{k}] = (uint64_t)t->{};", p.name).unwrap();
+        k += 1;
+    }
+    writeln!(c, "}}\n}}").unwrap();
+    std::fs::write(cpp, c).unwrap();
+    (n_in, k)
+}
+
+/// The runtime objects: from the cache, or built with `mdir`'s makefile and cached.
+fn runtime_objects(mdir: &Path, prefix: &str, out: &Path, key: u64) -> Vec<PathBuf> {
+    let cache = target_dir(out).map(|t| t.join("verilator-runtime").join(format!("{key:016x}")));
+    if let Some(c) = &cache {
+        let objs: Vec<PathBuf> = RUNTIME_OBJECTS.iter().map(|o| c.join(o)).collect();
+        if objs.iter().all(|o| o.exists()) {
+            return objs;
+        }
+    }
+    run(
+        Command::new("make")
+            .arg("-C")
+            .arg(mdir)
+            .args(["-j", "2", "-f", &format!("{prefix}.mk"), OPT_RUNTIME])
+            .args(RUNTIME_OBJECTS),
+        "building the Verilator runtime",
+    );
+    let built: Vec<PathBuf> = RUNTIME_OBJECTS.iter().map(|o| mdir.join(o)).collect();
+    let Some(c) = cache else { return built };
+    // Publish atomically: copy into a private directory, then rename it into place (a
+    // concurrent build that won the race leaves its identical copy).
+    let tmp = c.with_extension(format!("tmp{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&tmp);
+    let ok = std::fs::create_dir_all(&tmp).is_ok()
+        && built.iter().all(|b| std::fs::copy(b, tmp.join(b.file_name().unwrap())).is_ok())
+        && (std::fs::rename(&tmp, &c).is_ok() || c.join(RUNTIME_OBJECTS[2]).exists());
+    let _ = std::fs::remove_dir_all(&tmp);
+    if ok {
+        RUNTIME_OBJECTS.iter().map(|o| c.join(o)).collect()
+    } else {
+        built
+    }
+}
+
+fn lanes_to_build() -> Vec<usize> {
+    println!("cargo:rerun-if-env-changed=PFICP_SIM_LANES");
+    let Ok(s) = std::env::var("PFICP_SIM_LANES") else { return DEFAULT_LANES.to_vec() };
+    let mut lanes: Vec<usize> = s
+        .split(|c: char| c == ',' || c.is_whitespace())
+        .filter(|x| !x.is_empty())
+        .map(|x| x.parse().unwrap_or_else(|_| panic!("PFICP_SIM_LANES={s:?}: expected lane counts like 4,16")))
+        .collect();
+    lanes.sort_unstable();
+    lanes.dedup();
+    for &p in &lanes {
+        assert!(
+            pficp_fpga::rtl::SUPPORTED_LANES.contains(&p),
+            "PFICP_SIM_LANES: {p} lanes is not one of {:?}",
+            pficp_fpga::rtl::SUPPORTED_LANES
+        );
+    }
+    assert!(!lanes.is_empty(), "PFICP_SIM_LANES is empty");
+    lanes
+}
+
+fn main() {
+    println!("cargo:rerun-if-changed=build.rs");
+    let t_all = Instant::now();
+    let out = PathBuf::from(std::env::var("OUT_DIR").unwrap());
+    let version = verilator_version();
+    let include = verilator_include();
+    let lanes = lanes_to_build();
+    let mut report = format!("{version}\n");
+
+    let mut b = cc::Build::new();
+    b.cpp(true)
+        .include(&include)
+        .include(include.join("vltstd"))
+        .define("VM_TRACE", "1")
+        .define("VM_TRACE_VCD", "1")
+        .flag("-std=c++17")
+        .flag("-faligned-new")
+        .flag_if_supported("-Wno-unused-parameter")
+        .opt_level(2)
+        .cargo_warnings(false);
+    let mut rs = String::from("// Generated by sim/build.rs: do not edit.\n");
+    let mut models = String::new();
+    let mut first_mdir: Option<(PathBuf, String)> = None;
+    let mut words: Option<(usize, usize)> = None;
+    for &p in &lanes {
+        let prefix = format!("Vpipe{p}");
+        let f = prefix.to_lowercase();
+        let mdir = out.join(&f);
+        let _ = std::fs::remove_dir_all(&mdir);
+        std::fs::create_dir_all(&mdir).unwrap();
+
+        // 1. Verilog.
+        let t = Instant::now();
+        let vfile = out.join(format!("pipeline_p{p}.v"));
+        std::fs::write(&vfile, pficp_fpga::rtl::pipeline_verilog(p)).unwrap();
+        let t_gen = t.elapsed();
+
+        // 2. Verilate and compile the model (VpipeP__ALL.a and its objects in mdir).
+        let t = Instant::now();
+        let mut v = Command::new("verilator");
+        v.args([
+            "--cc",
+            "--build",
+            "-j",
+            "2",
+            "--trace",
+            "--timescale",
+            "1ns/1ns",
+            "-O3",
+            "-Wno-fatal",
+            "-Wno-WIDTH",
+            "-Wno-DECLFILENAME",
+        ])
+        .args(["-MAKEFLAGS", OPT_MODEL, "--prefix", &prefix, "--top-module", "top", "--Mdir"])
+        .arg(&mdir)
+        .arg(&vfile);
+        run(&mut v, &format!("verilating {}", vfile.display()));
+        let t_verilate = t.elapsed();
+        writeln!(
+            report,
+            "P={p}: Verilog {} bytes generated in {:.1} s; verilator --build {:.1} s",
+            std::fs::metadata(&vfile).unwrap().len(),
+            t_gen.as_secs_f64(),
+            t_verilate.as_secs_f64()
+        )
+        .unwrap();
+
+        // 4. Shim from the header's port lines.
+        let hdr_path = mdir.join(format!("{prefix}.h"));
+        let hdr = std::fs::read_to_string(&hdr_path).unwrap();
+        let ports = check_ports(parse_ports(&hdr), &hdr_path);
+        let shim = out.join(format!("{f}_shim.cpp"));
+        let w = gen_shim(&prefix, &ports, &shim);
+        assert!(words.is_none() || words == Some(w));
+        words = Some(w);
+        b.file(&shim).include(&mdir);
+        for e in std::fs::read_dir(&mdir).unwrap() {
+            let path = e.unwrap().path();
+            if path.extension().is_some_and(|x| x == "o") {
+                b.object(path);
+            }
+        }
+        if first_mdir.is_none() {
+            first_mdir = Some((mdir.clone(), prefix.clone()));
+        }
+        writeln!(
+            rs,
+            "extern \"C\" {{\n    fn pficp_{f}_new() -> *mut c_void;\n    fn pficp_{f}_free(h: *mut c_void);\n    \
+             fn pficp_{f}_tick(h: *mut c_void, t: u64);\n    \
+             fn pficp_{f}_trace_open(h: *mut c_void, path: *const c_char, t: u64) -> c_int;\n    \
+             fn pficp_{f}_trace_flush(h: *mut c_void);\n    fn pficp_{f}_trace_close(h: *mut c_void);\n    \
+             fn pficp_{f}_set_inputs(h: *mut c_void, v: *const u64);\n    \
+             fn pficp_{f}_get_outputs(h: *mut c_void, v: *mut u64);\n}}"
+        )
+        .unwrap();
+        writeln!(
+            models,
+            "    Model {{ lanes: {p}, prefix: \"{prefix}\", verilog: \"{}\", new: pficp_{f}_new, free: pficp_{f}_free, \
+             tick: pficp_{f}_tick, trace_open: pficp_{f}_trace_open, trace_flush: pficp_{f}_trace_flush, \
+             trace_close: pficp_{f}_trace_close, set_inputs: pficp_{f}_set_inputs, get_outputs: pficp_{f}_get_outputs }},",
+            vfile.display().to_string().escape_default()
+        )
+        .unwrap();
+    }
+
+    // 3. Runtime (shared by every model).
+    let t = Instant::now();
+    let (mdir, prefix) = first_mdir.unwrap();
+    let key = fnv1a(&[
+        &version,
+        OPT_RUNTIME,
+        "trace-vcd",
+        &std::env::var("CXX").unwrap_or_default(),
+        &std::env::var("CXXFLAGS").unwrap_or_default(),
+    ]);
+    for o in runtime_objects(&mdir, &prefix, &out, key) {
+        b.object(o);
+    }
+    writeln!(report, "runtime objects {:.1} s (cache key {key:016x})", t.elapsed().as_secs_f64()).unwrap();
+
+    // 5. One archive: shims + models + runtime (no circular dependency between archives).
+    let t = Instant::now();
+    b.compile("pficp_vpipe");
+    println!("cargo:rustc-link-lib=pthread");
+    println!("cargo:rustc-link-lib=atomic");
+    writeln!(
+        report,
+        "shims + archive {:.1} s\nbuild.rs total {:.1} s",
+        t.elapsed().as_secs_f64(),
+        t_all.elapsed().as_secs_f64()
+    )
+    .unwrap();
+
+    let (n_in, n_out) = words.unwrap();
+    writeln!(rs, "/// `u64` words of the packed input array.\npub(crate) const IN_WORDS: usize = {n_in};").unwrap();
+    writeln!(rs, "/// `u64` words of the packed output array.\npub(crate) const OUT_WORDS: usize = {n_out};").unwrap();
+    writeln!(rs, "/// The Verilated models.\npub(crate) static MODELS: &[Model] = &[\n{models}];").unwrap();
+    writeln!(
+        rs,
+        "/// Verilator version and build times.\npub const BUILD_REPORT: &str = \"{}\";",
+        report.escape_default()
+    )
+    .unwrap();
+    std::fs::write(out.join("models.rs"), rs).unwrap();
+    std::fs::write(out.join("build-report.txt"), &report).unwrap();
+}
