@@ -4,6 +4,7 @@
 //! - [`pipeline`]: the cycle-accurate reference of the nearest-neighbour pipeline.
 //! - [`weights`]: the cycle-accurate reference of the weight stage (minimum cost, exp table).
 //! - [`particle_weights`]: the two wired together, as the RTL top.
+//! - `rtl` (feature `rtl`): the rust_hdl RTL of the pipeline and its Verilog.
 //!
 //! The bit-exact reference of the pipeline, the wire protocol and (behind the `rtl`
 //! feature) the rust_hdl RTL land with the hardware issues.
@@ -12,4 +13,6 @@
 pub mod format;
 pub mod particle_weights;
 pub mod pipeline;
+#[cfg(feature = "rtl")]
+pub mod rtl;
 pub mod weights;

@@ -1,0 +1,95 @@
+//! The rust_hdl RTL of the nearest-neighbour pipeline (feature `rtl`).
+//!
+//! One block a file:
+//! - [`mul18`]: `Mul18`, a registered 18 x 18 signed multiplier (Verilog wrapper, one DSP48A1);
+//! - [`transform`]: `Transform`, the pose register and the transform pipeline (9 `Mul18`);
+//! - [`lane`]: `Lane`, one scan point's distance pipeline and running minimum (3 `Mul18`);
+//! - [`pipeline`]: `NnPipeline<P>`, the top: state machine, model RAM, `P` lanes, Reduce.
+//!
+//! `NnPipeline<P>` agrees with [`crate::pipeline::PipelineModel`] port for port on every
+//! clock (tests/rtl_sim.rs). [`pipeline_verilog`] gives the Verilog.
+
+pub mod lane;
+pub mod mul18;
+pub mod particle_weights;
+pub mod pipeline;
+pub mod transform;
+pub mod weight_stage;
+
+pub use lane::Lane;
+pub use mul18::{Mul18, MUL18_MODULE};
+pub use pipeline::NnPipeline;
+pub use transform::Transform;
+
+use rust_hdl::prelude::*;
+
+/// Lane counts [`pipeline_verilog`] accepts (16 lanes use 9 + 3 * 16 = 57 of the
+/// XC6SLX45's 58 DSP48A1).
+pub const SUPPORTED_LANES: [usize; 5] = [1, 2, 4, 8, 16];
+
+/// Sign extension that is correct for every value (rust_hdl 0.46's `signed_bit_cast`
+/// recurses forever on the most negative value). `#[hdl_gen]` recognises calls by name
+/// prefix, so this emits the same `$signed(x)`, sign-extended by the assignment context.
+pub fn signed_bit_cast_safe<const M: usize, const N: usize>(x: Signed<N>) -> Signed<M> {
+    assert!(M >= N && M < 64);
+    let raw = x.inner().to_u64();
+    Signed::<M>::from(((raw << (64 - N)) as i64) >> (64 - N))
+}
+
+/// Drop repeated module definitions (a `Wrapper`'s `cores` is emitted once per instance),
+/// keeping the first one and any attribute line in front of it.
+pub fn dedup_modules(v: &str) -> String {
+    let mut seen = std::collections::HashSet::new();
+    let mut out: Vec<&str> = Vec::new();
+    let mut skipping = false;
+    let mut pending_attr: Option<&str> = None;
+    for line in v.lines() {
+        let t = line.trim_start();
+        if !skipping && t.starts_with("(*") && t.ends_with("*)") {
+            if let Some(a) = pending_attr.replace(line) {
+                out.push(a);
+            }
+            continue;
+        }
+        if !skipping && t.starts_with("module ") {
+            let name = t[7..].split(|c: char| c == '(' || c.is_whitespace() || c == ';').next().unwrap_or("");
+            if !seen.insert(name.to_string()) {
+                skipping = true;
+                pending_attr = None;
+                continue;
+            }
+        }
+        if skipping {
+            if t.starts_with("endmodule") {
+                skipping = false;
+            }
+            continue;
+        }
+        if let Some(a) = pending_attr.take() {
+            out.push(a);
+        }
+        out.push(line);
+    }
+    out.join("\n") + "\n"
+}
+
+fn verilog_of<const P: usize>() -> String {
+    let mut uut = NnPipeline::<P>::new();
+    uut.connect_all();
+    dedup_modules(&generate_verilog(&uut))
+}
+
+/// The Verilog of `NnPipeline<lanes>`: top module `top` (ports as docs/pipeline.md), one
+/// module per block instance, the multiplier module ([`MUL18_MODULE`]) defined once.
+///
+/// Panics unless `lanes` is one of [`SUPPORTED_LANES`].
+pub fn pipeline_verilog(lanes: usize) -> String {
+    match lanes {
+        1 => verilog_of::<1>(),
+        2 => verilog_of::<2>(),
+        4 => verilog_of::<4>(),
+        8 => verilog_of::<8>(),
+        16 => verilog_of::<16>(),
+        _ => panic!("pipeline_verilog: {lanes} lanes is not supported; use one of {SUPPORTED_LANES:?}"),
+    }
+}
