@@ -192,7 +192,9 @@ impl Logic for WeightStage {
         self.mul.a.next = signed_cast(bit_cast::<18, 17>(self.c_shifted.q.val()));
         self.mul.b.next = signed_cast(bit_cast::<18, 17>(self.qmul.q.val()));
         self.product.next = unsigned_cast(self.mul.p.val());
-        if self.product.val().get_bits::<12>(24).any() {
+        // Both factors are below 2^17, so the product fits 34 bits: only those are used
+        // (Yosys 0.23 leaves the unused top bits of a narrower DSP product undriven).
+        if self.product.val().get_bits::<10>(24).any() {
             self.e_entry.d.next = 255.into();
         } else {
             self.e_entry.d.next = self.product.val().get_bits::<8>(16);
