@@ -17,9 +17,13 @@ struct Cli {
     /// Output directory (created if missing).
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
-    /// Number of parallel lanes P of the generated pipeline (pficp_fpga::rtl::pipeline_verilog).
-    #[arg(long, value_name = "P", default_value_t = 8, conflicts_with = "verilog")]
+    /// Number of parallel lanes P of the generated pipeline.
+    #[arg(long, value_name = "P", default_value_t = 16, conflicts_with = "verilog")]
     lanes: usize,
+    /// Which design to generate: the particle-weight pipeline (nearest-neighbour pipeline
+    /// and weight stage), the nearest-neighbour pipeline alone, or the weight stage alone.
+    #[arg(long, value_enum, default_value_t = Design::ParticleWeights, conflicts_with = "verilog")]
+    design: Design,
     /// Use the Verilog in FILE (top module `top`) instead of generating the pipeline.
     #[arg(long, value_name = "FILE")]
     verilog: Option<PathBuf>,
@@ -44,13 +48,30 @@ struct Cli {
     max_bram: f64,
 }
 
-/// The pipeline's Verilog with `lanes` lanes, from the RTL crate.
-fn generated_verilog(lanes: usize) -> Result<String> {
-    use pficp_fpga::rtl::{pipeline_verilog, SUPPORTED_LANES};
-    if !SUPPORTED_LANES.contains(&lanes) {
+/// The generated designs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum Design {
+    /// `ParticleWeightPipeline`: the nearest-neighbour pipeline feeding the weight stage.
+    ParticleWeights,
+    /// `NnPipeline` alone.
+    Nn,
+    /// `WeightStage` alone.
+    Weights,
+}
+
+/// The design's Verilog with `lanes` lanes, from the RTL crate, and where it came from.
+fn generated_verilog(design: Design, lanes: usize) -> Result<(String, String)> {
+    use pficp_fpga::rtl::{particle_weights_verilog, pipeline_verilog, weight_stage_verilog, SUPPORTED_LANES};
+    if design != Design::Weights && !SUPPORTED_LANES.contains(&lanes) {
         bail!("--lanes {lanes} is not supported by the RTL; use one of {SUPPORTED_LANES:?}");
     }
-    Ok(pipeline_verilog(lanes))
+    Ok(match design {
+        Design::ParticleWeights => {
+            (particle_weights_verilog(lanes), format!("pficp_fpga::rtl::particle_weights_verilog({lanes})"))
+        }
+        Design::Nn => (pipeline_verilog(lanes), format!("pficp_fpga::rtl::pipeline_verilog({lanes})")),
+        Design::Weights => (weight_stage_verilog(), "pficp_fpga::rtl::weight_stage_verilog()".to_string()),
+    })
 }
 
 fn run(cli: &Cli) -> Result<()> {
@@ -59,7 +80,7 @@ fn run(cli: &Cli) -> Result<()> {
             let v = std::fs::read_to_string(f).with_context(|| format!("could not read --verilog {}", f.display()))?;
             (v, format!("{} (top `{TOP}`)", f.display()))
         }
-        None => (generated_verilog(cli.lanes)?, format!("pficp_fpga::rtl::pipeline_verilog({})", cli.lanes)),
+        None => generated_verilog(cli.design, cli.lanes)?,
     };
     let path = write_verilog(&verilog, &cli.out)?;
     println!("wrote {} ({source})", path.display());

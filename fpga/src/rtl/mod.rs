@@ -79,6 +79,34 @@ fn verilog_of<const P: usize>() -> String {
     dedup_modules(&generate_verilog(&uut))
 }
 
+fn particle_weights_of<const P: usize>() -> String {
+    let mut uut = particle_weights::ParticleWeightPipeline::<P>::default();
+    uut.connect_all();
+    dedup_modules(&generate_verilog(&uut))
+}
+
+/// The Verilog of `ParticleWeightPipeline<lanes>` (the nearest-neighbour pipeline feeding
+/// the weight stage; ports in docs/pipeline.md and docs/weights.md), top module `top`.
+///
+/// Panics unless `lanes` is one of [`SUPPORTED_LANES`].
+pub fn particle_weights_verilog(lanes: usize) -> String {
+    match lanes {
+        1 => particle_weights_of::<1>(),
+        2 => particle_weights_of::<2>(),
+        4 => particle_weights_of::<4>(),
+        8 => particle_weights_of::<8>(),
+        16 => particle_weights_of::<16>(),
+        _ => panic!("particle_weights_verilog: {lanes} lanes is not supported; use one of {SUPPORTED_LANES:?}"),
+    }
+}
+
+/// The Verilog of the weight stage alone, top module `top` (docs/weights.md).
+pub fn weight_stage_verilog() -> String {
+    let mut uut = weight_stage::WeightStage::new();
+    uut.connect_all();
+    dedup_modules(&generate_verilog(&uut))
+}
+
 /// The Verilog of `NnPipeline<lanes>`: top module `top` (ports as docs/pipeline.md), one
 /// module per block instance, the multiplier module ([`MUL18_MODULE`]) defined once.
 ///

@@ -41,7 +41,7 @@ pub struct WeightStage {
     excess_max: Constant<Bits<17>>,
     full: Constant<Bits<9>>,
     costs: RAM<Bits<48>, 8>,
-    table: ROM<Bits<16>, 8>,
+    exp_rom: ROM<Bits<16>, 8>,
     count_r: DFF<Bits<9>>,
     /// The minimum, stored inverted so that the power-up value 0 reads as `2^48 - 1`.
     min_inv: DFF<Bits<48>>,
@@ -64,7 +64,8 @@ pub struct WeightStage {
     w_sum_r: DFF<Bits<24>>,
     issue: Signal<Local, Bit>,
     shifted: Signal<Local, Bits<48>>,
-    product: Signal<Local, Bits<36>>,
+    /// `product >> 16`, 18 bits (the product is below 2^34).
+    product_hi: Signal<Local, Bits<18>>,
 }
 
 impl Default for WeightStage {
@@ -96,7 +97,7 @@ impl WeightStage {
             excess_max: Constant::new(crate::format::EXCESS_MAX.into()),
             full: Constant::new((crate::weights::MAX_PARTICLES as u64).into()),
             costs: Default::default(),
-            table: table.iter().map(|&w| Bits::<16>::from(w as u64)).into(),
+            exp_rom: table.iter().map(|&w| Bits::<16>::from(w as u64)).into(),
             count_r: Default::default(),
             min_inv: Default::default(),
             min_val: Default::default(),
@@ -118,7 +119,7 @@ impl WeightStage {
             w_sum_r: Default::default(),
             issue: Default::default(),
             shifted: Default::default(),
-            product: Default::default(),
+            product_hi: Default::default(),
         }
     }
 }
@@ -191,22 +192,22 @@ impl Logic for WeightStage {
         }
         self.mul.a.next = signed_cast(bit_cast::<18, 17>(self.c_shifted.q.val()));
         self.mul.b.next = signed_cast(bit_cast::<18, 17>(self.qmul.q.val()));
-        self.product.next = unsigned_cast(self.mul.p.val());
-        // Both factors are below 2^17, so the product fits 34 bits: only those are used
-        // (Yosys 0.23 leaves the unused top bits of a narrower DSP product undriven).
-        if self.product.val().get_bits::<10>(24).any() {
+        // Both factors are below 2^17, so the product fits 34 bits and `>> 16` fits 18: only
+        // those bits are used (Yosys 0.23 leaves unused top bits of a DSP product undriven).
+        self.product_hi.next = bit_cast::<18, 36>(unsigned_cast(self.mul.p.val()) >> 16);
+        if self.product_hi.val().get_bits::<10>(8).any() {
             self.e_entry.d.next = 255.into();
         } else {
-            self.e_entry.d.next = self.product.val().get_bits::<8>(16);
+            self.e_entry.d.next = self.product_hi.val().get_bits::<8>(0);
         }
-        self.table.address.next = self.e_entry.q.val();
+        self.exp_rom.address.next = self.e_entry.q.val();
         self.w_valid_r.d.next = false;
         self.w_done_r.d.next = false;
         if self.valid[4].q.val() {
             self.w_valid_r.d.next = true;
             self.w_index_r.d.next = self.index[4].q.val();
-            self.weight_r.d.next = self.table.data.val();
-            self.sum.d.next = self.sum.q.val() + bit_cast::<24, 16>(self.table.data.val());
+            self.weight_r.d.next = self.exp_rom.data.val();
+            self.sum.d.next = self.sum.q.val() + bit_cast::<24, 16>(self.exp_rom.data.val());
         }
         if self.weighing.q.val()
             && !self.issue.val()
