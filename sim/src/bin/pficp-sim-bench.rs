@@ -1,6 +1,11 @@
-//! Simulated clocks per wall-clock second of the Verilated pipeline.
+//! The pipeline's design-point figures and Verilator's simulated clocks per second.
 //!
-//! `pficp-sim-bench [lanes] [seconds]` (default 16 lanes, 3 s): particles of 256 scan points
+//! First the design point: one particle of N_M = 1,000 scan points against N_D = 2,000
+//! model points through the Verilated RTL (checked against the functional reference):
+//! clocks per particle (measured, and the closed form of docs/pipeline.md), distances per
+//! clock, lane utilisation and the time per particle at 100 MHz.
+//!
+//! Then `pficp-sim-bench [lanes] [seconds]` (default 16 lanes, 3 s): particles of 256 scan points
 //! on a 1,024-point model, (1) the RTL alone, (2) in lockstep with the reference, (3) the
 //! RTL alone writing a VCD. Run it in release: `cargo run --release -p pficp-sim --bin pficp-sim-bench`.
 use pficp_fpga::format::{FxPoint, FxPose};
@@ -27,6 +32,31 @@ fn main() -> anyhow::Result<()> {
     let scan = cloud(256, &mut seed);
     let pose = FxPose::from_f64(&[0.9, -0.3, 0.1, 0.3, 0.9, 0.0, -0.1, 0.05, 0.95], &[0.1, -0.2, 0.05]);
     let expected = evaluate(&model, &scan, &pose);
+    // Design point.
+    {
+        let (n_m, n_d) = (1000usize, 2000usize);
+        let mut seed = 7;
+        let model = cloud(n_d, &mut seed);
+        let scan = cloud(n_m, &mut seed);
+        let mut rtl = VerilatedPipeline::new(lanes);
+        rtl.load_model(&model);
+        let t0 = Instant::now();
+        let (got, clocks) = rtl.particle(model.len(), &scan, &pose, |_| false);
+        let wall = t0.elapsed().as_secs_f64();
+        anyhow::ensure!(got == evaluate(&model, &scan, &pose), "RTL result differs from the functional reference");
+        let formula = pficp_fpga::pipeline::clocks_per_particle(n_m, n_d, lanes);
+        anyhow::ensure!(clocks == formula, "measured {clocks} clocks, the closed form says {formula}");
+        let per_clock = (n_m * n_d) as f64 / clocks as f64;
+        println!("design point: P = {lanes}, N_M = {n_m} scan points, N_D = {n_d} model points");
+        println!("  clocks per particle     {clocks} (measured in Verilator = closed form)");
+        println!(
+            "  distances per clock     {per_clock:.2} of {lanes} lanes ({:.1}% utilisation)",
+            100.0 * per_clock / lanes as f64
+        );
+        println!("  time per particle       {:.3} ms at 100 MHz", clocks as f64 / 100e6 * 1e3);
+        println!("  50 particles x 50 iter. {:.2} s at 100 MHz (compute only)", 2500.0 * clocks as f64 / 100e6);
+        println!("  Verilator               {:.0} clocks/s on this particle", clocks as f64 / wall);
+    }
     println!("P = {lanes}, model 1024 points, particles of 256 scan points, {secs} s per measurement");
 
     // (1) RTL alone.
