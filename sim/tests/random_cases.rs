@@ -1,0 +1,98 @@
+//! Property-style co-simulation: random models, scans, poses (saturating ones included),
+//! gaps and back-pressure, in lockstep with the reference on every clock, and each result
+//! against the functional reference. The seed comes from `PFICP_COSIM_SEED` (default 1)
+//! and is printed on failure; the number of cases from `PFICP_COSIM_CASES` (default 1,000).
+
+use pficp_fpga::format::{FxPoint, FxPose};
+use pficp_fpga::pipeline::evaluate;
+use pficp_sim::Lockstep;
+
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        // splitmix64
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+    fn below(&mut self, n: u64) -> u64 {
+        self.next() % n
+    }
+    fn coord(&mut self, range: i64) -> i16 {
+        (self.below(2 * range as u64 + 1) as i64 - range) as i16
+    }
+    fn point(&mut self) -> FxPoint {
+        match self.below(20) {
+            0 => [i16::MIN, i16::MAX, i16::MIN],
+            1 => [i16::MAX; 3],
+            _ => {
+                let r = [200, 4000, 16000, 32767][self.below(4) as usize];
+                [self.coord(r), self.coord(r), self.coord(r)]
+            }
+        }
+    }
+    fn pose(&mut self) -> FxPose {
+        let max = (1i64 << 17) - 1;
+        if self.below(10) == 0 {
+            // Anything the 18-bit fields hold, saturating the transform.
+            FxPose {
+                m: [0; 9].map(|_| (self.below(2 * max as u64 + 2) as i64 - max - 1) as i32),
+                t: [0; 3].map(|_| (self.below(2 * max as u64 + 2) as i64 - max - 1) as i32),
+            }
+        } else {
+            let a = (self.below(6284) as f64) / 1000.0;
+            let s = 0.5 + self.below(1000) as f64 / 1000.0;
+            let (c, n) = (a.cos() * s, a.sin() * s);
+            let t = [0; 3].map(|_| (self.below(2001) as f64 - 1000.0) / 1000.0);
+            FxPose::from_f64(&[c, -n, 0.0, n, c, 0.0, 0.0, 0.0, s], &t)
+        }
+    }
+}
+
+fn env(name: &str, default: u64) -> u64 {
+    std::env::var(name).ok().and_then(|v| v.parse().ok()).unwrap_or(default)
+}
+
+#[test]
+fn random_cases_in_lockstep() {
+    let seed = env("PFICP_COSIM_SEED", 1);
+    let cases = env("PFICP_COSIM_CASES", 1000);
+    let mut rng = Rng(seed);
+    let mut clocks = 0u64;
+    let mut results = 0usize;
+    for lanes in [4usize, 16] {
+        let mut ls = Lockstep::new(lanes);
+        let share = if lanes == 4 { cases * 4 / 5 } else { cases - cases * 4 / 5 };
+        for case in 0..share {
+            // A new model most of the time; sometimes reuse (and overwrite part of) the last.
+            let bound = if rng.below(8) == 0 { 300 } else { 48 };
+            let n_model = 1 + rng.below(bound) as usize;
+            let model: Vec<FxPoint> = (0..n_model).map(|_| rng.point()).collect();
+            let mut model = model;
+            if rng.below(10) == 0 && n_model > 1 {
+                model[1] = model[0]; // a tie
+            }
+            let n_scan = 1 + rng.below(3 * lanes as u64 + 5) as usize;
+            let scan: Vec<FxPoint> = (0..n_scan).map(|_| rng.point()).collect();
+            let pose = rng.pose();
+            let gap_kind = rng.below(4);
+            let gap_seed = rng.next();
+            let gap = move |c: u64| match gap_kind {
+                0 => false,
+                1 => c % 2 == 0,
+                2 => (c.wrapping_mul(gap_seed) >> 7) % 3 == 0,
+                _ => c % 7 < 4,
+            };
+            let outcome = ls.run_particle(&model, &scan, &pose, gap);
+            let (got, _) = outcome.unwrap_or_else(|m| panic!("seed {seed}, P = {lanes}, case {case}: {m}"));
+            assert_eq!(got, evaluate(&model, &scan, &pose), "seed {seed}, P = {lanes}, case {case}: result");
+            results += got.nearest.len();
+        }
+        clocks += ls.clocks_compared();
+    }
+    eprintln!("co-simulation matched {cases} random cases: {clocks} clocks compared, {results} nearest-neighbour results (seed {seed})");
+    assert!(clocks > cases * 20, "too few clocks compared: {clocks}");
+}
