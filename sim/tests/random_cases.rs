@@ -96,3 +96,27 @@ fn random_cases_in_lockstep() {
     eprintln!("co-simulation matched {cases} random cases: {clocks} clocks compared, {results} nearest-neighbour results (seed {seed})");
     assert!(clocks > cases * 20, "too few clocks compared: {clocks}");
 }
+
+#[test]
+fn full_model_memory_and_format_limits() {
+    // All 4,096 model words, extremes at both ends of the address range, one- and
+    // seventeen-point scans, the identity and a saturating pose.
+    let mut rng = Rng(11);
+    let mut model: Vec<FxPoint> = (0..pficp_fpga::format::MAX_POINTS).map(|_| rng.point()).collect();
+    model[0] = [i16::MIN; 3];
+    model[4095] = [i16::MAX; 3];
+    model[2048] = model[17]; // a tie far apart in the address range
+    let identity = FxPose::from_f64(&[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0], &[0.0; 3]);
+    let saturating = FxPose { m: [131071, -131072, 0, 0, 131071, 0, -131072, 0, 131071], t: [131071, -131072, 0] };
+    let mut ls = Lockstep::new(16);
+    ls.load_model(&model).expect("load in lockstep");
+    for (scan, pose) in [
+        (vec![model[4095]], identity),
+        (vec![model[17], [i16::MAX, i16::MIN, 0], [0; 3]].repeat(6)[..17].to_vec(), identity),
+        ((0..17).map(|_| rng.point()).collect::<Vec<_>>(), saturating),
+    ] {
+        let (got, _) = ls.particle(model.len(), &scan, &pose, |c| c % 3 == 0).unwrap_or_else(|m| panic!("{m}"));
+        assert_eq!(got, evaluate(&model, &scan, &pose));
+    }
+    eprintln!("full memory: {} clocks compared", ls.clocks_compared());
+}
