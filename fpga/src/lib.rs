@@ -4,6 +4,7 @@
 //! - [`pipeline`]: the cycle-accurate reference of the nearest-neighbour pipeline.
 //! - [`weights`]: the cycle-accurate reference of the weight stage (minimum cost, exp table).
 //! - [`particle_weights`]: the two wired together, as the RTL top.
+//! - [`protocol`]: the wire protocol (COBS framing, CRC-16, commands), shared with the host.
 //! - `rtl` (feature `rtl`): the rust_hdl RTL of the pipeline and its Verilog.
 //!
 //! The bit-exact reference of the pipeline, the wire protocol and (behind the `rtl`
@@ -13,6 +14,7 @@
 pub mod format;
 pub mod particle_weights;
 pub mod pipeline;
+pub mod protocol;
 #[cfg(feature = "rtl")]
 pub mod rtl;
 pub mod weights;
