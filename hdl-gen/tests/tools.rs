@@ -149,18 +149,31 @@ fn cli_rejects_unsupported_lanes() {
     assert!(stderr.contains("--lanes 3 is not supported"), "{stderr}");
 }
 
-/// The generated pipeline (pficp_fpga::rtl::pipeline_verilog) lints clean with only the two
+/// The generated particle-weight pipeline (the default design) lints clean with only the two
 /// waivers, and fits the limits (1 lane keeps the test short).
 #[test]
 fn cli_generated_pipeline_one_lane() {
     let dir = fresh_dir("hdl-gen-cli-pipeline");
     let (okay, stdout, stderr) = hdl_gen(&["--out", dir.to_str().unwrap(), "--lanes", "1"]);
     assert!(okay, "{stdout}\n{stderr}");
-    assert!(stdout.contains("pficp_fpga::rtl::pipeline_verilog(1)"), "{stdout}");
+    assert!(stdout.contains("pficp_fpga::rtl::particle_weights_verilog(1)"), "{stdout}");
     assert!(stdout.contains("lint: clean"), "{stdout}");
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("resources.json")).unwrap()).unwrap();
     assert!(json["resources"]["dsp"].as_u64().unwrap() >= 3, "a lane has 3 multipliers: {json}");
     assert!(json["resources"]["bram16"].as_f64().unwrap() >= 1.0, "model RAM: {json}");
     assert!(json["resources"]["depth"].as_u64().unwrap() > 0);
+}
+
+/// `--design nn` generates the nearest-neighbour pipeline alone: fewer multipliers than the
+/// particle-weight pipeline (no weight-stage DSP).
+#[test]
+fn cli_design_nn_one_lane() {
+    let dir = fresh_dir("hdl-gen-cli-nn");
+    let (okay, stdout, stderr) = hdl_gen(&["--out", dir.to_str().unwrap(), "--lanes", "1", "--design", "nn"]);
+    assert!(okay, "{stdout}\n{stderr}");
+    assert!(stdout.contains("pficp_fpga::rtl::pipeline_verilog(1)"), "{stdout}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("resources.json")).unwrap()).unwrap();
+    assert_eq!(json["resources"]["dsp"].as_u64().unwrap(), 9 + 3, "transform 9 + one lane 3: {json}");
 }
