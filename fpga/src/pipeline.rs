@@ -161,12 +161,15 @@ impl PipelineModel {
     /// One rising edge with the given inputs.
     pub fn step(&mut self, i: &Inputs) {
         let take = self.scan_ready() && i.scan_valid;
+        // The registers are copied to compute the next state; the RAM is moved, not copied
+        // (read first, then written, as the block RAM does).
+        let mut ram = std::mem::take(&mut self.ram);
         let mut next = self.clone();
-        // Model RAM: synchronous read of the sweep address, synchronous write.
-        next.ram_q = self.ram[(self.addr as usize) % MAX_POINTS];
+        next.ram_q = ram[(self.addr as usize) % MAX_POINTS];
         if i.model_we {
-            next.ram[(i.model_waddr as usize) % MAX_POINTS] = i.model_wdata & ((1 << 48) - 1);
+            ram[(i.model_waddr as usize) % MAX_POINTS] = i.model_wdata & ((1 << 48) - 1);
         }
+        next.ram = ram;
         // Transform pipeline (runs in every state; only Load feeds it).
         next.t1_valid = take;
         if take {
