@@ -1,28 +1,44 @@
-//! Builds the Verilator models of the nearest-neighbour pipeline:
+//! Builds the Verilator models of the generated designs ([`DESIGNS`]):
 //!
-//! 1. Verilog of `NnPipeline<P>` from `pficp_fpga::rtl::pipeline_verilog(P)` (build-dependency
-//!    with feature `rtl`), for every `P` in [`DEFAULT_LANES`] (or `PFICP_SIM_LANES=4,16`).
-//! 2. `verilator --cc --build --trace --prefix VpipeP` per lane count (`$OUT_DIR/vpipeP/`).
-//! 3. The Verilator runtime (`verilated.o`, `verilated_threads.o`, `verilated_vcd_c.o`), built
-//!    once with the generated makefile and cached in `target/verilator-runtime/<key>/` (the
-//!    objects depend only on the Verilator version and the flags, not on the design).
-//! 4. A C shim per model, generated from the `VL_IN*/VL_OUT*` port lines of `VpipeP.h` after
-//!    checking them against the ports of docs/pipeline.md: `set_inputs` (a packed `u64` array,
-//!    masked to the port widths), `get_outputs`, `tick`, VCD open/close.
-//! 5. One static archive (shims + models + runtime) via `cc`, and `$OUT_DIR/models.rs` with the
-//!    Rust declarations, included by `src/lib.rs`.
+//! - `pipeline`: `NnPipeline<P>` from `pficp_fpga::rtl::pipeline_verilog(P)` (prefix `VpipeP`);
+//! - `particle_weights`: `ParticleWeightPipeline<P>` from
+//!   `pficp_fpga::rtl::particle_weights_verilog(P)` (prefix `VpwP`);
+//! - `weight_stage`: `WeightStage` from `pficp_fpga::rtl::weight_stage_verilog()` (prefix
+//!   `Vweights`);
+//!
+//! the lane-parametrised ones for every `P` in [`DEFAULT_LANES`] (or `PFICP_SIM_LANES=4,16`).
+//! Per model, on a pool of `NUM_JOBS` threads, largest first:
+//!
+//! 1. the Verilog, from the build-dependency `pficp-fpga` (feature `rtl`);
+//! 2. `verilator --cc --trace --prefix <prefix>` (C++ in `$OUT_DIR/<prefix lower case>/`);
+//! 3. a C shim generated from the `VL_IN*/VL_OUT*` port lines of `<prefix>.h` after checking
+//!    them against the design's documented ports: `set_inputs` (a packed `u64` array, masked
+//!    to the port widths), `get_outputs`, `tick`, VCD open/close;
+//! 4. one unity file compiled with the `cc` compiler and flags at `-O2`, but with the
+//!    run-once code (most of the source) after a pragma that turns optimisation off:
+//!    half the compile time of Verilator's makefile build, the same simulation speed.
+//!
+//! Then the Verilator runtime (`verilated.o`, `verilated_threads.o`, `verilated_vcd_c.o`),
+//! built once with a generated makefile and cached in `target/verilator-runtime/<key>/` (the
+//! objects depend only on the Verilator version and the flags, not on the design); one static
+//! archive (models + shims + runtime) via `cc`; and `$OUT_DIR/models.rs`, the Rust
+//! declarations and the table of models, included by `src/lib.rs`.
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 /// Lane counts verilated unless `PFICP_SIM_LANES` says otherwise: 4 for fast tests, 16 (the
 /// design point).
 const DEFAULT_LANES: [usize; 2] = [4, 16];
 
-/// The ports of `top` (docs/pipeline.md), in the order of the packed input/output arrays the
-/// shim exchanges with Rust: (name, is_input, width). `clock` is driven by `tick`.
-const PORTS: [(&str, bool, usize); 17] = [
+/// A port: (name, is_input, width). `clock` is driven by `tick`.
+type PortSpec = (&'static str, bool, usize);
+
+/// The ports of the nearest-neighbour pipeline's `top` (docs/pipeline.md), in the order of
+/// the packed input/output arrays the shim exchanges with Rust.
+const PIPELINE_PORTS: &[PortSpec] = &[
     ("clock", true, 1),
     ("model_we", true, 1),
     ("model_waddr", true, 12),
@@ -42,8 +58,100 @@ const PORTS: [(&str, bool, usize); 17] = [
     ("cost", false, 48),
 ];
 
-/// Make flags for the model and the runtime.
-const OPT_MODEL: &str = "OPT_FAST=-O2 OPT_SLOW=-O1";
+/// The ports the particle-weight pipeline (`fpga/src/rtl/particle_weights.rs`) adds to
+/// [`PIPELINE_PORTS`]: the weight stage's controls and outputs (docs/weights.md; `busy` and
+/// `count` renamed `w_busy` and `w_count`).
+const PW_EXTRA_PORTS: &[PortSpec] = &[
+    ("clear", true, 1),
+    ("weigh", true, 1),
+    ("pre_shift", true, 6),
+    ("q_mul", true, 17),
+    ("w_busy", false, 1),
+    ("w_count", false, 9),
+    ("min_cost", false, 48),
+    ("w_valid", false, 1),
+    ("w_index", false, 8),
+    ("weight", false, 16),
+    ("w_done", false, 1),
+    ("w_sum", false, 24),
+];
+
+/// The ports of the weight stage (docs/weights.md).
+const WEIGHT_STAGE_PORTS: &[PortSpec] = &[
+    ("clock", true, 1),
+    ("clear", true, 1),
+    ("cost_valid", true, 1),
+    ("cost", true, 48),
+    ("weigh", true, 1),
+    ("pre_shift", true, 6),
+    ("q_mul", true, 17),
+    ("busy", false, 1),
+    ("count", false, 9),
+    ("min_cost", false, 48),
+    ("w_valid", false, 1),
+    ("w_index", false, 8),
+    ("weight", false, 16),
+    ("w_done", false, 1),
+    ("w_sum", false, 24),
+];
+
+/// One generated design.
+struct Design {
+    /// `Model::design` in `models.rs` (and the Verilog file's stem).
+    name: &'static str,
+    /// Verilator prefix; the lane count is appended for lane-parametrised designs.
+    prefix: &'static str,
+    /// Lane-parametrised: built for every lane count.
+    per_lane: bool,
+    /// The Verilog (top module `top`) for a lane count (ignored unless `per_lane`).
+    verilog: fn(usize) -> String,
+    /// The ports, concatenated in this order.
+    ports: &'static [&'static [PortSpec]],
+    /// Where the ports are specified (for the error message).
+    spec: &'static str,
+}
+
+/// Every design that is verilated.
+const DESIGNS: [Design; 3] = [
+    Design {
+        name: "pipeline",
+        prefix: "Vpipe",
+        per_lane: true,
+        verilog: pficp_fpga::rtl::pipeline_verilog,
+        ports: &[PIPELINE_PORTS],
+        spec: "docs/pipeline.md (sim/build.rs PIPELINE_PORTS)",
+    },
+    Design {
+        name: "particle_weights",
+        prefix: "Vpw",
+        per_lane: true,
+        verilog: pficp_fpga::rtl::particle_weights_verilog,
+        ports: &[PIPELINE_PORTS, PW_EXTRA_PORTS],
+        spec: "fpga/src/rtl/particle_weights.rs (sim/build.rs PIPELINE_PORTS + PW_EXTRA_PORTS)",
+    },
+    Design {
+        name: "weight_stage",
+        prefix: "Vweights",
+        per_lane: false,
+        verilog: |_| pficp_fpga::rtl::weight_stage_verilog(),
+        ports: &[WEIGHT_STAGE_PORTS],
+        spec: "docs/weights.md (sim/build.rs WEIGHT_STAGE_PORTS)",
+    },
+];
+
+impl Design {
+    fn port_specs(&self) -> impl Iterator<Item = &'static PortSpec> {
+        self.ports.iter().flat_map(|g| g.iter())
+    }
+}
+
+/// Optimisation of a model's per-clock code (Verilator's `VM_*_FAST` files) and the shim.
+const OPT_MODEL: &str = "-O2";
+/// Turns optimisation off for the rest of a translation unit (the run-once code, Verilator's
+/// `VM_*_SLOW` files): GCC and Clang; other compilers ignore it and optimise everything.
+const UNOPTIMISED: &str = "#if defined(__clang__)\n#pragma clang optimize off\n#elif defined(__GNUC__)\n\
+                           #pragma GCC optimize(\"O0\")\n#endif\n";
+/// Make flags for the runtime.
 const OPT_RUNTIME: &str = "OPT_GLOBAL=-O2";
 const RUNTIME_OBJECTS: [&str; 3] = ["verilated.o", "verilated_threads.o", "verilated_vcd_c.o"];
 
@@ -133,10 +241,10 @@ fn parse_ports(hdr: &str) -> Vec<Port> {
     ports
 }
 
-/// The header's ports must be exactly [`PORTS`]; returns them in [`PORTS`] order.
-fn check_ports(parsed: Vec<Port>, header: &Path) -> Vec<Port> {
+/// The header's ports must be exactly `design`'s; returns them in the design's order.
+fn check_ports(parsed: Vec<Port>, design: &Design, header: &Path) -> Vec<Port> {
     let mut problems = vec![];
-    for (name, input, width) in PORTS {
+    for &(name, input, width) in design.port_specs() {
         match parsed.iter().find(|p| p.name == name) {
             None => problems.push(format!("missing port {name}")),
             Some(p) if p.input != input || p.width != width => problems.push(format!(
@@ -153,7 +261,7 @@ fn check_ports(parsed: Vec<Port>, header: &Path) -> Vec<Port> {
         }
     }
     for p in &parsed {
-        if !PORTS.iter().any(|q| q.0 == p.name) {
+        if !design.port_specs().any(|q| q.0 == p.name) {
             problems.push(format!("unexpected port {}", p.name));
         }
         if !p.input && p.width > 64 {
@@ -161,15 +269,11 @@ fn check_ports(parsed: Vec<Port>, header: &Path) -> Vec<Port> {
         }
     }
     if !problems.is_empty() {
-        panic!(
-            "the ports of {} do not match docs/pipeline.md (sim/build.rs PORTS):\n  {}",
-            header.display(),
-            problems.join("\n  ")
-        );
+        panic!("the ports of {} do not match {}:\n  {}", header.display(), design.spec, problems.join("\n  "));
     }
     let mut parsed = parsed;
-    PORTS
-        .iter()
+    design
+        .port_specs()
         .map(|(n, ..)| {
             let k = parsed.iter().position(|p| p.name == *n).unwrap();
             parsed.swap_remove(k)
@@ -338,6 +442,178 @@ fn lanes_to_build() -> Vec<usize> {
     lanes
 }
 
+/// One model to build: a design at a lane count (0 for the weight stage).
+struct Job {
+    design: &'static Design,
+    lanes: usize,
+    prefix: String,
+}
+
+/// What building a [`Job`] produced.
+struct Built {
+    mdir: PathBuf,
+    /// The objects of the model and its shim.
+    objects: Vec<PathBuf>,
+    /// `extern "C"` declarations of the shim.
+    decls: String,
+    /// The `Model { .. }` entry.
+    entry: String,
+    report: String,
+    seconds: f64,
+}
+
+/// The model's C++ files from `<prefix>_classes.mk`: (`VM_CLASSES_FAST` + `VM_SUPPORT_FAST`,
+/// `VM_CLASSES_SLOW` + `VM_SUPPORT_SLOW`); every `<prefix>*.cpp` in `mdir` must be in one.
+fn class_files(mdir: &Path, prefix: &str) -> (Vec<PathBuf>, Vec<PathBuf>) {
+    let mk_path = mdir.join(format!("{prefix}_classes.mk"));
+    let mk = std::fs::read_to_string(&mk_path).unwrap();
+    let (mut fast, mut slow) = (vec![], vec![]);
+    let mut into: Option<bool> = None;
+    for line in mk.lines() {
+        if let Some(var) = line.strip_suffix(" += \\") {
+            into = match var {
+                "VM_CLASSES_FAST" | "VM_SUPPORT_FAST" => Some(true),
+                "VM_CLASSES_SLOW" | "VM_SUPPORT_SLOW" => Some(false),
+                _ => None,
+            };
+        } else if let (Some(is_fast), Some(name)) = (into, line.strip_prefix('\t')) {
+            let file = mdir.join(format!("{}.cpp", name.trim_end_matches('\\').trim()));
+            if is_fast { &mut fast } else { &mut slow }.push(file);
+        } else {
+            into = None;
+        }
+    }
+    let mut listed: Vec<&PathBuf> = fast.iter().chain(&slow).collect();
+    listed.sort();
+    let mut present: Vec<PathBuf> = std::fs::read_dir(mdir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| {
+            let n = p.file_name().unwrap().to_string_lossy();
+            n.starts_with(prefix) && n.ends_with(".cpp") && !n.ends_with("__ALL.cpp")
+        })
+        .collect();
+    present.sort();
+    assert!(
+        !fast.is_empty() && listed.iter().copied().eq(present.iter()),
+        "{}: the class lists {listed:?} are not the model's files {present:?}",
+        mk_path.display()
+    );
+    (fast, slow)
+}
+
+/// Verilog, verilated C++, shim and object (steps 1 to 4) of one model, in its own directory.
+fn build_model(job: &Job, out: &Path, compiler: &cc::Tool) -> Built {
+    let t0 = Instant::now();
+    let prefix = &job.prefix;
+    let f = prefix.to_lowercase();
+    let mdir = out.join(&f);
+    let _ = std::fs::remove_dir_all(&mdir);
+    std::fs::create_dir_all(&mdir).unwrap();
+
+    // 1. Verilog.
+    let t = Instant::now();
+    let vfile = out.join(if job.design.per_lane {
+        format!("{}_p{}.v", job.design.name, job.lanes)
+    } else {
+        format!("{}.v", job.design.name)
+    });
+    std::fs::write(&vfile, (job.design.verilog)(job.lanes)).unwrap();
+    let t_gen = t.elapsed();
+
+    // 2. Verilate (C++ only: compiled in 4.).
+    let t = Instant::now();
+    let mut v = Command::new("verilator");
+    v.args(["--cc", "--trace", "--timescale", "1ns/1ns", "-O3", "-Wno-fatal", "-Wno-WIDTH", "-Wno-DECLFILENAME"])
+        .args(["--prefix", prefix, "--top-module", "top", "--Mdir"])
+        .arg(&mdir)
+        .arg(&vfile);
+    run(&mut v, &format!("verilating {}", vfile.display()));
+    let t_verilate = t.elapsed();
+
+    // 3. Shim from the header's port lines.
+    let hdr_path = mdir.join(format!("{prefix}.h"));
+    let hdr = std::fs::read_to_string(&hdr_path).unwrap();
+    let ports = check_ports(parse_ports(&hdr), job.design, &hdr_path);
+    let shim = mdir.join(format!("{f}_shim.cpp"));
+    let (n_in, n_out) = gen_shim(prefix, &ports, &shim);
+
+    // 4. Compile one unity file, as Verilator's makefile would, but with only the per-clock
+    // code (evaluation, trace changes) and the shim optimised: the run-once code
+    // (constructors, initial settle, trace declarations and full dump; most of the source)
+    // follows a pragma that turns optimisation off. Half the compile time of the makefile's
+    // -O2 unity build, the same simulation speed.
+    let t = Instant::now();
+    let (fast, slow) = class_files(&mdir, prefix);
+    let unit = mdir.join(format!("{f}__unity.cpp"));
+    let include = |files: &[PathBuf]| -> String {
+        files.iter().map(|c| format!("#include \"{}\"\n", c.file_name().unwrap().to_str().unwrap())).collect()
+    };
+    let text = format!(
+        "// Generated by sim/build.rs: do not edit.\n// Per-clock code (VM_*_FAST) and the shim.\n{}{}\
+         // Run-once code (VM_*_SLOW), not optimised.\n{UNOPTIMISED}{}",
+        include(&fast),
+        include(std::slice::from_ref(&shim)),
+        include(&slow)
+    );
+    std::fs::write(&unit, text).unwrap();
+    let obj = unit.with_extension("o");
+    run(
+        compiler.to_command().args(["-w", OPT_MODEL, "-I"]).arg(&mdir).arg("-c").arg(&unit).arg("-o").arg(&obj),
+        &format!("compiling {}", unit.display()),
+    );
+    let objects = vec![obj];
+    let t_compile = t.elapsed();
+
+    let decls = format!(
+        "extern \"C\" {{\n    fn pficp_{f}_new() -> *mut c_void;\n    fn pficp_{f}_free(h: *mut c_void);\n    \
+         fn pficp_{f}_tick(h: *mut c_void, t: u64);\n    \
+         fn pficp_{f}_trace_open(h: *mut c_void, path: *const c_char, t: u64) -> c_int;\n    \
+         fn pficp_{f}_trace_flush(h: *mut c_void);\n    fn pficp_{f}_trace_close(h: *mut c_void);\n    \
+         fn pficp_{f}_set_inputs(h: *mut c_void, v: *const u64);\n    \
+         fn pficp_{f}_get_outputs(h: *mut c_void, v: *mut u64);\n}}\n"
+    );
+    let outputs: Vec<String> = ports.iter().filter(|p| !p.input).map(|p| format!("{:?}", p.name)).collect();
+    let entry = format!(
+        "    Model {{ design: \"{}\", lanes: {}, prefix: \"{prefix}\", verilog: \"{}\", in_words: {n_in}, \
+         out_words: {n_out}, outputs: &[{}], new: pficp_{f}_new, free: pficp_{f}_free, tick: pficp_{f}_tick, \
+         trace_open: pficp_{f}_trace_open, trace_flush: pficp_{f}_trace_flush, trace_close: pficp_{f}_trace_close, \
+         set_inputs: pficp_{f}_set_inputs, get_outputs: pficp_{f}_get_outputs }},\n",
+        job.design.name,
+        job.lanes,
+        vfile.display().to_string().escape_default(),
+        outputs.join(", ")
+    );
+    let report = format!(
+        "{prefix}: Verilog {} bytes generated in {:.1} s; verilated in {:.1} s; compiled in {:.1} s",
+        std::fs::metadata(&vfile).unwrap().len(),
+        t_gen.as_secs_f64(),
+        t_verilate.as_secs_f64(),
+        t_compile.as_secs_f64()
+    );
+    Built { mdir, objects, decls, entry, report, seconds: t0.elapsed().as_secs_f64() }
+}
+
+/// Build every job on `threads` threads, largest first; results in job order.
+fn build_all(jobs: &[Job], threads: usize, out: &Path, compiler: &cc::Tool) -> Vec<Built> {
+    // The 16-lane designs take several times as long as the rest: start them first.
+    let mut order: Vec<usize> = (0..jobs.len()).collect();
+    order.sort_by_key(|&k| std::cmp::Reverse((jobs[k].lanes, jobs[k].design.ports.len())));
+    let next = AtomicUsize::new(0);
+    let results: Vec<std::sync::Mutex<Option<Built>>> = jobs.iter().map(|_| Default::default()).collect();
+    std::thread::scope(|s| {
+        for _ in 0..threads.clamp(1, jobs.len()) {
+            s.spawn(|| {
+                while let Some(&k) = order.get(next.fetch_add(1, Ordering::Relaxed)) {
+                    let built = build_model(&jobs[k], out, compiler);
+                    *results[k].lock().unwrap() = Some(built);
+                }
+            });
+        }
+    });
+    results.into_iter().map(|r| r.into_inner().unwrap().expect("a build thread failed")).collect()
+}
+
 fn main() {
     println!("cargo:rerun-if-changed=build.rs");
     let t_all = Instant::now();
@@ -345,107 +621,56 @@ fn main() {
     let version = verilator_version();
     let include = verilator_include();
     let lanes = lanes_to_build();
+    let threads: usize = std::env::var("NUM_JOBS").ok().and_then(|n| n.parse().ok()).unwrap_or(2);
     let mut report = format!("{version}\n");
 
     let mut b = cc::Build::new();
     b.cpp(true)
         .include(&include)
         .include(include.join("vltstd"))
+        .define("VM_COVERAGE", "0")
+        .define("VM_SC", "0")
         .define("VM_TRACE", "1")
+        .define("VM_TRACE_FST", "0")
         .define("VM_TRACE_VCD", "1")
         .flag("-std=c++17")
         .flag("-faligned-new")
         .flag_if_supported("-Wno-unused-parameter")
         .opt_level(2)
+        .debug(false)
         .cargo_warnings(false);
+    let compiler = b.get_compiler();
+
+    // 1 to 3: every model, in parallel.
+    let jobs: Vec<Job> = DESIGNS
+        .iter()
+        .flat_map(|d| {
+            let ls = if d.per_lane { lanes.clone() } else { vec![0] };
+            ls.into_iter().map(move |p| Job {
+                design: d,
+                lanes: p,
+                prefix: if d.per_lane { format!("{}{p}", d.prefix) } else { d.prefix.to_string() },
+            })
+        })
+        .collect();
+    let t = Instant::now();
+    let built = build_all(&jobs, threads, &out, &compiler);
     let mut rs = String::from("// Generated by sim/build.rs: do not edit.\n");
     let mut models = String::new();
-    let mut first_mdir: Option<(PathBuf, String)> = None;
-    let mut words: Option<(usize, usize)> = None;
-    for &p in &lanes {
-        let prefix = format!("Vpipe{p}");
-        let f = prefix.to_lowercase();
-        let mdir = out.join(&f);
-        let _ = std::fs::remove_dir_all(&mdir);
-        std::fs::create_dir_all(&mdir).unwrap();
-
-        // 1. Verilog.
-        let t = Instant::now();
-        let vfile = out.join(format!("pipeline_p{p}.v"));
-        std::fs::write(&vfile, pficp_fpga::rtl::pipeline_verilog(p)).unwrap();
-        let t_gen = t.elapsed();
-
-        // 2. Verilate and compile the model (VpipeP__ALL.a and its objects in mdir).
-        let t = Instant::now();
-        let mut v = Command::new("verilator");
-        v.args([
-            "--cc",
-            "--build",
-            "-j",
-            "2",
-            "--trace",
-            "--timescale",
-            "1ns/1ns",
-            "-O3",
-            "-Wno-fatal",
-            "-Wno-WIDTH",
-            "-Wno-DECLFILENAME",
-        ])
-        .args(["-MAKEFLAGS", OPT_MODEL, "--prefix", &prefix, "--top-module", "top", "--Mdir"])
-        .arg(&mdir)
-        .arg(&vfile);
-        run(&mut v, &format!("verilating {}", vfile.display()));
-        let t_verilate = t.elapsed();
-        writeln!(
-            report,
-            "P={p}: Verilog {} bytes generated in {:.1} s; verilator --build {:.1} s",
-            std::fs::metadata(&vfile).unwrap().len(),
-            t_gen.as_secs_f64(),
-            t_verilate.as_secs_f64()
-        )
-        .unwrap();
-
-        // 4. Shim from the header's port lines.
-        let hdr_path = mdir.join(format!("{prefix}.h"));
-        let hdr = std::fs::read_to_string(&hdr_path).unwrap();
-        let ports = check_ports(parse_ports(&hdr), &hdr_path);
-        let shim = out.join(format!("{f}_shim.cpp"));
-        let w = gen_shim(&prefix, &ports, &shim);
-        assert!(words.is_none() || words == Some(w));
-        words = Some(w);
-        b.file(&shim).include(&mdir);
-        for e in std::fs::read_dir(&mdir).unwrap() {
-            let path = e.unwrap().path();
-            if path.extension().is_some_and(|x| x == "o") {
-                b.object(path);
-            }
+    for m in &built {
+        writeln!(report, "{} ({:.1} s)", m.report, m.seconds).unwrap();
+        rs.push_str(&m.decls);
+        models.push_str(&m.entry);
+        for o in &m.objects {
+            b.object(o);
         }
-        if first_mdir.is_none() {
-            first_mdir = Some((mdir.clone(), prefix.clone()));
-        }
-        writeln!(
-            rs,
-            "extern \"C\" {{\n    fn pficp_{f}_new() -> *mut c_void;\n    fn pficp_{f}_free(h: *mut c_void);\n    \
-             fn pficp_{f}_tick(h: *mut c_void, t: u64);\n    \
-             fn pficp_{f}_trace_open(h: *mut c_void, path: *const c_char, t: u64) -> c_int;\n    \
-             fn pficp_{f}_trace_flush(h: *mut c_void);\n    fn pficp_{f}_trace_close(h: *mut c_void);\n    \
-             fn pficp_{f}_set_inputs(h: *mut c_void, v: *const u64);\n    \
-             fn pficp_{f}_get_outputs(h: *mut c_void, v: *mut u64);\n}}"
-        )
-        .unwrap();
-        writeln!(
-            models,
-            "    Model {{ lanes: {p}, prefix: \"{prefix}\", verilog: \"{}\", new: pficp_{f}_new, free: pficp_{f}_free, \
-             tick: pficp_{f}_tick, trace_open: pficp_{f}_trace_open, trace_flush: pficp_{f}_trace_flush, \
-             trace_close: pficp_{f}_trace_close, set_inputs: pficp_{f}_set_inputs, get_outputs: pficp_{f}_get_outputs }},",
-            vfile.display().to_string().escape_default()
-        )
-        .unwrap();
     }
+    writeln!(report, "{} models on {} threads {:.1} s", jobs.len(), threads.min(jobs.len()), t.elapsed().as_secs_f64())
+        .unwrap();
 
-    // 3. Runtime (shared by every model).
+    // The runtime (shared by every model), from the smallest model's makefile.
     let t = Instant::now();
-    let (mdir, prefix) = first_mdir.unwrap();
+    let (k, _) = jobs.iter().enumerate().min_by_key(|(_, j)| (j.lanes, j.design.ports.len())).unwrap();
     let key = fnv1a(&[
         &version,
         OPT_RUNTIME,
@@ -453,27 +678,24 @@ fn main() {
         &std::env::var("CXX").unwrap_or_default(),
         &std::env::var("CXXFLAGS").unwrap_or_default(),
     ]);
-    for o in runtime_objects(&mdir, &prefix, &out, key) {
+    for o in runtime_objects(&built[k].mdir, &jobs[k].prefix, &out, key) {
         b.object(o);
     }
     writeln!(report, "runtime objects {:.1} s (cache key {key:016x})", t.elapsed().as_secs_f64()).unwrap();
 
-    // 5. One archive: shims + models + runtime (no circular dependency between archives).
+    // One archive: shims + models + runtime (no circular dependency between archives).
     let t = Instant::now();
     b.compile("pficp_vpipe");
     println!("cargo:rustc-link-lib=pthread");
     println!("cargo:rustc-link-lib=atomic");
     writeln!(
         report,
-        "shims + archive {:.1} s\nbuild.rs total {:.1} s",
+        "archive {:.1} s\nbuild.rs total {:.1} s",
         t.elapsed().as_secs_f64(),
         t_all.elapsed().as_secs_f64()
     )
     .unwrap();
 
-    let (n_in, n_out) = words.unwrap();
-    writeln!(rs, "/// `u64` words of the packed input array.\npub(crate) const IN_WORDS: usize = {n_in};").unwrap();
-    writeln!(rs, "/// `u64` words of the packed output array.\npub(crate) const OUT_WORDS: usize = {n_out};").unwrap();
     writeln!(rs, "/// The Verilated models.\npub(crate) static MODELS: &[Model] = &[\n{models}];").unwrap();
     writeln!(
         rs,

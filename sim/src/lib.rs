@@ -1,19 +1,26 @@
-//! Verilator co-simulation of the nearest-neighbour pipeline (docs/pipeline.md) against the
-//! bit-exact reference [`PipelineModel`].
+//! Verilator co-simulation of the generated designs against their bit-exact references:
 //!
-//! - [`VerilatedPipeline`]: the Verilated RTL (`pficp_fpga::rtl::pipeline_verilog(P)`, built by
-//!   `build.rs` for the lane counts in [`verilated_lanes`]), one clock at a time, optional VCD.
-//! - [`Lockstep`]: the RTL and a [`PipelineModel`] driven with the same inputs, every output
-//!   port compared after reset and after every rising edge; the first difference is a
-//!   [`Mismatch`] that names the cycle, the signal, both values and a VCD of the RTL run.
+//! | RTL (`build.rs` verilates it) | wrapper | reference | lockstep |
+//! |---|---|---|---|
+//! | `pipeline_verilog(P)` (docs/pipeline.md), P in [`verilated_lanes`] | [`VerilatedPipeline`] | [`PipelineModel`] | [`Lockstep`] |
+//! | `particle_weights_verilog(P)`, the same P | [`VerilatedParticleWeights`] | [`ParticleWeightModel`] | [`PwLockstep`] |
+//! | `weight_stage_verilog()` (docs/weights.md) | [`VerilatedWeightStage`] | [`WeightModel`] | [`WeightLockstep`] |
+//!
+//! - The wrappers run the Verilated RTL one clock at a time, with an optional VCD.
+//! - [`LockstepOf`] (the three lockstep types are its instances) drives the RTL and the
+//!   reference with the same inputs and compares every output port after reset and after
+//!   every rising edge; the first difference is a [`Mismatch`] that names the cycle, the
+//!   signal, both values and a VCD of the RTL run. The designs plug in through [`Rtl`].
 //!
 //! Time in the VCDs: clock period 10; the state after reset is at time 0, the rising edge of
 //! cycle `c` (`c` = 1, 2, ...) at time `10 c`, the falling edge before it (where the inputs
 //! change) at `10 c - 5`. [`Mismatch::cycle`] `c` is therefore at VCD time `10 c`.
 #![warn(missing_docs)]
 
-use pficp_fpga::format::{pack_point, FxPoint, FxPose, MAX_POINTS};
+use pficp_fpga::format::{pack_point, FxPoint, FxPose, WeightScale, MAX_POINTS};
+use pficp_fpga::particle_weights::{ParticleWeightModel, PwInputs, PwOutputs};
 use pficp_fpga::pipeline::{Evaluation, Inputs, Outputs, PipelineModel};
+use pficp_fpga::weights::{WeightInputs, WeightModel, WeightOutputs, MAX_PARTICLES};
 use std::ffi::CString;
 use std::fmt;
 use std::os::raw::{c_char, c_int, c_void};
@@ -21,9 +28,17 @@ use std::path::{Path, PathBuf};
 
 /// One Verilated model in the archive (a table of its shim's entry points).
 struct Model {
+    /// `pipeline`, `particle_weights` or `weight_stage`.
+    design: &'static str,
+    /// Lanes (0 for the weight stage).
     lanes: usize,
     prefix: &'static str,
     verilog: &'static str,
+    /// `u64` words of the packed input array.
+    in_words: usize,
+    /// Output ports in the order of the packed output array (one `u64` each).
+    outputs: &'static [&'static str],
+    out_words: usize,
     new: unsafe extern "C" fn() -> *mut c_void,
     free: unsafe extern "C" fn(*mut c_void),
     tick: unsafe extern "C" fn(*mut c_void, u64),
@@ -41,112 +56,79 @@ mod ffi {
 }
 pub use ffi::BUILD_REPORT;
 
-/// Lane counts with a Verilated model (the build verilates 4 and 16 unless
-/// `PFICP_SIM_LANES` says otherwise).
+const PIPELINE: &str = "pipeline";
+const PARTICLE_WEIGHTS: &str = "particle_weights";
+const WEIGHT_STAGE: &str = "weight_stage";
+
+/// Lane counts with a Verilated pipeline (and particle-weight pipeline): the build verilates
+/// 4 and 16 unless `PFICP_SIM_LANES` says otherwise.
 pub fn verilated_lanes() -> Vec<usize> {
-    ffi::MODELS.iter().map(|m| m.lanes).collect()
+    ffi::MODELS.iter().filter(|m| m.design == PIPELINE).map(|m| m.lanes).collect()
 }
 
-/// The Verilog file that was verilated for `lanes`, if there is a model for it.
+/// Every Verilated model: (design, lanes, Verilator prefix), e.g. `("particle_weights", 16,
+/// "Vpw16")`; the weight stage has 0 lanes.
+pub fn verilated_models() -> Vec<(&'static str, usize, &'static str)> {
+    ffi::MODELS.iter().map(|m| (m.design, m.lanes, m.prefix)).collect()
+}
+
+/// The Verilog file that was verilated for the `lanes`-lane pipeline, if there is a model.
 pub fn verilog_path(lanes: usize) -> Option<&'static Path> {
-    ffi::MODELS.iter().find(|m| m.lanes == lanes).map(|m| Path::new(m.verilog))
+    ffi::MODELS.iter().find(|m| m.design == PIPELINE && m.lanes == lanes).map(|m| Path::new(m.verilog))
 }
 
-/// The Verilated pipeline with its own `VerilatedContext` (instances are independent and
-/// may live on different threads).
-pub struct VerilatedPipeline {
+/// A Verilated model with its own `VerilatedContext`, untyped (packed `u64` ports).
+struct Core {
     model: &'static Model,
     h: *mut c_void,
     cycle: u64,
     trace: Option<PathBuf>,
 }
 
-// The handle is owned exclusively; Verilator models with separate contexts may move between
-// threads.
-unsafe impl Send for VerilatedPipeline {}
-
-impl VerilatedPipeline {
-    /// A pipeline with `lanes` lanes after reset (all inputs low, evaluated once).
-    ///
-    /// Panics if no model was verilated for `lanes` (see [`verilated_lanes`]).
-    pub fn new(lanes: usize) -> Self {
-        let model = ffi::MODELS.iter().find(|m| m.lanes == lanes).unwrap_or_else(|| {
+impl Core {
+    /// A fresh model of `design` with `lanes` lanes; its ports must be `in_words` input words
+    /// and the outputs `outputs` (what the typed wrapper packs and unpacks).
+    fn new(design: &str, lanes: usize, in_words: usize, outputs: &[&str]) -> Core {
+        let model = ffi::MODELS.iter().find(|m| m.design == design && m.lanes == lanes).unwrap_or_else(|| {
             panic!(
-                "no Verilated model with {lanes} lanes (built: {:?}; rebuild with PFICP_SIM_LANES=...)",
-                verilated_lanes()
+                "no Verilated {design} model with {lanes} lanes (built: {:?}; rebuild with PFICP_SIM_LANES=...)",
+                verilated_models()
             )
         });
+        assert!(
+            model.in_words == in_words && model.out_words == outputs.len() && model.outputs == outputs,
+            "{}: the shim's ports ({} input words, outputs {:?}) are not the wrapper's ({in_words}, {outputs:?})",
+            model.prefix,
+            model.in_words,
+            model.outputs
+        );
         // SAFETY: the shim allocates and evaluates a fresh model.
         let h = unsafe { (model.new)() };
         assert!(!h.is_null());
-        VerilatedPipeline { model, h, cycle: 0, trace: None }
+        Core { model, h, cycle: 0, trace: None }
     }
 
-    /// Number of lanes.
-    pub fn lanes(&self) -> usize {
-        self.model.lanes
-    }
-
-    /// The Verilator prefix of the model (`Vpipe16`).
-    pub fn prefix(&self) -> &'static str {
-        self.model.prefix
-    }
-
-    /// Drive the input ports (sampled at the next [`tick`](Self::tick)'s rising edge).
-    /// Values are masked to the port widths.
-    pub fn set_inputs(&mut self, i: &Inputs) {
-        let pose = i.pose.pack();
-        let words: [u64; ffi::IN_WORDS] = [
-            i.model_we as u64,
-            i.model_waddr as u64,
-            i.model_wdata,
-            i.model_count as u64,
-            i.start as u64,
-            pose[0],
-            pose[1],
-            pose[2],
-            pose[3],
-            i.scan_valid as u64,
-            i.scan_data,
-            i.scan_last as u64,
-        ];
-        // SAFETY: the array has the length the shim reads.
+    fn set_inputs<const N: usize>(&mut self, words: &[u64; N]) {
+        debug_assert_eq!(N, self.model.in_words);
+        // SAFETY: the array has the length the shim reads (checked in `new`).
         unsafe { (self.model.set_inputs)(self.h, words.as_ptr()) }
     }
 
-    /// One clock: clock low, eval, clock high (the rising edge), eval; the VCD, if open,
-    /// gets both phases.
-    pub fn tick(&mut self) {
+    fn outputs<const N: usize>(&self) -> [u64; N] {
+        debug_assert_eq!(N, self.model.out_words);
+        let mut o = [0u64; N];
+        // SAFETY: the array has the length the shim writes (checked in `new`).
+        unsafe { (self.model.get_outputs)(self.h, o.as_mut_ptr()) };
+        o
+    }
+
+    fn tick(&mut self) {
         self.cycle += 1;
         // SAFETY: valid handle.
         unsafe { (self.model.tick)(self.h, 10 * self.cycle) }
     }
 
-    /// The output ports now.
-    pub fn outputs(&self) -> Outputs {
-        let mut o = [0u64; ffi::OUT_WORDS];
-        // SAFETY: the array has the length the shim writes.
-        unsafe { (self.model.get_outputs)(self.h, o.as_mut_ptr()) };
-        Outputs {
-            scan_ready: o[0] != 0,
-            busy: o[1] != 0,
-            nn_valid: o[2] != 0,
-            nn_index: o[3] as u16,
-            nn_dist: o[4],
-            cost_valid: o[5] != 0,
-            cost: o[6],
-        }
-    }
-
-    /// Rising edges so far.
-    pub fn cycle(&self) -> u64 {
-        self.cycle
-    }
-
-    /// Write a VCD of every signal from now on (the current state at time `10 * cycle`, then
-    /// both phases of every clock). Replaces an open trace.
-    pub fn trace_to(&mut self, path: impl AsRef<Path>) -> std::io::Result<()> {
-        let path = path.as_ref();
+    fn trace_to(&mut self, path: &Path) -> std::io::Result<()> {
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir)?;
         }
@@ -161,47 +143,423 @@ impl VerilatedPipeline {
         Ok(())
     }
 
-    /// The open VCD, if any.
-    pub fn trace_path(&self) -> Option<&Path> {
-        self.trace.as_deref()
-    }
-
-    /// Flush the VCD to disk (it is also flushed when closed or dropped).
-    pub fn flush_trace(&mut self) {
+    fn flush_trace(&mut self) {
         // SAFETY: valid handle.
         unsafe { (self.model.trace_flush)(self.h) }
     }
 
-    /// Close the VCD.
-    pub fn close_trace(&mut self) {
+    fn close_trace(&mut self) {
         // SAFETY: valid handle.
         unsafe { (self.model.trace_close)(self.h) };
         self.trace = None;
     }
 }
 
-impl Drop for VerilatedPipeline {
+impl Drop for Core {
     fn drop(&mut self) {
         // SAFETY: the handle came from `new` and is freed once.
         unsafe { (self.model.free)(self.h) }
     }
 }
 
-impl fmt::Debug for VerilatedPipeline {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.debug_struct("VerilatedPipeline")
-            .field("prefix", &self.model.prefix)
-            .field("cycle", &self.cycle)
-            .field("trace", &self.trace)
-            .finish()
+// The handle is owned exclusively; Verilator models with separate contexts may move between
+// threads.
+unsafe impl Send for Core {}
+
+/// The methods every wrapper has (on `self.core`).
+macro_rules! verilated_common {
+    ($ty:ident, $inputs:ty) => {
+        impl $ty {
+            /// The Verilator prefix of the model (`Vpipe16`, `Vpw4`, `Vweights`).
+            pub fn prefix(&self) -> &'static str {
+                self.core.model.prefix
+            }
+
+            /// The Verilog file that was verilated.
+            pub fn verilog_path(&self) -> &'static Path {
+                Path::new(self.core.model.verilog)
+            }
+
+            /// One clock: clock low, eval, clock high (the rising edge), eval; the VCD, if
+            /// open, gets both phases.
+            pub fn tick(&mut self) {
+                self.core.tick()
+            }
+
+            /// Apply the inputs and tick.
+            pub fn step(&mut self, i: &$inputs) {
+                self.set_inputs(i);
+                self.tick();
+            }
+
+            /// Rising edges so far.
+            pub fn cycle(&self) -> u64 {
+                self.core.cycle
+            }
+
+            /// Write a VCD of every signal from now on (the current state at time
+            /// `10 * cycle`, then both phases of every clock). Replaces an open trace.
+            pub fn trace_to(&mut self, path: impl AsRef<Path>) -> std::io::Result<()> {
+                self.core.trace_to(path.as_ref())
+            }
+
+            /// The open VCD, if any.
+            pub fn trace_path(&self) -> Option<&Path> {
+                self.core.trace.as_deref()
+            }
+
+            /// Flush the VCD to disk (it is also flushed when closed or dropped).
+            pub fn flush_trace(&mut self) {
+                self.core.flush_trace()
+            }
+
+            /// Close the VCD.
+            pub fn close_trace(&mut self) {
+                self.core.close_trace()
+            }
+        }
+
+        impl fmt::Debug for $ty {
+            fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.debug_struct(stringify!($ty))
+                    .field("prefix", &self.core.model.prefix)
+                    .field("cycle", &self.core.cycle)
+                    .field("trace", &self.core.trace)
+                    .finish()
+            }
+        }
+    };
+}
+
+/// The Verilated pipeline with its own `VerilatedContext` (instances are independent and
+/// may live on different threads).
+pub struct VerilatedPipeline {
+    core: Core,
+}
+
+verilated_common!(VerilatedPipeline, Inputs);
+
+fn pipeline_input_words(i: &Inputs) -> [u64; 12] {
+    let pose = i.pose.pack();
+    [
+        i.model_we as u64,
+        i.model_waddr as u64,
+        i.model_wdata,
+        i.model_count as u64,
+        i.start as u64,
+        pose[0],
+        pose[1],
+        pose[2],
+        pose[3],
+        i.scan_valid as u64,
+        i.scan_data,
+        i.scan_last as u64,
+    ]
+}
+
+fn pipeline_outputs(o: &[u64]) -> Outputs {
+    Outputs {
+        scan_ready: o[0] != 0,
+        busy: o[1] != 0,
+        nn_valid: o[2] != 0,
+        nn_index: o[3] as u16,
+        nn_dist: o[4],
+        cost_valid: o[5] != 0,
+        cost: o[6],
     }
 }
 
-/// Output port names in the order [`Lockstep`] compares them.
+impl VerilatedPipeline {
+    /// A pipeline with `lanes` lanes after reset (all inputs low, evaluated once).
+    ///
+    /// Panics if no model was verilated for `lanes` (see [`verilated_lanes`]).
+    pub fn new(lanes: usize) -> Self {
+        VerilatedPipeline { core: Core::new(PIPELINE, lanes, 12, &OUTPUT_PORTS) }
+    }
+
+    /// Number of lanes.
+    pub fn lanes(&self) -> usize {
+        self.core.model.lanes
+    }
+
+    /// Drive the input ports (sampled at the next [`tick`](Self::tick)'s rising edge).
+    /// Values are masked to the port widths.
+    pub fn set_inputs(&mut self, i: &Inputs) {
+        self.core.set_inputs(&pipeline_input_words(i))
+    }
+
+    /// The output ports now.
+    pub fn outputs(&self) -> Outputs {
+        pipeline_outputs(&self.core.outputs::<7>())
+    }
+}
+
+/// The Verilated particle-weight pipeline (`ParticleWeightPipeline<P>`: the nearest-neighbour
+/// pipeline whose costs feed the weight stage).
+pub struct VerilatedParticleWeights {
+    core: Core,
+}
+
+verilated_common!(VerilatedParticleWeights, PwInputs);
+
+impl VerilatedParticleWeights {
+    /// The `lanes`-lane particle-weight pipeline after reset.
+    ///
+    /// Panics if no model was verilated for `lanes` (see [`verilated_lanes`]).
+    pub fn new(lanes: usize) -> Self {
+        VerilatedParticleWeights { core: Core::new(PARTICLE_WEIGHTS, lanes, 16, &PW_OUTPUT_PORTS) }
+    }
+
+    /// Number of lanes.
+    pub fn lanes(&self) -> usize {
+        self.core.model.lanes
+    }
+
+    /// Drive the input ports (masked to the port widths).
+    pub fn set_inputs(&mut self, i: &PwInputs) {
+        let nn = pipeline_input_words(&i.nn);
+        let mut w = [0u64; 16];
+        w[..12].copy_from_slice(&nn);
+        w[12..].copy_from_slice(&[i.clear as u64, i.weigh as u64, i.pre_shift as u64, i.q_mul as u64]);
+        self.core.set_inputs(&w)
+    }
+
+    /// The output ports now.
+    pub fn outputs(&self) -> PwOutputs {
+        let o = self.core.outputs::<15>();
+        PwOutputs { nn: pipeline_outputs(&o[..7]), w: weight_outputs(&o[7..]) }
+    }
+}
+
+/// The Verilated weight stage alone (docs/weights.md).
+pub struct VerilatedWeightStage {
+    core: Core,
+}
+
+verilated_common!(VerilatedWeightStage, WeightInputs);
+
+fn weight_outputs(o: &[u64]) -> WeightOutputs {
+    WeightOutputs {
+        busy: o[0] != 0,
+        count: o[1] as u16,
+        min_cost: o[2],
+        w_valid: o[3] != 0,
+        w_index: o[4] as u8,
+        weight: o[5] as u16,
+        w_done: o[6] != 0,
+        w_sum: o[7] as u32,
+    }
+}
+
+impl VerilatedWeightStage {
+    /// The weight stage after reset.
+    pub fn new() -> Self {
+        VerilatedWeightStage { core: Core::new(WEIGHT_STAGE, 0, 6, &WEIGHT_OUTPUT_PORTS) }
+    }
+
+    /// Drive the input ports (masked to the port widths).
+    pub fn set_inputs(&mut self, i: &WeightInputs) {
+        self.core.set_inputs(&[
+            i.clear as u64,
+            i.cost_valid as u64,
+            i.cost,
+            i.weigh as u64,
+            i.pre_shift as u64,
+            i.q_mul as u64,
+        ])
+    }
+
+    /// The output ports now.
+    pub fn outputs(&self) -> WeightOutputs {
+        weight_outputs(&self.core.outputs::<8>())
+    }
+}
+
+impl Default for VerilatedWeightStage {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Output port names of the pipeline in the order [`Lockstep`] compares them.
 pub const OUTPUT_PORTS: [&str; 7] = ["scan_ready", "busy", "nn_valid", "nn_index", "nn_dist", "cost_valid", "cost"];
+
+/// Output port names of the particle-weight pipeline in the order [`PwLockstep`] compares
+/// them (the pipeline's, then the weight stage's).
+pub const PW_OUTPUT_PORTS: [&str; 15] = [
+    "scan_ready",
+    "busy",
+    "nn_valid",
+    "nn_index",
+    "nn_dist",
+    "cost_valid",
+    "cost",
+    "w_busy",
+    "w_count",
+    "min_cost",
+    "w_valid",
+    "w_index",
+    "weight",
+    "w_done",
+    "w_sum",
+];
+
+/// Output port names of the weight stage in the order [`WeightLockstep`] compares them.
+pub const WEIGHT_OUTPUT_PORTS: [&str; 8] =
+    ["busy", "count", "min_cost", "w_valid", "w_index", "weight", "w_done", "w_sum"];
 
 fn port_values(o: &Outputs) -> [u64; 7] {
     [o.scan_ready as u64, o.busy as u64, o.nn_valid as u64, o.nn_index as u64, o.nn_dist, o.cost_valid as u64, o.cost]
+}
+
+fn weight_port_values(o: &WeightOutputs) -> [u64; 8] {
+    [
+        o.busy as u64,
+        o.count as u64,
+        o.min_cost,
+        o.w_valid as u64,
+        o.w_index as u64,
+        o.weight as u64,
+        o.w_done as u64,
+        o.w_sum as u64,
+    ]
+}
+
+/// A Verilated design and its reference, as [`LockstepOf`] runs them (implemented by
+/// [`VerilatedPipeline`], [`VerilatedParticleWeights`] and [`VerilatedWeightStage`]).
+pub trait Rtl: Sized {
+    /// The input ports.
+    type Inputs: Copy + PartialEq + fmt::Debug;
+    /// The output ports.
+    type Outputs: Copy + PartialEq + fmt::Debug;
+    /// The cycle-accurate reference.
+    type Reference: Clone;
+    /// Output port names, in the order they are compared.
+    const OUTPUT_PORTS: &'static [&'static str];
+    /// The output port values in [`OUTPUT_PORTS`](Self::OUTPUT_PORTS) order.
+    fn port_values(o: &Self::Outputs) -> Vec<u64>;
+    /// The reference after reset for this RTL.
+    fn new_reference(&self) -> Self::Reference;
+    /// The reference's outputs now.
+    fn reference_outputs(r: &Self::Reference) -> Self::Outputs;
+    /// One rising edge of the reference.
+    fn reference_step(r: &mut Self::Reference, i: &Self::Inputs);
+    /// A fresh instance of the same model, after reset.
+    fn fresh(&self) -> Self;
+    /// Drive the input ports.
+    fn set_inputs(&mut self, i: &Self::Inputs);
+    /// The output ports now.
+    fn outputs(&self) -> Self::Outputs;
+    /// One clock.
+    fn tick(&mut self);
+    /// Rising edges so far.
+    fn cycle(&self) -> u64;
+    /// Lanes (0 for the weight stage).
+    fn lanes(&self) -> usize;
+    /// The Verilator prefix.
+    fn prefix(&self) -> &'static str;
+    /// Trace to a VCD from now on.
+    fn trace_to(&mut self, path: &Path) -> std::io::Result<()>;
+    /// Flush the VCD.
+    fn flush_trace(&mut self);
+}
+
+macro_rules! rtl_common {
+    ($inputs:ty) => {
+        fn set_inputs(&mut self, i: &$inputs) {
+            Self::set_inputs(self, i)
+        }
+        fn outputs(&self) -> Self::Outputs {
+            Self::outputs(self)
+        }
+        fn tick(&mut self) {
+            self.core.tick()
+        }
+        fn cycle(&self) -> u64 {
+            self.core.cycle
+        }
+        fn lanes(&self) -> usize {
+            self.core.model.lanes
+        }
+        fn prefix(&self) -> &'static str {
+            self.core.model.prefix
+        }
+        fn trace_to(&mut self, path: &Path) -> std::io::Result<()> {
+            self.core.trace_to(path)
+        }
+        fn flush_trace(&mut self) {
+            self.core.flush_trace()
+        }
+    };
+}
+
+impl Rtl for VerilatedPipeline {
+    type Inputs = Inputs;
+    type Outputs = Outputs;
+    type Reference = PipelineModel;
+    const OUTPUT_PORTS: &'static [&'static str] = &OUTPUT_PORTS;
+    fn port_values(o: &Outputs) -> Vec<u64> {
+        port_values(o).to_vec()
+    }
+    fn new_reference(&self) -> PipelineModel {
+        PipelineModel::new(self.lanes())
+    }
+    fn reference_outputs(r: &PipelineModel) -> Outputs {
+        r.outputs()
+    }
+    fn reference_step(r: &mut PipelineModel, i: &Inputs) {
+        r.step(i)
+    }
+    fn fresh(&self) -> Self {
+        Self::new(self.lanes())
+    }
+    rtl_common!(Inputs);
+}
+
+impl Rtl for VerilatedParticleWeights {
+    type Inputs = PwInputs;
+    type Outputs = PwOutputs;
+    type Reference = ParticleWeightModel;
+    const OUTPUT_PORTS: &'static [&'static str] = &PW_OUTPUT_PORTS;
+    fn port_values(o: &PwOutputs) -> Vec<u64> {
+        port_values(&o.nn).into_iter().chain(weight_port_values(&o.w)).collect()
+    }
+    fn new_reference(&self) -> ParticleWeightModel {
+        ParticleWeightModel::new(self.lanes())
+    }
+    fn reference_outputs(r: &ParticleWeightModel) -> PwOutputs {
+        r.outputs()
+    }
+    fn reference_step(r: &mut ParticleWeightModel, i: &PwInputs) {
+        r.step(i)
+    }
+    fn fresh(&self) -> Self {
+        Self::new(self.lanes())
+    }
+    rtl_common!(PwInputs);
+}
+
+impl Rtl for VerilatedWeightStage {
+    type Inputs = WeightInputs;
+    type Outputs = WeightOutputs;
+    type Reference = WeightModel;
+    const OUTPUT_PORTS: &'static [&'static str] = &WEIGHT_OUTPUT_PORTS;
+    fn port_values(o: &WeightOutputs) -> Vec<u64> {
+        weight_port_values(o).to_vec()
+    }
+    fn new_reference(&self) -> WeightModel {
+        WeightModel::new()
+    }
+    fn reference_outputs(r: &WeightModel) -> WeightOutputs {
+        r.outputs()
+    }
+    fn reference_step(r: &mut WeightModel, i: &WeightInputs) {
+        r.step(i)
+    }
+    fn fresh(&self) -> Self {
+        Self::new()
+    }
+    rtl_common!(WeightInputs);
 }
 
 /// The first difference between the RTL and the reference.
@@ -209,7 +567,8 @@ fn port_values(o: &Outputs) -> [u64; 7] {
 pub struct Mismatch {
     /// Rising edges before the comparison (0: after reset); VCD time `10 * cycle`.
     pub cycle: u64,
-    /// The first differing output port (in [`OUTPUT_PORTS`] order).
+    /// The first differing output port (in the design's output port order:
+    /// [`OUTPUT_PORTS`], [`PW_OUTPUT_PORTS`] or [`WEIGHT_OUTPUT_PORTS`]).
     pub signal: &'static str,
     /// The reference's value.
     pub expected: u64,
@@ -217,21 +576,26 @@ pub struct Mismatch {
     pub actual: u64,
     /// Other ports that differ at the same cycle.
     pub also: Vec<&'static str>,
-    /// Lanes of the RTL.
+    /// Lanes of the RTL (0 for the weight stage).
     pub lanes: usize,
+    /// The Verilator prefix of the RTL (`Vpipe4`, `Vpw16`, `Vweights`).
+    pub prefix: &'static str,
     /// The VCD of the RTL run up to and including this cycle (`None` if it could not be
     /// written; the reason went to stderr).
     pub vcd: Option<PathBuf>,
-    /// The first cycle in the VCD (see [`Lockstep::vcd_window`]).
+    /// The first cycle in the VCD (see [`LockstepOf::vcd_window`]).
     pub vcd_from: u64,
 }
 
 impl fmt::Display for Mismatch {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "RTL {}", self.prefix)?;
+        if self.lanes > 0 {
+            write!(f, " (P = {})", self.lanes)?;
+        }
         write!(
             f,
-            "RTL (P = {}) differs from the reference at cycle {} (VCD time {}): {} expected {} (0x{:x}), actual {} (0x{:x})",
-            self.lanes,
+            " differs from the reference at cycle {} (VCD time {}): {} expected {} (0x{:x}), actual {} (0x{:x})",
             self.cycle,
             10 * self.cycle,
             self.signal,
@@ -252,12 +616,12 @@ impl fmt::Display for Mismatch {
 
 impl std::error::Error for Mismatch {}
 
-/// How [`Lockstep`] keeps its VCD.
+/// How a [`LockstepOf`] keeps its VCD.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TraceMode {
     /// Trace only when needed: the inputs are recorded (run-length encoded) and, on a
     /// mismatch, replayed into a fresh RTL that is traced over the last
-    /// [`vcd_window`](Lockstep::vcd_window) cycles up to the mismatch. Full speed.
+    /// [`vcd_window`](LockstepOf::vcd_window) cycles up to the mismatch. Full speed.
     OnMismatch,
     /// Trace the run as it goes (slower; the VCD covers the whole run).
     Always,
@@ -269,29 +633,42 @@ pub const DEFAULT_VCD_WINDOW: u64 = 5_000;
 
 static RUN_COUNTER: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
 
-/// The Verilated RTL and the reference, clock for clock.
-pub struct Lockstep {
-    rtl: VerilatedPipeline,
-    reference: PipelineModel,
+/// A Verilated design ([`Rtl`]) and its reference, clock for clock: every output port is
+/// compared after reset and after every rising edge.
+pub struct LockstepOf<R: Rtl> {
+    rtl: R,
+    reference: R::Reference,
     mode: TraceMode,
     vcd: PathBuf,
     vcd_window: Option<u64>,
     /// Inputs applied so far, run-length encoded (for the replay in [`TraceMode::OnMismatch`]).
-    history: Vec<(Inputs, u64)>,
+    history: Vec<(R::Inputs, u64)>,
     reset_checked: bool,
     compared: u64,
     failed: Option<Mismatch>,
 }
 
-impl Lockstep {
-    /// The `lanes`-lane RTL and `PipelineModel::new(lanes)`, both after reset; VCD (on
+/// The nearest-neighbour pipeline in lockstep with [`PipelineModel`].
+pub type Lockstep = LockstepOf<VerilatedPipeline>;
+/// The particle-weight pipeline in lockstep with [`ParticleWeightModel`].
+pub type PwLockstep = LockstepOf<VerilatedParticleWeights>;
+/// The weight stage in lockstep with [`WeightModel`].
+pub type WeightLockstep = LockstepOf<VerilatedWeightStage>;
+
+impl<R: Rtl> LockstepOf<R> {
+    /// `rtl` (which must not have been clocked) against its reference after reset; VCD (on
     /// mismatch) under the system temp directory; see [`vcd`](Self::vcd).
-    pub fn new(lanes: usize) -> Self {
+    pub fn from_rtl(rtl: R) -> Self {
+        assert_eq!(rtl.cycle(), 0, "LockstepOf::from_rtl needs an RTL that was not clocked");
         let n = RUN_COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        let vcd = std::env::temp_dir().join(format!("pficp-sim-p{lanes}-{}-{n}.vcd", std::process::id()));
-        Lockstep {
-            rtl: VerilatedPipeline::new(lanes),
-            reference: PipelineModel::new(lanes),
+        let vcd = std::env::temp_dir().join(format!(
+            "pficp-sim-{}-{}-{n}.vcd",
+            rtl.prefix().to_lowercase(),
+            std::process::id()
+        ));
+        LockstepOf {
+            reference: rtl.new_reference(),
+            rtl,
             mode: TraceMode::OnMismatch,
             vcd,
             vcd_window: Some(DEFAULT_VCD_WINDOW),
@@ -327,9 +704,9 @@ impl Lockstep {
         self
     }
 
-    /// Compare against this reference instead of `PipelineModel::new(lanes)` (it may have
-    /// a different lane count or state: a way to check that the checker catches errors).
-    pub fn with_reference(mut self, reference: PipelineModel) -> Self {
+    /// Compare against this reference instead of the one after reset (it may have a
+    /// different configuration or state: a way to check that the checker catches errors).
+    pub fn with_reference(mut self, reference: R::Reference) -> Self {
         self.assert_fresh("with_reference");
         self.reference = reference;
         self
@@ -341,12 +718,12 @@ impl Lockstep {
     }
 
     /// The RTL.
-    pub fn rtl(&self) -> &VerilatedPipeline {
+    pub fn rtl(&self) -> &R {
         &self.rtl
     }
 
     /// The reference.
-    pub fn reference(&self) -> &PipelineModel {
+    pub fn reference(&self) -> &R::Reference {
         &self.reference
     }
 
@@ -357,26 +734,27 @@ impl Lockstep {
     }
 
     /// The output ports (equal on both sides while no mismatch was found).
-    pub fn outputs(&self) -> Outputs {
+    pub fn outputs(&self) -> R::Outputs {
         self.rtl.outputs()
     }
 
     fn compare(&mut self) -> Result<(), Mismatch> {
-        let (e, a) = (self.reference.outputs(), self.rtl.outputs());
+        let (e, a) = (R::reference_outputs(&self.reference), self.rtl.outputs());
         if e == a {
             return Ok(());
         }
-        let (ev, av) = (port_values(&e), port_values(&a));
-        let differ: Vec<usize> = (0..OUTPUT_PORTS.len()).filter(|&k| ev[k] != av[k]).collect();
-        let k = differ[0];
+        let (ev, av) = (R::port_values(&e), R::port_values(&a));
+        let differ: Vec<usize> = (0..R::OUTPUT_PORTS.len()).filter(|&k| ev[k] != av[k]).collect();
+        let k = *differ.first().expect("outputs differ but no port value does");
         let (vcd, vcd_from) = self.finish_vcd();
         let m = Mismatch {
             cycle: self.rtl.cycle(),
-            signal: OUTPUT_PORTS[k],
+            signal: R::OUTPUT_PORTS[k],
             expected: ev[k],
             actual: av[k],
-            also: differ[1..].iter().map(|&j| OUTPUT_PORTS[j]).collect(),
+            also: differ[1..].iter().map(|&j| R::OUTPUT_PORTS[j]).collect(),
             lanes: self.rtl.lanes(),
+            prefix: self.rtl.prefix(),
             vcd,
             vcd_from,
         };
@@ -407,7 +785,7 @@ impl Lockstep {
 
     /// Replay the recorded inputs into a fresh RTL, traced from cycle `from`.
     fn replay(&self, from: u64) -> std::io::Result<()> {
-        let mut replay = VerilatedPipeline::new(self.rtl.lanes());
+        let mut replay = self.rtl.fresh();
         for (i, n) in &self.history {
             for _ in 0..*n {
                 if replay.cycle() == from {
@@ -444,11 +822,11 @@ impl Lockstep {
     /// One clock in lockstep: the same inputs to both, one rising edge each, every output
     /// port compared (the outputs after reset are compared before the first edge). After a
     /// mismatch every call returns it again.
-    pub fn step(&mut self, i: &Inputs) -> Result<(), Mismatch> {
+    pub fn step(&mut self, i: &R::Inputs) -> Result<(), Mismatch> {
         self.check_reset()?;
         self.rtl.set_inputs(i);
         self.rtl.tick();
-        self.reference.step(i);
+        R::reference_step(&mut self.reference, i);
         if self.mode == TraceMode::OnMismatch {
             match self.history.last_mut() {
                 Some((last, n)) if last == i => *n += 1,
@@ -458,6 +836,14 @@ impl Lockstep {
         self.compare()?;
         self.compared += 1;
         Ok(())
+    }
+}
+
+impl LockstepOf<VerilatedPipeline> {
+    /// The `lanes`-lane RTL and `PipelineModel::new(lanes)`, both after reset; VCD (on
+    /// mismatch) under the system temp directory; see [`vcd`](Self::vcd).
+    pub fn new(lanes: usize) -> Self {
+        Self::from_rtl(VerilatedPipeline::new(lanes))
     }
 
     /// Write the model RAM, one point a clock from address 0.
@@ -505,13 +891,201 @@ impl Lockstep {
     }
 }
 
-impl VerilatedPipeline {
-    /// Apply the inputs and tick.
-    pub fn step(&mut self, i: &Inputs) {
-        self.set_inputs(i);
-        self.tick();
+/// The weights of one weight pass, as [`PwLockstep::weigh`] and [`WeightLockstep::weigh`]
+/// collect them.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct WeightPass {
+    /// `w_index` of every `w_valid`, in order.
+    pub indices: Vec<u8>,
+    /// `weight` of every `w_valid`, in order.
+    pub weights: Vec<u16>,
+    /// `w_sum` at `w_done`.
+    pub sum: u32,
+    /// Rising edges after the edge that started the pass (the first with `busy`) up to and
+    /// including the `w_done` edge.
+    pub clocks: u64,
+}
+
+impl LockstepOf<VerilatedParticleWeights> {
+    /// The `lanes`-lane particle-weight RTL and `ParticleWeightModel::new(lanes)`, both after
+    /// reset; VCD (on mismatch) under the system temp directory; see [`vcd`](Self::vcd).
+    pub fn new(lanes: usize) -> Self {
+        Self::from_rtl(VerilatedParticleWeights::new(lanes))
     }
 
+    /// Write the model RAM, one point a clock from address 0 (weight controls low).
+    pub fn load_model(&mut self, model: &[FxPoint]) -> Result<(), Mismatch> {
+        load_model(|i| self.step(&PwInputs { nn: *i, ..Default::default() }), model)
+    }
+
+    /// [`Lockstep::particle`] with the weight controls low: the particle's cost goes into
+    /// the weight stage at the edge after `cost_valid` (if the stage is idle and not full).
+    pub fn particle(
+        &mut self,
+        model_count: usize,
+        scan: &[FxPoint],
+        pose: &FxPose,
+        gap: impl FnMut(u64) -> bool,
+    ) -> Result<(Evaluation, u64), Mismatch> {
+        self.check_reset()?;
+        let now = self.outputs().nn;
+        drive_particle(
+            |i| {
+                self.step(&PwInputs { nn: *i, ..Default::default() })?;
+                Ok(self.outputs().nn)
+            },
+            now,
+            model_count,
+            scan,
+            pose,
+            gap,
+        )
+    }
+
+    /// Wait for the weight stage to be idle, then `clear` for one clock.
+    pub fn clear(&mut self) -> Result<(), Mismatch> {
+        self.check_reset()?;
+        let now = self.outputs().w;
+        drive_clear(
+            |i| {
+                self.step(&PwInputs { clear: i.clear, ..Default::default() })?;
+                Ok(self.outputs().w)
+            },
+            now,
+        )
+    }
+
+    /// Wait for the weight stage to be idle, hold `weigh` with `scale` until the pass starts
+    /// (a cost stored at the same edge has priority), and collect the weights until
+    /// `w_done`. Panics if the pass does not start (no cost stored).
+    pub fn weigh(&mut self, scale: &WeightScale) -> Result<WeightPass, Mismatch> {
+        self.check_reset()?;
+        let now = self.outputs().w;
+        drive_weigh(
+            |i| {
+                self.step(&PwInputs { weigh: i.weigh, pre_shift: i.pre_shift, q_mul: i.q_mul, ..Default::default() })?;
+                Ok(self.outputs().w)
+            },
+            now,
+            scale,
+        )
+    }
+}
+
+impl LockstepOf<VerilatedWeightStage> {
+    /// The weight-stage RTL and `WeightModel::new()`, both after reset; VCD (on mismatch)
+    /// under the system temp directory; see [`vcd`](Self::vcd).
+    pub fn new() -> Self {
+        Self::from_rtl(VerilatedWeightStage::new())
+    }
+
+    /// Wait for the stage to be idle, then `clear` for one clock.
+    pub fn clear(&mut self) -> Result<(), Mismatch> {
+        self.check_reset()?;
+        let now = self.outputs();
+        drive_clear(
+            |i| {
+                self.step(i)?;
+                Ok(self.outputs())
+            },
+            now,
+        )
+    }
+
+    /// Wait for the stage to be idle, then offer `cost` for one clock (stored unless 256
+    /// costs are stored).
+    pub fn push_cost(&mut self, cost: u64) -> Result<(), Mismatch> {
+        self.check_reset()?;
+        let now = self.outputs();
+        let mut step = |i: &WeightInputs| {
+            self.step(i)?;
+            Ok(self.outputs())
+        };
+        wait_weight_idle(&mut step, now)?;
+        step(&WeightInputs { cost_valid: true, cost, ..Default::default() })?;
+        Ok(())
+    }
+
+    /// As [`PwLockstep::weigh`].
+    pub fn weigh(&mut self, scale: &WeightScale) -> Result<WeightPass, Mismatch> {
+        self.check_reset()?;
+        let now = self.outputs();
+        drive_weigh(
+            |i| {
+                self.step(i)?;
+                Ok(self.outputs())
+            },
+            now,
+            scale,
+        )
+    }
+}
+
+impl Default for LockstepOf<VerilatedWeightStage> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Step with no inputs while `busy`, then once with `clear` (`step` as in [`drive_weigh`]).
+fn drive_clear<E>(
+    mut step: impl FnMut(&WeightInputs) -> Result<WeightOutputs, E>,
+    now: WeightOutputs,
+) -> Result<(), E> {
+    wait_weight_idle(&mut step, now)?;
+    step(&WeightInputs { clear: true, ..Default::default() })?;
+    Ok(())
+}
+
+/// Step with no inputs while `busy`; returns the outputs then.
+fn wait_weight_idle<E>(
+    step: &mut impl FnMut(&WeightInputs) -> Result<WeightOutputs, E>,
+    mut now: WeightOutputs,
+) -> Result<WeightOutputs, E> {
+    let mut wait = 0;
+    while now.busy {
+        now = step(&WeightInputs::default())?;
+        wait += 1;
+        assert!(wait <= MAX_PARTICLES + 16, "the weight stage never became idle");
+    }
+    Ok(now)
+}
+
+/// The weight-pass driver: `step` applies the weight stage's controls (`weigh`,
+/// `pre_shift`, `q_mul` of the argument) for one edge and returns the stage's outputs after
+/// it; `now` are the outputs before.
+fn drive_weigh<E>(
+    mut step: impl FnMut(&WeightInputs) -> Result<WeightOutputs, E>,
+    mut now: WeightOutputs,
+    scale: &WeightScale,
+) -> Result<WeightPass, E> {
+    now = wait_weight_idle(&mut step, now)?;
+    let weigh =
+        WeightInputs { weigh: true, pre_shift: scale.pre_shift as u8, q_mul: scale.q_mul, ..Default::default() };
+    let mut tries = 0;
+    while !now.busy {
+        // A cost arriving at the same edge has priority over `weigh`: hold it.
+        assert!(tries < 4, "weigh did not start the pass (no cost stored?)");
+        now = step(&weigh)?;
+        tries += 1;
+    }
+    let mut pass = WeightPass { indices: vec![], weights: vec![], sum: 0, clocks: 0 };
+    loop {
+        now = step(&WeightInputs::default())?;
+        pass.clocks += 1;
+        if now.w_valid {
+            pass.indices.push(now.w_index);
+            pass.weights.push(now.weight);
+        }
+        if now.w_done {
+            pass.sum = now.w_sum;
+            return Ok(pass);
+        }
+        assert!(pass.clocks <= MAX_PARTICLES as u64 + 16, "no w_done after {} clocks", pass.clocks);
+    }
+}
+
+impl VerilatedPipeline {
     /// Write the model RAM, one point a clock from address 0 (RTL only, no reference).
     pub fn load_model(&mut self, model: &[FxPoint]) {
         let r: Result<(), std::convert::Infallible> = load_model(
@@ -557,8 +1131,9 @@ fn load_model<E>(mut step: impl FnMut(&Inputs) -> Result<(), E>, model: &[FxPoin
     Ok(())
 }
 
-/// The particle driver shared by [`Lockstep`] and [`VerilatedPipeline`]: `step` applies
-/// inputs for one edge and returns the outputs after it; `now` are the outputs before.
+/// The particle driver shared by the lockstep types and [`VerilatedPipeline`]: `step`
+/// applies inputs for one edge and returns the outputs after it; `now` are the outputs
+/// before.
 fn drive_particle<E>(
     mut step: impl FnMut(&Inputs) -> Result<Outputs, E>,
     mut now: Outputs,
@@ -604,7 +1179,7 @@ fn drive_particle<E>(
     }
 }
 
-impl fmt::Debug for Lockstep {
+impl<R: Rtl + fmt::Debug> fmt::Debug for LockstepOf<R> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_struct("Lockstep")
             .field("rtl", &self.rtl)
