@@ -207,15 +207,7 @@ mod tests {
     use nalgebra::{Rotation3, Unit};
     use rand::{Rng, SeedableRng};
 
-    /// The smooth 3-D spiral of the ICP tests, `n` points.
-    fn curve(n: usize) -> Vec<Point3<f64>> {
-        (0..n)
-            .map(|i| {
-                let t = i as f64 / n as f64 * 6.0;
-                Point3::new(t.cos() * (1.0 + 0.2 * t), (1.7 * t).sin(), 0.3 * t)
-            })
-            .collect()
-    }
+    use crate::test_support::spiral as curve;
 
     fn random_unit(rng: &mut impl Rng) -> Vector3<f64> {
         Vector3::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0)).normalize()

@@ -148,14 +148,7 @@ pub fn icp(nn: &NearestNeighbours, scan: &[Point3<f64>], init: &Pose, settings: 
 mod tests {
     use super::*;
 
-    fn curve(n: usize) -> Vec<Point3<f64>> {
-        (0..n)
-            .map(|i| {
-                let t = i as f64 / n as f64 * 6.0;
-                Point3::new(t.cos() * (1.0 + 0.2 * t), (1.7 * t).sin(), 0.3 * t)
-            })
-            .collect()
-    }
+    use crate::test_support::spiral as curve;
 
     #[test]
     fn converges_from_a_near_start() {

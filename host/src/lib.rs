@@ -27,3 +27,5 @@ pub mod particle_filter;
 pub mod pf_icp;
 pub mod sparse_icp;
 pub mod svd_match;
+#[cfg(test)]
+mod test_support;

@@ -240,15 +240,7 @@ mod tests {
     use crate::icp::{icp, IcpSettings};
     use rand::{Rng, SeedableRng};
 
-    /// The smooth 3-D spiral of the ICP tests, `n` points.
-    fn curve(n: usize) -> Vec<Point3<f64>> {
-        (0..n)
-            .map(|i| {
-                let t = i as f64 / n as f64 * 6.0;
-                Point3::new(t.cos() * (1.0 + 0.2 * t), (1.7 * t).sin(), 0.3 * t)
-            })
-            .collect()
-    }
+    use crate::test_support::spiral as curve;
 
     /// Every second model point, mapped into the scan frame, plus uniform noise.
     fn scan_of(model: &[Point3<f64>], truth: &Pose, noise: f64, seed: u64) -> Vec<Point3<f64>> {
