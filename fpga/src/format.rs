@@ -122,8 +122,9 @@ pub fn unpack_point(w: u64) -> FxPoint {
     [w as u16 as i16, (w >> 16) as u16 as i16, (w >> 32) as u16 as i16]
 }
 
-/// The transform of one point, exactly as the RTL computes it:
+/// The transform of one point, exactly as the RTL computes it (indices as in the RTL):
 /// `x'_i = sat16((sum_j m_ij * p_j + (t_i << 15) + 2^14) >> 15)`.
+#[allow(clippy::needless_range_loop)]
 pub fn transform(pose: &FxPose, p: FxPoint) -> FxPoint {
     let mut out = [0i16; 3];
     for i in 0..3 {

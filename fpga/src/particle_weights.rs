@@ -75,7 +75,7 @@ mod tests {
 
     #[test]
     fn costs_flow_into_the_weight_stage() {
-        let model: Vec<[i16; 3]> = (0..20).map(|k| [k * 300, -k * 200, (k * k) as i16]).collect();
+        let model: Vec<[i16; 3]> = (0..20i16).map(|k| [k * 300, -k * 200, k * k]).collect();
         let scan: Vec<[i16; 3]> = (0..7).map(|k| [k * 500 - 1000, k * 100, 50]).collect();
         let mut m = ParticleWeightModel::new(4);
         for (a, &p) in model.iter().enumerate() {

@@ -159,6 +159,7 @@ impl PipelineModel {
     }
 
     /// One rising edge with the given inputs.
+    #[allow(clippy::needless_range_loop)] // register indices mirror the RTL's
     pub fn step(&mut self, i: &Inputs) {
         let take = self.scan_ready() && i.scan_valid;
         // The registers are copied to compute the next state; the RAM is moved, not copied

@@ -221,7 +221,7 @@ mod tests {
         let mut m = WeightModel::new();
         let costs = [COST_MAX, 0, 5];
         let (w, _, _) = run(&mut m, &costs, WeightScale { pre_shift: 0, q_mul: (1 << 17) - 1 });
-        assert_eq!(w, vec![exp_table()[255], 65535, exp_table()[(5 * ((1u64 << 17) - 1) >> 16) as usize]]);
+        assert_eq!(w, vec![exp_table()[255], 65535, exp_table()[((5 * ((1u64 << 17) - 1)) >> 16) as usize]]);
     }
 
     #[test]
