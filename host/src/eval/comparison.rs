@@ -276,7 +276,7 @@ impl ComparisonTable {
             100.0 * Tolerance::SUCCESS.s_frac,
         ));
         t.note(format!(
-            "PF-ICP used K = {} clusters (request clamped to a tenth of the smaller cloud); baselines start from the identity",
+            "PF-ICP used K = {} clusters (K is capped at a tenth of the smaller cloud); baselines start from the identity",
             self.pf_clusters
         ));
         t.render()
