@@ -12,6 +12,7 @@
 #![warn(missing_docs)]
 
 pub mod format;
+pub mod messages;
 pub mod particle_weights;
 pub mod pipeline;
 pub mod protocol;

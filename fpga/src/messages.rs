@@ -1,0 +1,405 @@
+//! The data layouts of the protocol's commands and replies (docs/protocol.md), shared by
+//! the host's board client and the board reference. Everything is little-endian; points
+//! are 6 bytes, poses 27 (the 216-bit word of [`FxPose::pack`]).
+
+use crate::format::{pack_point, unpack_point, FxPoint, FxPose, WeightScale, MAX_POINTS, POSE_BITS};
+use crate::protocol::VERSION;
+use crate::weights::MAX_PARTICLES;
+
+/// Bytes of a point on the wire.
+pub const POINT_BYTES: usize = 6;
+/// Bytes of a pose on the wire.
+pub const POSE_BYTES: usize = 27;
+/// Most points in one LoadModel / LoadScan frame.
+pub const MAX_LOAD_POINTS: usize = 170;
+/// Most poses in one Evaluate frame.
+pub const MAX_POSES: usize = 37;
+/// Most results in one Nearest frame.
+pub const MAX_NEAREST: usize = 144;
+/// Data bytes of the Identify reply.
+pub const IDENTITY_BYTES: usize = 26;
+/// Evaluate flag: forget the stored costs first.
+pub const FLAG_FIRST: u8 = 1;
+/// Evaluate flag: weigh every stored cost afterwards.
+pub const FLAG_LAST: u8 = 2;
+
+/// Why a reply's data does not parse.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum MessageError {
+    /// The data is not as long as the layout says.
+    #[error("reply data is {got} bytes, expected {expected}")]
+    Length {
+        /// Bytes received.
+        got: usize,
+        /// Bytes the layout needs.
+        expected: usize,
+    },
+    /// A field does not hold what the request asked for.
+    #[error("reply field {field} is {got}, expected {expected}")]
+    Field {
+        /// Which field.
+        field: &'static str,
+        /// Its value.
+        got: u64,
+        /// What was asked for.
+        expected: u64,
+    },
+}
+
+fn need(data: &[u8], expected: usize) -> Result<(), MessageError> {
+    if data.len() == expected {
+        Ok(())
+    } else {
+        Err(MessageError::Length { got: data.len(), expected })
+    }
+}
+
+fn le(data: &[u8]) -> u64 {
+    data.iter().rev().fold(0u64, |v, &b| (v << 8) | b as u64)
+}
+
+fn put(out: &mut Vec<u8>, v: u64, bytes: usize) {
+    out.extend((0..bytes).map(|k| (v >> (8 * k)) as u8));
+}
+
+/// A point's 6 bytes.
+pub fn point_bytes(p: FxPoint) -> [u8; POINT_BYTES] {
+    let w = pack_point(p);
+    std::array::from_fn(|k| (w >> (8 * k)) as u8)
+}
+
+/// The point of 6 bytes.
+pub fn point_from_bytes(b: &[u8]) -> FxPoint {
+    unpack_point(le(&b[..POINT_BYTES]))
+}
+
+/// A pose's 27 bytes.
+pub fn pose_bytes(pose: &FxPose) -> [u8; POSE_BYTES] {
+    let w = pose.pack();
+    std::array::from_fn(|k| (w[k / 8] >> (8 * (k % 8))) as u8)
+}
+
+/// The pose of 27 bytes (fields sign-extended from 18 bits).
+pub fn pose_from_bytes(b: &[u8]) -> FxPose {
+    let field = |k: usize| -> i32 {
+        let at = k * POSE_BITS as usize;
+        let mut raw = 0u64;
+        for bit in 0..POSE_BITS as usize {
+            let i = at + bit;
+            raw |= (((b[i / 8] >> (i % 8)) & 1) as u64) << bit;
+        }
+        (((raw << (64 - POSE_BITS)) as i64) >> (64 - POSE_BITS)) as i32
+    };
+    FxPose { m: std::array::from_fn(field), t: std::array::from_fn(|k| field(9 + k)) }
+}
+
+/// The Identify reply: version, limits, clock, baud and the current sizes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Identity {
+    /// Protocol version.
+    pub version: u16,
+    /// Pipeline lanes.
+    pub lanes: u8,
+    /// Largest model.
+    pub max_model: u16,
+    /// Largest scan.
+    pub max_scan: u16,
+    /// Most stored particle costs.
+    pub max_particles: u16,
+    /// Most poses per Evaluate frame.
+    pub max_poses: u8,
+    /// Most points per load frame.
+    pub max_load: u8,
+    /// Most results per Nearest frame.
+    pub max_nearest: u8,
+    /// Design clock in Hz.
+    pub clock_hz: u32,
+    /// Nominal UART baud rate.
+    pub baud: u32,
+    /// Model points in use.
+    pub model_count: u16,
+    /// Scan points in use.
+    pub scan_count: u16,
+    /// Particle costs stored.
+    pub stored: u16,
+}
+
+impl Identity {
+    /// The identity of a board with `lanes` lanes at `clock_hz` and `baud`, sizes given.
+    pub fn of_board(lanes: u8, clock_hz: u32, baud: u32, model_count: u16, scan_count: u16, stored: u16) -> Self {
+        Identity {
+            version: VERSION,
+            lanes,
+            max_model: MAX_POINTS as u16,
+            max_scan: MAX_POINTS as u16,
+            max_particles: MAX_PARTICLES as u16,
+            max_poses: MAX_POSES as u8,
+            max_load: MAX_LOAD_POINTS as u8,
+            max_nearest: MAX_NEAREST as u8,
+            clock_hz,
+            baud,
+            model_count,
+            scan_count,
+            stored,
+        }
+    }
+
+    /// The reply data.
+    pub fn encode(&self) -> Vec<u8> {
+        let mut out = Vec::with_capacity(IDENTITY_BYTES);
+        put(&mut out, self.version as u64, 2);
+        put(&mut out, self.lanes as u64, 1);
+        put(&mut out, self.max_model as u64, 2);
+        put(&mut out, self.max_scan as u64, 2);
+        put(&mut out, self.max_particles as u64, 2);
+        put(&mut out, self.max_poses as u64, 1);
+        put(&mut out, self.max_load as u64, 1);
+        put(&mut out, self.max_nearest as u64, 1);
+        put(&mut out, self.clock_hz as u64, 4);
+        put(&mut out, self.baud as u64, 4);
+        put(&mut out, self.model_count as u64, 2);
+        put(&mut out, self.scan_count as u64, 2);
+        put(&mut out, self.stored as u64, 2);
+        out
+    }
+
+    /// Parse the reply data.
+    pub fn decode(d: &[u8]) -> Result<Self, MessageError> {
+        need(d, IDENTITY_BYTES)?;
+        Ok(Identity {
+            version: le(&d[0..2]) as u16,
+            lanes: d[2],
+            max_model: le(&d[3..5]) as u16,
+            max_scan: le(&d[5..7]) as u16,
+            max_particles: le(&d[7..9]) as u16,
+            max_poses: d[9],
+            max_load: d[10],
+            max_nearest: d[11],
+            clock_hz: le(&d[12..16]) as u32,
+            baud: le(&d[16..20]) as u32,
+            model_count: le(&d[20..22]) as u16,
+            scan_count: le(&d[22..24]) as u16,
+            stored: le(&d[24..26]) as u16,
+        })
+    }
+}
+
+/// LoadModel / LoadScan request data: offset, count, points.
+pub fn load_request(offset: u16, points: &[FxPoint]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(4 + POINT_BYTES * points.len());
+    put(&mut out, offset as u64, 2);
+    put(&mut out, points.len() as u64, 2);
+    for &p in points {
+        out.extend_from_slice(&point_bytes(p));
+    }
+    out
+}
+
+/// Two u16 fields (LoadModel / LoadScan replies, SetSizes request and reply).
+pub fn two_u16(a: u16, b: u16) -> Vec<u8> {
+    let mut out = Vec::with_capacity(4);
+    put(&mut out, a as u64, 2);
+    put(&mut out, b as u64, 2);
+    out
+}
+
+/// Parse two u16 fields.
+pub fn parse_two_u16(d: &[u8]) -> Result<(u16, u16), MessageError> {
+    need(d, 4)?;
+    Ok((le(&d[0..2]) as u16, le(&d[2..4]) as u16))
+}
+
+/// An Evaluate request.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct EvaluateRequest {
+    /// Forget the stored costs first.
+    pub first: bool,
+    /// Weigh every stored cost afterwards.
+    pub last: bool,
+    /// The weight scale (used with `last`).
+    pub scale: WeightScale,
+    /// The poses (1 ..= [`MAX_POSES`]).
+    pub poses: Vec<FxPose>,
+}
+
+impl EvaluateRequest {
+    /// The request data.
+    pub fn encode(&self) -> Vec<u8> {
+        let mut out = Vec::with_capacity(6 + POSE_BYTES * self.poses.len());
+        out.push(if self.first { FLAG_FIRST } else { 0 } | if self.last { FLAG_LAST } else { 0 });
+        out.push(self.scale.pre_shift as u8);
+        put(&mut out, self.scale.q_mul as u64, 3);
+        out.push(self.poses.len() as u8);
+        for p in &self.poses {
+            out.extend_from_slice(&pose_bytes(p));
+        }
+        out
+    }
+}
+
+/// The weights that come with the last batch.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct WeightSummary {
+    /// Smallest stored cost.
+    pub min_cost: u64,
+    /// Sum of the weights (24 bits).
+    pub w_sum: u32,
+    /// Every stored particle's weight, in order.
+    pub weights: Vec<u16>,
+}
+
+/// An Evaluate reply.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct EvaluateReply {
+    /// This batch's costs.
+    pub costs: Vec<u64>,
+    /// With LAST: the weights of every stored particle.
+    pub summary: Option<WeightSummary>,
+}
+
+impl EvaluateReply {
+    /// The reply data.
+    pub fn encode(&self) -> Vec<u8> {
+        let mut out = Vec::new();
+        for &c in &self.costs {
+            put(&mut out, c, 6);
+        }
+        if let Some(s) = &self.summary {
+            put(&mut out, s.weights.len() as u64, 2);
+            put(&mut out, s.min_cost, 6);
+            put(&mut out, s.w_sum as u64, 3);
+            for &w in &s.weights {
+                put(&mut out, w as u64, 2);
+            }
+        }
+        out
+    }
+
+    /// Parse the reply to a request of `n` poses, with or without LAST.
+    pub fn decode(d: &[u8], n: usize, last: bool) -> Result<Self, MessageError> {
+        let costs_len = 6 * n;
+        if d.len() < costs_len + if last { 11 } else { 0 } {
+            return Err(MessageError::Length { got: d.len(), expected: costs_len + if last { 11 } else { 0 } });
+        }
+        let costs = d[..costs_len].chunks(6).map(le).collect();
+        if !last {
+            need(d, costs_len)?;
+            return Ok(EvaluateReply { costs, summary: None });
+        }
+        let s = &d[costs_len..];
+        let stored = le(&s[0..2]) as usize;
+        need(s, 11 + 2 * stored)?;
+        let summary = WeightSummary {
+            min_cost: le(&s[2..8]),
+            w_sum: le(&s[8..11]) as u32,
+            weights: s[11..].chunks(2).map(|c| le(c) as u16).collect(),
+        };
+        Ok(EvaluateReply { costs, summary: Some(summary) })
+    }
+}
+
+/// A Nearest request: scan points `first .. first + count` at `pose`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct NearestRequest {
+    /// First scan point.
+    pub first: u16,
+    /// Scan points (1 ..= [`MAX_NEAREST`]).
+    pub count: u16,
+    /// The pose.
+    pub pose: FxPose,
+}
+
+impl NearestRequest {
+    /// The request data.
+    pub fn encode(&self) -> Vec<u8> {
+        let mut out = two_u16(self.first, self.count);
+        out.extend_from_slice(&pose_bytes(&self.pose));
+        out
+    }
+}
+
+/// A Nearest reply.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct NearestReply {
+    /// First scan point.
+    pub first: u16,
+    /// Sum of the squared distances of these points.
+    pub cost: u64,
+    /// Per point: nearest model index and squared distance (Q8.26).
+    pub results: Vec<(u16, u64)>,
+}
+
+impl NearestReply {
+    /// The reply data.
+    pub fn encode(&self) -> Vec<u8> {
+        let mut out = two_u16(self.first, self.results.len() as u16);
+        put(&mut out, self.cost, 6);
+        for &(i, d) in &self.results {
+            put(&mut out, i as u64, 2);
+            put(&mut out, d, 5);
+        }
+        out
+    }
+
+    /// Parse the reply to `request`.
+    pub fn decode(d: &[u8], request: &NearestRequest) -> Result<Self, MessageError> {
+        need(d, 10 + 7 * request.count as usize)?;
+        let (first, count) = parse_two_u16(&d[..4])?;
+        if first != request.first {
+            return Err(MessageError::Field { field: "first", got: first as u64, expected: request.first as u64 });
+        }
+        if count != request.count {
+            return Err(MessageError::Field { field: "count", got: count as u64, expected: request.count as u64 });
+        }
+        Ok(NearestReply {
+            first,
+            cost: le(&d[4..10]),
+            results: d[10..].chunks(7).map(|c| (le(&c[..2]) as u16, le(&c[2..]))).collect(),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn points_and_poses_round_trip() {
+        for p in [[0, 0, 0], [-1, 32767, -32768], [1234, -4321, 7]] {
+            assert_eq!(point_from_bytes(&point_bytes(p)), p);
+        }
+        let pose = FxPose { m: [1, -1, 2, -2, 131071, -131072, 0, 5, -5], t: [7, -7, 100] };
+        assert_eq!(pose_from_bytes(&pose_bytes(&pose)), pose);
+        assert_eq!(pose_bytes(&pose)[0], 1, "m[0] = 1 sits in byte 0's low bits");
+    }
+
+    #[test]
+    fn replies_round_trip() {
+        let id = Identity::of_board(16, 100_000_000, 921_600, 2000, 1000, 50);
+        assert_eq!(id.encode().len(), IDENTITY_BYTES);
+        assert_eq!(Identity::decode(&id.encode()), Ok(id));
+        let r = EvaluateReply {
+            costs: vec![1, (1 << 48) - 1],
+            summary: Some(WeightSummary { min_cost: 1, w_sum: 65535, weights: vec![65535, 0, 7] }),
+        };
+        assert_eq!(EvaluateReply::decode(&r.encode(), 2, true), Ok(r.clone()));
+        let short = EvaluateReply { costs: vec![5], summary: None };
+        assert_eq!(EvaluateReply::decode(&short.encode(), 1, false), Ok(short));
+        let e = r.encode();
+        assert!(EvaluateReply::decode(&e[..e.len() - 1], 2, true).is_err());
+        let q = NearestRequest { first: 3, count: 2, pose: FxPose::default() };
+        assert_eq!(q.encode().len(), 31);
+        let n = NearestReply { first: 3, cost: 99, results: vec![(4095, (1 << 34) - 1), (0, 0)] };
+        assert_eq!(NearestReply::decode(&n.encode(), &q), Ok(n));
+    }
+
+    #[test]
+    fn request_sizes_fit_the_body_limit() {
+        use crate::protocol::MAX_BODY;
+        assert!(2 + 4 + POINT_BYTES * MAX_LOAD_POINTS <= MAX_BODY);
+        assert!(2 + 6 + POSE_BYTES * MAX_POSES <= MAX_BODY);
+        assert!(2 + 6 + POSE_BYTES * (MAX_POSES + 1) > MAX_BODY);
+        assert!(2 + 10 + 7 * MAX_NEAREST <= MAX_BODY);
+        assert!(2 + 10 + 7 * (MAX_NEAREST + 1) > MAX_BODY);
+    }
+}
