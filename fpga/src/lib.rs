@@ -11,6 +11,7 @@
 //! feature) the rust_hdl RTL land with the hardware issues.
 #![warn(missing_docs)]
 
+pub mod board;
 pub mod format;
 pub mod messages;
 pub mod particle_weights;

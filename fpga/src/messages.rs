@@ -218,7 +218,7 @@ pub struct EvaluateRequest {
     pub last: bool,
     /// The weight scale (used with `last`).
     pub scale: WeightScale,
-    /// The poses (1 ..= [`MAX_POSES`]).
+    /// The poses (0 ..= [`MAX_POSES`]; none only with `last`: weigh the stored costs).
     pub poses: Vec<FxPose>,
 }
 
