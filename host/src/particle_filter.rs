@@ -5,7 +5,8 @@
 //! 1. **Propagate**: every particle moves by a uniform step in `+-sigma_k` per state and is
 //!    clamped into the propagation region `x_hat +- region_sigmas * sigma_k` (the first
 //!    iteration draws uniformly over the whole region).
-//! 2. **Weigh** (Eq. 20, 21): cost `c_i` (the MSD of the transformed scan),
+//! 2. **Weigh** (Eq. 20, 21; [`Objective::weigh`], in software unless the objective says
+//!    otherwise): cost `c_i` (the MSD of the transformed scan),
 //!    `w_i = exp(-(c_i - c_min) / (2 Q_k))`, normalised. Subtracting `c_min` only rescales
 //!    the weights before normalisation (the hardware does the same). `Q_k` is the larger
 //!    of the ICP variance `Q` and a sixth of the median cost excess `median(c_i - c_min)`:
@@ -45,6 +46,56 @@ pub trait Objective: Sync {
     }
     /// Bring a state back into its valid domain (e.g. positive scale).
     fn constrain(&self, _x: &mut [f64]) {}
+    /// Costs and normalised weights (Eq. 20, 21) of one iteration's particles, `q` the
+    /// filter's ICP variance. The default is [`weigh_in_software`]; an objective may get them
+    /// elsewhere (PF-ICP with the board: `crate::board_pf`). An error stops the filter
+    /// ([`try_run`]).
+    fn weigh(&self, particles: &[Vec<f64>], q: f64) -> Result<Weighed, WeighError> {
+        Ok(weigh_in_software(self, particles, q))
+    }
+}
+
+/// Why a pluggable [`Objective::weigh`] failed (the software weights never fail).
+pub type WeighError = Box<dyn std::error::Error + Send + Sync>;
+
+/// One iteration's particle costs (the units of [`Objective::cost`]) and their normalised
+/// weights.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Weighed {
+    /// Cost per particle.
+    pub costs: Vec<f64>,
+    /// Weight per particle, summing to 1.
+    pub weights: Vec<f64>,
+}
+
+/// The lowest cost and its index (the first on ties).
+pub fn lowest(costs: &[f64]) -> (usize, f64) {
+    costs.iter().copied().enumerate().fold((0, f64::INFINITY), |a, (i, c)| if c < a.1 { (i, c) } else { a })
+}
+
+/// The tempered `Q_k = max(Q, median(c_i - c_min) / 6)` of one iteration's costs.
+pub fn tempered_q(costs: &[f64], q: f64) -> f64 {
+    let (_, cmin) = lowest(costs);
+    let excess: Vec<f64> = costs.iter().map(|c| c - cmin).collect();
+    q.max(crate::icp::median(&excess) / 6.0).max(1e-300)
+}
+
+/// The software weights: `w_i = exp(-(c_i - c_min) / (2 Q_k))`, normalised.
+pub fn software_weights(costs: &[f64], q: f64) -> Vec<f64> {
+    let (_, cmin) = lowest(costs);
+    let q_k = tempered_q(costs, q);
+    let mut w: Vec<f64> = costs.iter().map(|c| (-(c - cmin) / (2.0 * q_k)).exp()).collect();
+    let total: f64 = w.iter().sum();
+    w.iter_mut().for_each(|x| *x /= total);
+    w
+}
+
+/// The default [`Objective::weigh`]: every particle's cost (in parallel), then
+/// [`software_weights`].
+pub fn weigh_in_software<O: Objective + ?Sized>(obj: &O, particles: &[Vec<f64>], q: f64) -> Weighed {
+    let costs: Vec<f64> = particles.par_iter().map(|x| obj.cost(x)).collect();
+    let weights = software_weights(&costs, q);
+    Weighed { costs, weights }
 }
 
 /// Particle-count adaptation.
@@ -162,8 +213,19 @@ fn weighted_sigma(obj: &dyn Objective, particles: &[Vec<f64>], w: &[f64], centre
         .collect()
 }
 
-/// Run the filter from `init` with initial standard deviations `sigma0`.
+/// Run the filter from `init` with initial standard deviations `sigma0`. Panics if the
+/// objective's [`Objective::weigh`] fails (the software one never does): see [`try_run`].
 pub fn run(obj: &dyn Objective, init: &[f64], sigma0: &[f64], settings: &FilterSettings) -> FilterResult {
+    try_run(obj, init, sigma0, settings).unwrap_or_else(|e| panic!("particle weights failed: {e}"))
+}
+
+/// [`run`], stopping at the first error of the objective's [`Objective::weigh`].
+pub fn try_run(
+    obj: &dyn Objective,
+    init: &[f64],
+    sigma0: &[f64],
+    settings: &FilterSettings,
+) -> Result<FilterResult, WeighError> {
     let dim = obj.dim();
     assert_eq!(init.len(), dim);
     assert_eq!(sigma0.len(), dim);
@@ -203,14 +265,13 @@ pub fn run(obj: &dyn Objective, init: &[f64], sigma0: &[f64], settings: &FilterS
             }
         }
         // Weigh.
-        let costs: Vec<f64> = particles.par_iter().map(|x| obj.cost(x)).collect();
-        let (imin, cmin) =
-            costs.iter().copied().enumerate().fold((0, f64::INFINITY), |a, (i, c)| if c < a.1 { (i, c) } else { a });
-        let excess: Vec<f64> = costs.iter().map(|c| c - cmin).collect();
-        let q_k = settings.q.max(crate::icp::median(&excess) / 6.0).max(1e-300);
-        let mut w: Vec<f64> = excess.iter().map(|e| (-e / (2.0 * q_k)).exp()).collect();
-        let total: f64 = w.iter().sum();
-        w.iter_mut().for_each(|x| *x /= total);
+        let Weighed { costs, weights: w } = obj.weigh(&particles, settings.q)?;
+        if costs.len() != particles.len() || w.len() != particles.len() {
+            return Err(
+                format!("{} costs and {} weights for {} particles", costs.len(), w.len(), particles.len()).into()
+            );
+        }
+        let (imin, cmin) = lowest(&costs);
         let ess = 1.0 / w.iter().map(|x| x * x).sum::<f64>();
         if cmin < best.0 {
             best = (cmin, particles[imin].clone());
@@ -261,7 +322,7 @@ pub fn run(obj: &dyn Objective, init: &[f64], sigma0: &[f64], settings: &FilterS
         let picks = systematic_resample(&w, rng.gen_range(0.0..1.0), n);
         particles = picks.into_iter().map(|i| particles[i].clone()).collect();
     }
-    FilterResult { estimate: best.1, cost: best.0, iterations, history, particles }
+    Ok(FilterResult { estimate: best.1, cost: best.0, iterations, history, particles })
 }
 
 #[cfg(test)]

@@ -12,6 +12,9 @@
 //!    `weight_points` scan points); after every iteration a few ICP iterations refine the
 //!    weighted estimate (`icp_per_iteration`, 0 to turn off).
 //! 4. **Polish**: ICP on the whole scan from the filter's estimate.
+//!
+//! [`register_with`] takes the particles' costs and weights from a [`ParticleWeights`]
+//! source instead (the board: `crate::board_pf`); everything else is the same.
 
 use crate::covariance::{approximate_icp_variance, IcpCovariance};
 use crate::geometry::{Centred, Params, Pose};
@@ -19,7 +22,7 @@ use crate::icp::{icp, IcpSettings, Registration};
 use crate::init::{initial_pose, InitMode, InitialPose};
 use crate::kmeans::Pairing;
 use crate::nn::NearestNeighbours;
-use crate::particle_filter::{self, Adaptive, FilterSettings, Objective};
+use crate::particle_filter::{self, Adaptive, FilterSettings, Objective, WeighError, Weighed};
 use nalgebra::Point3;
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
@@ -136,12 +139,25 @@ fn start_prior(pairing: Pairing, diag: f64, scale: f64) -> Params {
     [t * diag, t * diag, t * diag, s * scale, a, a, a]
 }
 
+/// Where the filter's particle costs and weights come from when not from the host's
+/// k-d tree (the board: `crate::board_pf::BoardWeights`).
+pub trait ParticleWeights: Sync {
+    /// Called once, before the filter, with the scan points the costs are taken over (the
+    /// fixed weight sample).
+    fn prepare(&self, sample: &[Point3<f64>]) -> Result<(), WeighError>;
+    /// Costs of the particles' poses (MSD over the sample, in the clouds' units) and their
+    /// normalised weights, `q` the filter's ICP variance (tempered as
+    /// [`particle_filter::tempered_q`] does).
+    fn weigh(&self, poses: &[Pose], q: f64) -> Result<Weighed, WeighError>;
+}
+
 /// The 7-state objective: MSD of a fixed scan subset, states in the centred frame.
 struct PoseObjective<'a> {
     nn: &'a NearestNeighbours,
     sample: &'a [Point3<f64>],
     frame: Centred,
     refine_iterations: usize,
+    weights: Option<&'a dyn ParticleWeights>,
 }
 
 impl PoseObjective<'_> {
@@ -187,18 +203,44 @@ impl Objective for PoseObjective<'_> {
     fn constrain(&self, x: &mut [f64]) {
         x[3] = x[3].max(1e-6);
     }
+    fn weigh(&self, particles: &[Vec<f64>], q: f64) -> Result<Weighed, WeighError> {
+        match self.weights {
+            None => Ok(particle_filter::weigh_in_software(self, particles, q)),
+            Some(source) => {
+                let poses: Vec<Pose> = particles.iter().map(|x| self.pose(x)).collect();
+                source.weigh(&poses, q)
+            }
+        }
+    }
 }
 
 /// Register `scan` to the model behind `nn` with PF-ICP.
 pub fn register(nn: &NearestNeighbours, scan: &[Point3<f64>], settings: &PfIcpSettings) -> PfIcpResult {
-    let model = nn.points();
-    let diag = crate::cloud::bbox_diagonal(model);
+    register_with(nn, scan, settings, None).unwrap_or_else(|e| panic!("software particle weights failed: {e}"))
+}
+
+/// The fixed random subset of the scan the particle costs are taken over (at most
+/// `settings.weight_points` points, drawn with the seed).
+pub fn weight_sample(scan: &[Point3<f64>], settings: &PfIcpSettings) -> Vec<Point3<f64>> {
     let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
-    let sample: Vec<Point3<f64>> = if scan.len() > settings.weight_points {
+    if scan.len() > settings.weight_points {
         scan.choose_multiple(&mut rng, settings.weight_points).copied().collect()
     } else {
         scan.to_vec()
-    };
+    }
+}
+
+/// [`register`] with the particles' costs and weights from `weights` (`None`: the host's
+/// own, exactly as [`register`]). Stops at the first error of the source.
+pub fn register_with(
+    nn: &NearestNeighbours,
+    scan: &[Point3<f64>],
+    settings: &PfIcpSettings,
+    weights: Option<&dyn ParticleWeights>,
+) -> Result<PfIcpResult, WeighError> {
+    let model = nn.points();
+    let diag = crate::cloud::bbox_diagonal(model);
+    let sample = weight_sample(scan, settings);
     let k = settings.clusters.min(scan.len().min(model.len()) / 10).max(3);
 
     let t0 = Instant::now();
@@ -224,7 +266,11 @@ pub fn register(nn: &NearestNeighbours, scan: &[Point3<f64>], settings: &PfIcpSe
     let prior = start_prior(initial.pairing, diag, initial.pose.scale);
     let sigma0: Vec<f64> =
         variance.iter().enumerate().map(|(d, v)| v.sqrt().max(prior[d]).max(floor[d]).min(cap[d])).collect();
-    let objective = PoseObjective { nn, sample: &sample, frame, refine_iterations: settings.icp_per_iteration };
+    if let Some(source) = weights {
+        source.prepare(&sample)?;
+    }
+    let objective =
+        PoseObjective { nn, sample: &sample, frame, refine_iterations: settings.icp_per_iteration, weights };
     let filter_settings = FilterSettings {
         particles: settings.particles,
         iterations: settings.iterations,
@@ -236,7 +282,7 @@ pub fn register(nn: &NearestNeighbours, scan: &[Point3<f64>], settings: &PfIcpSe
         adaptive: settings.adaptive,
         seed: settings.seed.wrapping_add(1),
     };
-    let filtered = particle_filter::run(&objective, &init_params, &sigma0, &filter_settings);
+    let filtered = particle_filter::try_run(&objective, &init_params, &sigma0, &filter_settings)?;
     let filter_pose = frame.pose(filtered.estimate.as_slice().try_into().expect("7 states"));
     let t3 = Instant::now();
 
@@ -245,14 +291,14 @@ pub fn register(nn: &NearestNeighbours, scan: &[Point3<f64>], settings: &PfIcpSe
     let t4 = Instant::now();
     let mut errors: Vec<f64> = filtered.history.iter().map(|h| h.cost).collect();
     errors.push(polished.msd);
-    PfIcpResult {
+    Ok(PfIcpResult {
         registration: Registration { pose: polished.pose, msd: polished.msd, iterations: filtered.iterations, errors },
         initial,
         covariance,
         filter_pose,
         filter_history: filtered.history.clone(),
         times: StageTimes { clustering: t1 - t0, covariance: t2 - t1, filter: t3 - t2, polish: t4 - t3 },
-    }
+    })
 }
 
 #[cfg(test)]
