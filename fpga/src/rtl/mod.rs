@@ -9,6 +9,7 @@
 //! `NnPipeline<P>` agrees with [`crate::pipeline::PipelineModel`] port for port on every
 //! clock (tests/rtl_sim.rs). [`pipeline_verilog`] gives the Verilog.
 
+pub mod board;
 pub mod lane;
 pub mod mul18;
 pub mod particle_weights;
@@ -119,5 +120,27 @@ pub fn pipeline_verilog(lanes: usize) -> String {
         8 => verilog_of::<8>(),
         16 => verilog_of::<16>(),
         _ => panic!("pipeline_verilog: {lanes} lanes is not supported; use one of {SUPPORTED_LANES:?}"),
+    }
+}
+
+fn board_of<const P: usize>(config: &crate::board::BoardConfig) -> String {
+    let mut uut = board::BoardTop::<P>::new(config);
+    uut.connect_all();
+    dedup_modules(&generate_verilog(&uut))
+}
+
+/// The Verilog of the whole board (`BoardTop<lanes>`, top module `top`, pins `clock`,
+/// `reset_n`, `uart_rx`, `uart_tx`, `leds[3:0]`) as `config` says.
+///
+/// Panics unless `config.lanes` is one of [`SUPPORTED_LANES`] and the UART has at least 4
+/// clocks per bit.
+pub fn board_verilog(config: &crate::board::BoardConfig) -> String {
+    match config.lanes {
+        1 => board_of::<1>(config),
+        2 => board_of::<2>(config),
+        4 => board_of::<4>(config),
+        8 => board_of::<8>(config),
+        16 => board_of::<16>(config),
+        n => panic!("board_verilog: {n} lanes is not supported; use one of {SUPPORTED_LANES:?}"),
     }
 }
