@@ -8,6 +8,8 @@
 //! - [`io`]: PLY, XYZ and CSV files.
 #![warn(missing_docs)]
 
+pub mod board;
+pub mod board_pf;
 pub mod cli;
 pub mod cloud;
 pub mod covariance;

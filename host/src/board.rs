@@ -1,0 +1,659 @@
+//! The host's board client: the wire protocol of docs/protocol.md over a serial port
+//! (`serialport`), one request at a time.
+//!
+//! Every request waits for its reply before the next is sent (so the board never answers
+//! `Busy` in normal use). The rules:
+//! - **Sequence numbers** run 1, 2, ..., 255, 1, ... (0 is skipped: the board answers a frame
+//!   it cannot trust, a frame error, with sequence 0 and command 0).
+//! - Each request is sent after a lone delimiter, which ends any partial frame left in the
+//!   board's receiver (an empty frame is ignored by the board).
+//! - **A reply** is the frame that echoes the sequence with `command | 0x80`; any other frame
+//!   (a stale reply, a duplicate) is skipped.
+//! - **Every read is bounded**: each reply must arrive within the timeout (default 2 s) plus
+//!   the time the board needs for it, modelled from the bytes at the baud rate and, for
+//!   Evaluate and Nearest, the pipeline's clocks
+//!   ([`pficp_fpga::pipeline::clocks_per_particle`]). A silent board is a
+//!   [`BoardError::Timeout`], a port that goes away a [`BoardError::Io`].
+//! - **Resends**: an error reply `BadCrc` or `Busy` for this request, a frame error (sequence
+//!   0) or a reply frame that does not decode (bad CRC, bad COBS) sends the same request
+//!   again with the same sequence, at most [`MAX_RETRIES`] times. A reply to an earlier copy
+//!   is as good as one to the last. An Evaluate that appends to the stored costs (no FIRST,
+//!   some poses) is not repeatable when the board may have executed it (a lost reply):
+//!   then [`BoardError::ReplyLost`], and [`BoardClient::costs_and_weights`] starts the
+//!   iteration over from its FIRST batch.
+//! - Any other error reply is a [`BoardError::Board`] naming the code.
+
+use pficp_fpga::format::{FxPoint, FxPose, WeightScale};
+use pficp_fpga::messages::{
+    load_request, parse_two_u16, two_u16, EvaluateReply, EvaluateRequest, Identity, MessageError, NearestReply,
+    NearestRequest, WeightSummary, IDENTITY_BYTES, MAX_LOAD_POINTS, MAX_NEAREST, MAX_POSES,
+};
+use pficp_fpga::pipeline::clocks_per_particle;
+use pficp_fpga::protocol::{Command, Deframer, ErrorCode, Frame, FrameError, DELIMITER, VERSION};
+use serialport::SerialPort;
+use std::io::{ErrorKind, Read, Write};
+use std::time::{Duration, Instant};
+
+/// The board's nominal baud rate.
+pub const DEFAULT_BAUD: u32 = 921_600;
+/// Time allowed for each reply on top of the modelled transfer and compute time.
+pub const DEFAULT_TIMEOUT: Duration = Duration::from_secs(2);
+/// Resends of one request after a corrupted exchange (so at most 3 attempts).
+pub const MAX_RETRIES: usize = 2;
+/// Largest model and scan the protocol addresses (12-bit indices).
+pub const MAX_POINTS: usize = pficp_fpga::format::MAX_POINTS;
+/// Most particles the board stores.
+pub const MAX_PARTICLES: usize = pficp_fpga::weights::MAX_PARTICLES;
+
+/// What went wrong talking to the board.
+#[derive(Debug, thiserror::Error)]
+pub enum BoardError {
+    /// The serial port could not be opened.
+    #[error("cannot open serial port {path}: {reason}")]
+    Open {
+        /// The path asked for.
+        path: String,
+        /// Why.
+        reason: String,
+    },
+    /// Reading or writing the port failed (e.g. the adapter was unplugged).
+    #[error("serial port {port}: {source} while {during} (was the board unplugged?)")]
+    Io {
+        /// The port.
+        port: String,
+        /// What the client was doing.
+        during: String,
+        /// The error.
+        source: std::io::Error,
+    },
+    /// No reply within the time allowed.
+    #[error(
+        "the board on {port} did not answer {command:?} within {} ms (is it connected, configured and set to {baud} baud?)",
+        waited.as_millis()
+    )]
+    Timeout {
+        /// The port.
+        port: String,
+        /// The request.
+        command: Command,
+        /// Time waited for the reply.
+        waited: Duration,
+        /// The port's baud rate.
+        baud: u32,
+    },
+    /// The board answered with an error reply.
+    #[error("the board answered {command:?} with error {code:?} ({})", *code as u8)]
+    Board {
+        /// The request.
+        command: Command,
+        /// The board's error code.
+        code: ErrorCode,
+    },
+    /// Every attempt of a request ended in a corrupted exchange.
+    #[error("no valid reply to {command:?} after {attempts} attempts (last: {last})")]
+    Retries {
+        /// The request.
+        command: Command,
+        /// Attempts made.
+        attempts: usize,
+        /// The last problem.
+        last: String,
+    },
+    /// The reply to a request that is not repeatable was lost (the board may have executed it).
+    #[error("the reply to {command:?} was lost ({reason}) and the request is not repeatable")]
+    ReplyLost {
+        /// The request.
+        command: Command,
+        /// What happened to the reply.
+        reason: String,
+    },
+    /// A reply with a valid CRC whose contents do not fit the request.
+    #[error("malformed reply to {command:?}: {source}")]
+    Reply {
+        /// The request.
+        command: Command,
+        /// What does not fit.
+        source: MessageError,
+    },
+    /// The request does not fit the board's limits (checked on the host).
+    #[error("{0}")]
+    Limit(String),
+    /// The particle filter stopped for a reason of its own.
+    #[error("the particle filter stopped: {0}")]
+    Filter(String),
+}
+
+/// Counters of one client's traffic.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ClientStats {
+    /// Requests answered.
+    pub requests: usize,
+    /// Resends after a corrupted exchange.
+    pub resends: usize,
+    /// Evaluate sequences started over after a lost reply.
+    pub restarts: usize,
+    /// Bytes written.
+    pub bytes_sent: usize,
+    /// Bytes read.
+    pub bytes_received: usize,
+}
+
+/// How one read of a reply ended.
+enum Read1 {
+    /// The reply.
+    Reply(Frame),
+    /// Send again; `executed` when the board may have executed the request.
+    Resend { reason: String, executed: bool },
+}
+
+/// A client of one board on one serial port.
+pub struct BoardClient {
+    port: Box<dyn SerialPort>,
+    name: String,
+    baud: u32,
+    timeout: Duration,
+    seq: u8,
+    deframer: Deframer,
+    /// Bytes read but not yet given to the deframer, from `rx_at` on.
+    rx: Vec<u8>,
+    rx_at: usize,
+    identity: Option<Identity>,
+    sizes: (u16, u16),
+    stored: usize,
+    stats: ClientStats,
+}
+
+impl std::fmt::Debug for BoardClient {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("BoardClient")
+            .field("port", &self.name)
+            .field("baud", &self.baud)
+            .field("timeout", &self.timeout)
+            .field("identity", &self.identity)
+            .finish()
+    }
+}
+
+impl BoardClient {
+    /// Open the serial port at `path` (8N1, no flow control) and drop whatever it had
+    /// buffered. `timeout` is the time allowed per reply (plus the modelled board time).
+    pub fn open(path: &str, baud: u32, timeout: Duration) -> Result<Self, BoardError> {
+        let open_error = |reason: String| BoardError::Open { path: path.to_string(), reason };
+        if baud == 0 {
+            return Err(open_error("the baud rate must be above 0".into()));
+        }
+        if !std::path::Path::new(path).exists() {
+            return Err(open_error("no such device (is the board plugged in? check the path)".into()));
+        }
+        let port = serialport::new(path, baud)
+            .timeout(timeout)
+            .data_bits(serialport::DataBits::Eight)
+            .parity(serialport::Parity::None)
+            .stop_bits(serialport::StopBits::One)
+            .flow_control(serialport::FlowControl::None)
+            .open()
+            .map_err(|e| open_error(e.to_string()))?;
+        // Stale bytes from before (a previous run cut short) would only be skipped later.
+        let _ = port.clear(serialport::ClearBuffer::All);
+        let mut client = Self::from_port(port);
+        client.name = path.to_string();
+        client.baud = baud;
+        client.timeout = timeout;
+        Ok(client)
+    }
+
+    /// A client on a port opened elsewhere (e.g. one end of a pseudo-terminal), with the
+    /// default timeout.
+    pub fn from_port(port: Box<dyn SerialPort>) -> Self {
+        let name = port.name().unwrap_or_else(|| "(unnamed port)".to_string());
+        let baud = port.baud_rate().ok().filter(|&b| b > 0).unwrap_or(DEFAULT_BAUD);
+        BoardClient {
+            port,
+            name,
+            baud,
+            timeout: DEFAULT_TIMEOUT,
+            seq: 0,
+            deframer: Deframer::default(),
+            rx: Vec::new(),
+            rx_at: 0,
+            identity: None,
+            sizes: (0, 0),
+            stored: 0,
+            stats: ClientStats::default(),
+        }
+    }
+
+    /// Set the time allowed per reply (on top of the modelled board time).
+    pub fn set_timeout(&mut self, timeout: Duration) {
+        self.timeout = timeout;
+    }
+
+    /// The time allowed per reply (on top of the modelled board time).
+    pub fn timeout(&self) -> Duration {
+        self.timeout
+    }
+
+    /// The port's name.
+    pub fn port_name(&self) -> &str {
+        &self.name
+    }
+
+    /// The last identity read ([`Self::identify`]).
+    pub fn identity(&self) -> Option<Identity> {
+        self.identity
+    }
+
+    /// Traffic counters.
+    pub fn stats(&self) -> ClientStats {
+        self.stats
+    }
+
+    /// Version, limits, clock, baud and the current sizes.
+    pub fn identify(&mut self) -> Result<Identity, BoardError> {
+        let reply = self.transact(Command::Identify, Vec::new(), IDENTITY_BYTES, 0, true)?;
+        let id =
+            Identity::decode(&reply.data).map_err(|source| BoardError::Reply { command: Command::Identify, source })?;
+        self.identity = Some(id);
+        self.sizes = (id.model_count, id.scan_count);
+        self.stored = id.stored as usize;
+        Ok(id)
+    }
+
+    /// Write the model store from point 0, in frames of [`MAX_LOAD_POINTS`], each
+    /// acknowledged; `progress(done, total)` after each. Sizes are not changed.
+    pub fn load_model(&mut self, points: &[FxPoint], progress: impl FnMut(usize, usize)) -> Result<(), BoardError> {
+        self.load(Command::LoadModel, points, progress)
+    }
+
+    /// Write the scan store from point 0, as [`Self::load_model`].
+    pub fn load_scan(&mut self, points: &[FxPoint], progress: impl FnMut(usize, usize)) -> Result<(), BoardError> {
+        self.load(Command::LoadScan, points, progress)
+    }
+
+    fn load(
+        &mut self,
+        command: Command,
+        points: &[FxPoint],
+        mut progress: impl FnMut(usize, usize),
+    ) -> Result<(), BoardError> {
+        let what = if command == Command::LoadModel { "model" } else { "scan" };
+        let max = self.max_points(command);
+        if points.is_empty() || points.len() > max {
+            return Err(BoardError::Limit(format!(
+                "the {what} has {} points; the board holds 1 to {max}",
+                points.len()
+            )));
+        }
+        progress(0, points.len());
+        let mut offset = 0;
+        for chunk in points.chunks(MAX_LOAD_POINTS) {
+            let reply = self.transact(command, load_request(offset as u16, chunk), 4, 0, true)?;
+            let ack = parse_two_u16(&reply.data).map_err(|source| BoardError::Reply { command, source })?;
+            if ack != (offset as u16, chunk.len() as u16) {
+                return Err(BoardError::Reply {
+                    command,
+                    source: MessageError::Field {
+                        field: "offset, count",
+                        got: ((ack.0 as u64) << 16) | ack.1 as u64,
+                        expected: ((offset as u64) << 16) | chunk.len() as u64,
+                    },
+                });
+            }
+            offset += chunk.len();
+            progress(offset, points.len());
+        }
+        Ok(())
+    }
+
+    fn max_points(&self, command: Command) -> usize {
+        let id = self.identity;
+        match command {
+            Command::LoadModel => id.map_or(MAX_POINTS, |i| i.max_model as usize),
+            _ => id.map_or(MAX_POINTS, |i| i.max_scan as usize),
+        }
+        .min(MAX_POINTS)
+    }
+
+    /// Set the numbers of model and scan points in use (1 to 4,096 each).
+    pub fn set_sizes(&mut self, model: usize, scan: usize) -> Result<(), BoardError> {
+        for (what, n, command) in [("model", model, Command::LoadModel), ("scan", scan, Command::LoadScan)] {
+            if n == 0 || n > self.max_points(command) {
+                return Err(BoardError::Limit(format!(
+                    "{what} size {n}: the board holds 1 to {}",
+                    self.max_points(command)
+                )));
+            }
+        }
+        let data = two_u16(model as u16, scan as u16);
+        let reply = self.transact(Command::SetSizes, data.clone(), 4, 0, true)?;
+        if reply.data != data {
+            let got = parse_two_u16(&reply.data)
+                .map_err(|source| BoardError::Reply { command: Command::SetSizes, source })?;
+            return Err(BoardError::Reply {
+                command: Command::SetSizes,
+                source: MessageError::Field {
+                    field: "sizes",
+                    got: ((got.0 as u64) << 16) | got.1 as u64,
+                    expected: ((model as u64) << 16) | scan as u64,
+                },
+            });
+        }
+        self.sizes = (model as u16, scan as u16);
+        Ok(())
+    }
+
+    /// One Evaluate frame: `poses` (at most [`MAX_POSES`]; none only with `last`) evaluated
+    /// over the scan in use; with `first` the stored costs are forgotten first; with `last`
+    /// every stored cost is weighed with `scale` afterwards.
+    pub fn evaluate(
+        &mut self,
+        first: bool,
+        last: bool,
+        scale: WeightScale,
+        poses: &[FxPose],
+    ) -> Result<EvaluateReply, BoardError> {
+        let n = poses.len();
+        if n > MAX_POSES || (n == 0 && !last) {
+            return Err(BoardError::Limit(format!(
+                "an Evaluate frame carries 1 to {MAX_POSES} poses (or none to weigh), not {n}"
+            )));
+        }
+        let after = if first { n } else { self.stored + n };
+        if after == 0 || after > self.max_particles() {
+            return Err(BoardError::Limit(format!(
+                "{after} particle costs would be stored; the board holds 1 to {}",
+                self.max_particles()
+            )));
+        }
+        let request = EvaluateRequest { first, last, scale, poses: poses.to_vec() };
+        let reply_bytes = 6 * n + if last { 11 + 2 * after } else { 0 };
+        let clocks = n as u64 * clocks_per_particle(self.sizes.1 as usize, self.sizes.0 as usize, self.lanes())
+            + if last { after as u64 + 16 } else { 0 };
+        // Appending costs twice would corrupt the iteration: only FIRST or weigh-only repeat.
+        let repeatable = first || n == 0;
+        let reply = self.transact(Command::Evaluate, request.encode(), reply_bytes, clocks, repeatable)?;
+        let r = EvaluateReply::decode(&reply.data, n, last)
+            .map_err(|source| BoardError::Reply { command: Command::Evaluate, source })?;
+        self.stored = after;
+        if let Some(s) = &r.summary {
+            if s.weights.len() != after {
+                return Err(BoardError::Reply {
+                    command: Command::Evaluate,
+                    source: MessageError::Field {
+                        field: "stored",
+                        got: s.weights.len() as u64,
+                        expected: after as u64,
+                    },
+                });
+            }
+        }
+        Ok(r)
+    }
+
+    /// Weigh the stored costs with `scale` (Evaluate with no poses and LAST).
+    pub fn weigh(&mut self, scale: WeightScale) -> Result<WeightSummary, BoardError> {
+        let r = self.evaluate(false, true, scale, &[])?;
+        Ok(r.summary.expect("decoded with LAST"))
+    }
+
+    /// The costs of `poses` (1 to 256), in frames of [`MAX_POSES`] without LAST (the first
+    /// with FIRST): they become the stored costs. Started over (at most [`MAX_RETRIES`]
+    /// times) when a reply is lost.
+    pub fn costs(&mut self, poses: &[FxPose]) -> Result<Vec<u64>, BoardError> {
+        if poses.is_empty() || poses.len() > self.max_particles() {
+            return Err(BoardError::Limit(format!(
+                "{} particles: the board weighs 1 to {}",
+                poses.len(),
+                self.max_particles()
+            )));
+        }
+        let mut restarts = 0;
+        'again: loop {
+            let mut costs = Vec::with_capacity(poses.len());
+            for (k, batch) in poses.chunks(MAX_POSES).enumerate() {
+                match self.evaluate(k == 0, false, WeightScale::default(), batch) {
+                    Ok(r) => costs.extend(r.costs),
+                    Err(BoardError::ReplyLost { .. }) if restarts < MAX_RETRIES => {
+                        restarts += 1;
+                        self.stats.restarts += 1;
+                        continue 'again;
+                    }
+                    Err(e) => return Err(e),
+                }
+            }
+            return Ok(costs);
+        }
+    }
+
+    /// One filter iteration on the board: the costs of `poses` ([`Self::costs`]), then
+    /// `scale_fn(costs)` chooses the weight scale and the stored costs are weighed
+    /// ([`Self::weigh`]). Returns the costs and the weights (checked: one per pose, `w_sum`
+    /// their sum).
+    pub fn costs_and_weights(
+        &mut self,
+        poses: &[FxPose],
+        scale_fn: impl FnOnce(&[u64]) -> WeightScale,
+    ) -> Result<(Vec<u64>, WeightSummary), BoardError> {
+        let costs = self.costs(poses)?;
+        let summary = self.weigh(scale_fn(&costs))?;
+        let sum: u64 = summary.weights.iter().map(|&w| w as u64).sum();
+        if sum != summary.w_sum as u64 {
+            return Err(BoardError::Reply {
+                command: Command::Evaluate,
+                source: MessageError::Field { field: "w_sum", got: summary.w_sum as u64, expected: sum },
+            });
+        }
+        Ok((costs, summary))
+    }
+
+    /// Nearest model point and squared distance of scan points `first .. first + count` at
+    /// `pose`, in frames of [`MAX_NEAREST`]; `cost` is their sum.
+    pub fn nearest(&mut self, first: usize, count: usize, pose: &FxPose) -> Result<NearestReply, BoardError> {
+        if count == 0 || first + count > MAX_POINTS {
+            return Err(BoardError::Limit(format!(
+                "scan points {first}..{}: the board holds points 0..{MAX_POINTS}",
+                first + count
+            )));
+        }
+        let mut out = NearestReply { first: first as u16, cost: 0, results: Vec::with_capacity(count) };
+        let mut at = first;
+        while at < first + count {
+            let n = (first + count - at).min(MAX_NEAREST);
+            let request = NearestRequest { first: at as u16, count: n as u16, pose: *pose };
+            let clocks = clocks_per_particle(n, self.sizes.0 as usize, self.lanes());
+            let reply = self.transact(Command::Nearest, request.encode(), 10 + 7 * n, clocks, true)?;
+            let r = NearestReply::decode(&reply.data, &request)
+                .map_err(|source| BoardError::Reply { command: Command::Nearest, source })?;
+            out.cost += r.cost;
+            out.results.extend(r.results);
+            at += n;
+        }
+        Ok(out)
+    }
+
+    fn max_particles(&self) -> usize {
+        self.identity.map_or(MAX_PARTICLES, |i| i.max_particles as usize).min(MAX_PARTICLES)
+    }
+
+    /// Lanes for the compute-time model: the board's once identified, else 1 (the slowest).
+    fn lanes(&self) -> usize {
+        self.identity.map_or(1, |i| i.lanes.max(1) as usize)
+    }
+
+    /// Time the board needs for a request of `request_bytes` on the wire, a reply of
+    /// `reply_data` data bytes and `clocks` of compute.
+    fn board_time(&self, request_bytes: usize, reply_data: usize, clocks: u64) -> Duration {
+        // Reply on the wire: body + CRC + COBS overhead + delimiter; 10 bits per byte (8N1).
+        let reply_bytes = reply_data + 4 + (reply_data + 4) / 254 + 2;
+        let wire = (request_bytes + reply_bytes) as f64 * 10.0 / self.baud as f64;
+        let clock_hz = self.identity.map_or(100e6, |i| i.clock_hz.max(1) as f64);
+        Duration::from_secs_f64(wire + clocks as f64 / clock_hz)
+    }
+
+    fn next_seq(&mut self) -> u8 {
+        self.seq = if self.seq == 255 { 1 } else { self.seq + 1 };
+        self.seq
+    }
+
+    /// Send one request and wait for its reply (see the module documentation).
+    fn transact(
+        &mut self,
+        command: Command,
+        data: Vec<u8>,
+        reply_data: usize,
+        clocks: u64,
+        repeatable: bool,
+    ) -> Result<Frame, BoardError> {
+        let seq = self.next_seq();
+        let mut wire = vec![DELIMITER];
+        wire.extend(Frame { code: command as u8, seq, data }.encode());
+        let allowed = self.timeout + self.board_time(wire.len(), reply_data, clocks);
+        let mut last = String::new();
+        for attempt in 0..=MAX_RETRIES {
+            if attempt > 0 {
+                self.stats.resends += 1;
+            }
+            self.send(&wire, command, allowed)?;
+            match self.read_reply(command, seq, allowed)? {
+                Read1::Reply(f) => {
+                    self.stats.requests += 1;
+                    return Ok(f);
+                }
+                Read1::Resend { reason, executed } => {
+                    if executed && !repeatable {
+                        return Err(BoardError::ReplyLost { command, reason });
+                    }
+                    last = reason;
+                }
+            }
+        }
+        Err(BoardError::Retries { command, attempts: MAX_RETRIES + 1, last })
+    }
+
+    fn io_error(&self, during: String, source: std::io::Error) -> BoardError {
+        BoardError::Io { port: self.name.clone(), during, source }
+    }
+
+    fn send(&mut self, wire: &[u8], command: Command, allowed: Duration) -> Result<(), BoardError> {
+        let during = || format!("sending {command:?}");
+        self.port.set_timeout(allowed).map_err(|e| self.io_error(during(), e.into()))?;
+        match self.port.write_all(wire) {
+            Ok(()) => {
+                self.stats.bytes_sent += wire.len();
+                Ok(())
+            }
+            Err(e) if e.kind() == ErrorKind::TimedOut => {
+                Err(BoardError::Timeout { port: self.name.clone(), command, waited: allowed, baud: self.baud })
+            }
+            Err(e) => Err(self.io_error(during(), e)),
+        }
+    }
+
+    /// Read until the reply to (`command`, `seq`), a reason to resend, or the deadline.
+    fn read_reply(&mut self, command: Command, seq: u8, allowed: Duration) -> Result<Read1, BoardError> {
+        let start = Instant::now();
+        let deadline = start + allowed;
+        let during = || format!("waiting for the reply to {command:?}");
+        let mut buf = [0u8; 512];
+        loop {
+            while self.rx_at < self.rx.len() {
+                let b = self.rx[self.rx_at];
+                self.rx_at += 1;
+                let Some(decoded) = self.deframer.push(b) else { continue };
+                if let Some(outcome) = Self::judge(decoded, command, seq)? {
+                    return Ok(outcome);
+                }
+            }
+            self.rx.clear();
+            self.rx_at = 0;
+            let now = Instant::now();
+            if now >= deadline {
+                return Err(BoardError::Timeout {
+                    port: self.name.clone(),
+                    command,
+                    waited: now - start,
+                    baud: self.baud,
+                });
+            }
+            self.port.set_timeout(deadline - now).map_err(|e| self.io_error(during(), e.into()))?;
+            match self.port.read(&mut buf) {
+                Ok(0) => {
+                    let e = std::io::Error::new(ErrorKind::UnexpectedEof, "the port was closed");
+                    return Err(self.io_error(during(), e));
+                }
+                Ok(n) => {
+                    self.stats.bytes_received += n;
+                    self.rx.extend_from_slice(&buf[..n]);
+                }
+                Err(e) if e.kind() == ErrorKind::TimedOut || e.kind() == ErrorKind::Interrupted => {}
+                Err(e) => return Err(self.io_error(during(), e)),
+            }
+        }
+    }
+
+    /// What a frame (or an undecodable one) means for the request (`command`, `seq`):
+    /// the reply, a reason to resend, an error, or nothing (a stale frame, skipped).
+    fn judge(decoded: Result<Frame, FrameError>, command: Command, seq: u8) -> Result<Option<Read1>, BoardError> {
+        let frame = match decoded {
+            Ok(f) => f,
+            // It may have been our reply (or a stale one): a repeatable request is resent.
+            Err(e) => {
+                return Ok(Some(Read1::Resend { reason: format!("undecodable reply frame ({e:?})"), executed: true }))
+            }
+        };
+        if frame.code == command as u8 | 0x80 && frame.seq == seq {
+            return Ok(Some(Read1::Reply(frame)));
+        }
+        if frame.code != Command::Error as u8 | 0x80 || frame.data.len() != 2 {
+            return Ok(None);
+        }
+        let code = ErrorCode::from_byte(frame.data[0]);
+        if frame.seq == seq && frame.data[1] == command as u8 {
+            return match code {
+                Some(c @ (ErrorCode::BadCrc | ErrorCode::Busy)) => {
+                    Ok(Some(Read1::Resend { reason: format!("error reply {c:?}"), executed: false }))
+                }
+                Some(code) => Err(BoardError::Board { command, code }),
+                None => Err(BoardError::Reply {
+                    command,
+                    source: MessageError::Field {
+                        field: "error code",
+                        got: frame.data[0] as u64,
+                        expected: ErrorCode::BadCrc as u64,
+                    },
+                }),
+            };
+        }
+        if frame.seq == 0 && frame.data[1] == 0 {
+            // A frame error: our request arrived garbled, or line noise came before it (then
+            // our request may still have run).
+            let what = code.map_or_else(|| format!("code {}", frame.data[0]), |c| format!("{c:?}"));
+            return Ok(Some(Read1::Resend { reason: format!("frame error {what}"), executed: true }));
+        }
+        Ok(None)
+    }
+}
+
+/// The Identify fields, one per line (`pficp board info`).
+pub fn identity_text(port: &str, id: &Identity) -> String {
+    let mut s = String::new();
+    s += &format!("port              {port}\n");
+    s += &format!(
+        "protocol version  {}{}\n",
+        id.version,
+        if id.version == VERSION { String::new() } else { format!(" (this host speaks {VERSION})") }
+    );
+    s += &format!("lanes             {}\n", id.lanes);
+    s += &format!("max model points  {}\n", id.max_model);
+    s += &format!("max scan points   {}\n", id.max_scan);
+    s += &format!("max particles     {}\n", id.max_particles);
+    s += &format!("poses per frame   {}\n", id.max_poses);
+    s += &format!("points per load   {}\n", id.max_load);
+    s += &format!("nearest per frame {}\n", id.max_nearest);
+    s += &format!("clock             {} Hz\n", id.clock_hz);
+    s += &format!("baud              {}\n", id.baud);
+    s += &format!("model points      {}\n", id.model_count);
+    s += &format!("scan points       {}\n", id.scan_count);
+    s += &format!("stored costs      {}\n", id.stored);
+    s
+}
