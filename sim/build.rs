@@ -95,6 +95,10 @@ const WEIGHT_STAGE_PORTS: &[PortSpec] = &[
     ("w_sum", false, 24),
 ];
 
+/// The pins of the board top (`fpga/src/rtl/board/top.rs`).
+const BOARD_PORTS: &[PortSpec] =
+    &[("clock", true, 1), ("reset_n", true, 1), ("uart_rx", true, 1), ("uart_tx", false, 1), ("leds", false, 4)];
+
 /// One generated design.
 struct Design {
     /// `Model::design` in `models.rs` (and the Verilog file's stem).
@@ -112,7 +116,7 @@ struct Design {
 }
 
 /// Every design that is verilated.
-const DESIGNS: [Design; 3] = [
+const DESIGNS: [Design; 5] = [
     Design {
         name: "pipeline",
         prefix: "Vpipe",
@@ -136,6 +140,22 @@ const DESIGNS: [Design; 3] = [
         verilog: |_| pficp_fpga::rtl::weight_stage_verilog(),
         ports: &[WEIGHT_STAGE_PORTS],
         spec: "docs/weights.md (sim/build.rs WEIGHT_STAGE_PORTS)",
+    },
+    Design {
+        name: "board",
+        prefix: "Vboard",
+        per_lane: false,
+        verilog: |_| pficp_fpga::rtl::board_verilog(&pficp_fpga::board::BoardConfig::default()),
+        ports: &[BOARD_PORTS],
+        spec: "fpga/src/rtl/board/top.rs (sim/build.rs BOARD_PORTS)",
+    },
+    Design {
+        name: "board_fast",
+        prefix: "Vboardfast",
+        per_lane: false,
+        verilog: |_| pficp_fpga::rtl::board_verilog(&pficp_fpga::board::BoardConfig::FAST_SIM),
+        ports: &[BOARD_PORTS],
+        spec: "fpga/src/rtl/board/top.rs (sim/build.rs BOARD_PORTS)",
     },
 ];
 

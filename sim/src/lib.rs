@@ -17,6 +17,9 @@
 //! change) at `10 c - 5`. [`Mismatch::cycle`] `c` is therefore at VCD time `10 c`.
 #![warn(missing_docs)]
 
+pub mod serial;
+
+use pficp_fpga::board::BoardConfig;
 use pficp_fpga::format::{pack_point, FxPoint, FxPose, WeightScale, MAX_POINTS};
 use pficp_fpga::particle_weights::{ParticleWeightModel, PwInputs, PwOutputs};
 use pficp_fpga::pipeline::{Evaluation, Inputs, Outputs, PipelineModel};
@@ -59,6 +62,8 @@ pub use ffi::BUILD_REPORT;
 const PIPELINE: &str = "pipeline";
 const PARTICLE_WEIGHTS: &str = "particle_weights";
 const WEIGHT_STAGE: &str = "weight_stage";
+const BOARD: &str = "board";
+const BOARD_FAST: &str = "board_fast";
 
 /// Lane counts with a Verilated pipeline (and particle-weight pipeline): the build verilates
 /// 4 and 16 unless `PFICP_SIM_LANES` says otherwise.
@@ -328,6 +333,67 @@ impl VerilatedParticleWeights {
     pub fn outputs(&self) -> PwOutputs {
         let o = self.core.outputs::<15>();
         PwOutputs { nn: pipeline_outputs(&o[..7]), w: weight_outputs(&o[7..]) }
+    }
+}
+
+/// The Verilated board top (`BoardTop`, `fpga/src/rtl/board/top.rs`): pins only.
+pub struct VerilatedBoard {
+    core: Core,
+}
+
+/// The board's pins after an edge.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BoardPins {
+    /// The serial line to the host.
+    pub uart_tx: bool,
+    /// The LEDs (0 heartbeat, 1 receive activity, 2 busy, 3 error).
+    pub leds: u8,
+}
+
+/// The input pins of the board.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BoardInputs {
+    /// Reset, active low.
+    pub reset_n: bool,
+    /// The serial line from the host (high when idle).
+    pub uart_rx: bool,
+}
+
+impl Default for BoardInputs {
+    fn default() -> Self {
+        BoardInputs { reset_n: true, uart_rx: true }
+    }
+}
+
+verilated_common!(VerilatedBoard, BoardInputs);
+
+impl VerilatedBoard {
+    /// The board generated as `config` says: [`BoardConfig::default`] (the real board) or
+    /// [`BoardConfig::FAST_SIM`] (the fast UART the fault tests use); pins idle.
+    ///
+    /// Panics for any other configuration (only those two are verilated).
+    pub fn new(config: &BoardConfig) -> Self {
+        let design = if *config == BoardConfig::default() {
+            BOARD
+        } else if *config == BoardConfig::FAST_SIM {
+            BOARD_FAST
+        } else {
+            panic!("no Verilated board for {config:?}: only BoardConfig::default() and BoardConfig::FAST_SIM are built")
+        };
+        let mut b = VerilatedBoard { core: Core::new(design, 0, 2, &["uart_tx", "leds"]) };
+        b.set_inputs(&BoardInputs::default());
+        b
+    }
+
+    /// Drive the input pins.
+    pub fn set_inputs(&mut self, i: &BoardInputs) {
+        self.core.set_inputs(&[i.reset_n as u64, i.uart_rx as u64])
+    }
+
+    /// The output pins now.
+    pub fn pins(&self) -> BoardPins {
+        let o = self.core.outputs::<2>();
+        BoardPins { uart_tx: o[0] != 0, leds: o[1] as u8 }
     }
 }
 

@@ -1,0 +1,73 @@
+//! The Verilated board top against the byte-level reference, through its serial pins at
+//! the UART's bit timing: every byte the board sends must equal the reference's.
+
+use pficp_fpga::board::BoardConfig;
+use pficp_fpga::format::{FxPoint, FxPose, WeightScale};
+use pficp_fpga::messages::{self, EvaluateRequest, NearestRequest};
+use pficp_fpga::protocol::{Command, Frame};
+use pficp_sim::serial::SerialBoard;
+
+fn lcg(s: &mut u64) -> u64 {
+    *s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+    *s >> 33
+}
+
+fn cloud(n: usize, s: &mut u64) -> Vec<FxPoint> {
+    (0..n).map(|_| [0; 3].map(|_: i16| (lcg(s) % 16001) as i16 - 8000)).collect()
+}
+
+fn pose(k: u64) -> FxPose {
+    let a = 0.1 * k as f64;
+    let (c, s) = (a.cos(), a.sin());
+    FxPose::from_f64(&[c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0], &[0.01 * k as f64, -0.02, 0.03])
+}
+
+/// Send one request, run to idle, check the board's bytes against the reference.
+fn exchange(b: &mut SerialBoard, frame: &Frame) -> Frame {
+    let wire = frame.encode();
+    let got = b.exchange(&wire, 50_000_000).expect("the board went quiet");
+    let (compared, mismatch) = b.comparison();
+    assert!(mismatch.is_none(), "after {compared} bytes: {}", mismatch.unwrap());
+    assert_eq!(b.expected_pending(), 0, "the board sent less than the reference");
+    assert_eq!(*got.last().expect("an answer"), 0, "ends with the delimiter");
+    Frame::decode(&got[..got.len() - 1]).expect("a well-formed reply")
+}
+
+fn req(cmd: Command, seq: u8, data: Vec<u8>) -> Frame {
+    Frame { code: cmd as u8, seq, data }
+}
+
+#[test]
+fn every_command_matches_the_reference_byte_for_byte() {
+    let mut b = SerialBoard::new(BoardConfig::FAST_SIM).with_reference();
+    b.run(100);
+    let id = exchange(&mut b, &req(Command::Identify, 1, vec![]));
+    let ident = messages::Identity::decode(&id.data).unwrap();
+    assert_eq!((ident.lanes, ident.baud), (4, 25_000_000));
+    let mut s = 7;
+    let model = cloud(300, &mut s);
+    let scan = cloud(45, &mut s);
+    let mut seq = 2u8;
+    for (cmd, pts) in [(Command::LoadModel, &model), (Command::LoadScan, &scan)] {
+        for (k, chunk) in pts.chunks(messages::MAX_LOAD_POINTS).enumerate() {
+            let r = exchange(&mut b, &req(cmd, seq, messages::load_request((k * 170) as u16, chunk)));
+            assert_eq!(r.code, cmd as u8 | 0x80);
+            seq = seq.wrapping_add(1);
+        }
+    }
+    exchange(&mut b, &req(Command::SetSizes, seq, messages::two_u16(300, 45)));
+    let scale = WeightScale::for_two_q(1.0e6);
+    let first = EvaluateRequest { first: true, last: false, scale, poses: (0..5).map(pose).collect() };
+    let r = exchange(&mut b, &req(Command::Evaluate, 20, first.encode()));
+    assert_eq!(r.data.len(), 30);
+    let last = EvaluateRequest { first: false, last: true, scale, poses: (5..8).map(pose).collect() };
+    let r = exchange(&mut b, &req(Command::Evaluate, 21, last.encode()));
+    let reply = messages::EvaluateReply::decode(&r.data, 3, true).unwrap();
+    assert_eq!(reply.summary.unwrap().weights.len(), 8);
+    let weigh = EvaluateRequest { first: false, last: true, scale: WeightScale::for_two_q(1.0e8), poses: vec![] };
+    exchange(&mut b, &req(Command::Evaluate, 22, weigh.encode()));
+    let near = NearestRequest { first: 3, count: 40, pose: pose(2) };
+    let r = exchange(&mut b, &req(Command::Nearest, 23, near.encode()));
+    assert_eq!(messages::NearestReply::decode(&r.data, &near).unwrap().results.len(), 40);
+    eprintln!("{} bytes compared in {} clocks", b.comparison().0, b.clocks());
+}
