@@ -1,0 +1,305 @@
+//! The board client against the byte-level reference board served on a real
+//! pseudo-terminal: results equal the functional references, corrupted exchanges are
+//! resent, a silent or vanishing board is a clear error within the timeout, and PF-ICP with
+//! the board's weights registers a reduced model-1.
+
+mod support;
+
+use pficp::board::{BoardClient, BoardError, MAX_RETRIES};
+use pficp::board_pf::{self, Upload};
+use pficp::cloud::bbox_diagonal;
+use pficp::datasets::{make, ModelId, Sampling, ScanSpec};
+use pficp::methods::{PoseError, Tolerance};
+use pficp::nn::NearestNeighbours;
+use pficp::pf_icp::PfIcpSettings;
+use pficp_fpga::board::BoardConfig;
+use pficp_fpga::format::{point, FxPoint, FxPose, WeightScale};
+use pficp_fpga::messages::Identity;
+use pficp_fpga::pipeline::evaluate;
+use pficp_fpga::protocol::{Command, ErrorCode};
+use pficp_fpga::weights::weights;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::time::{Duration, Instant};
+use support::{reference_handler, PtyBoard};
+
+fn cloud(n: usize, seed: u64) -> Vec<FxPoint> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    (0..n).map(|_| point([rng.gen_range(-0.9..0.9), rng.gen_range(-0.9..0.9), rng.gen_range(-0.9..0.9)])).collect()
+}
+
+fn poses(n: usize, seed: u64) -> Vec<FxPose> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    (0..n)
+        .map(|_| {
+            let (a, s) = (rng.gen_range(-0.3..0.3f64), rng.gen_range(0.9..1.1));
+            let t = [rng.gen_range(-0.1..0.1), rng.gen_range(-0.1..0.1), rng.gen_range(-0.1..0.1)];
+            let (c, si) = (a.cos() * s, a.sin() * s);
+            FxPose::from_f64(&[c, -si, 0.0, si, c, 0.0, 0.0, 0.0, s], &t)
+        })
+        .collect()
+}
+
+/// A client on the reference with the model and scan loaded and sized.
+fn loaded(model: &[FxPoint], scan: &[FxPoint]) -> (PtyBoard, BoardClient) {
+    let mut board = PtyBoard::reference();
+    let mut client = board.client();
+    client.identify().unwrap();
+    client.load_model(model, |_, _| {}).unwrap();
+    client.load_scan(scan, |_, _| {}).unwrap();
+    client.set_sizes(model.len(), scan.len()).unwrap();
+    (board, client)
+}
+
+#[test]
+fn identify_reports_the_reference_board() {
+    let mut board = PtyBoard::reference();
+    let mut client = board.client();
+    let id = client.identify().unwrap();
+    let c = BoardConfig::default();
+    assert_eq!(id, Identity::of_board(c.lanes as u8, c.clock_hz, c.baud, 0, 0, 0));
+    assert_eq!(client.stats().resends, 0);
+}
+
+#[test]
+fn load_evaluate_and_weigh_equal_the_references() {
+    let (model, scan) = (cloud(700, 1), cloud(300, 2));
+    let mut board = PtyBoard::reference();
+    let mut client = board.client();
+    client.identify().unwrap();
+    let mut seen = Vec::new();
+    client.load_model(&model, |done, total| seen.push((done, total))).unwrap();
+    assert_eq!(seen.first(), Some(&(0, 700)));
+    assert_eq!(seen.last(), Some(&(700, 700)));
+    assert!(seen.windows(2).all(|w| w[0].0 < w[1].0), "progress grows: {seen:?}");
+    assert_eq!(seen.len(), 1 + 700usize.div_ceil(170));
+    client.load_scan(&scan, |_, _| {}).unwrap();
+    client.set_sizes(model.len(), scan.len()).unwrap();
+    let id = client.identify().unwrap();
+    assert_eq!((id.model_count, id.scan_count), (700, 300));
+
+    // 50 particles: two frames (37 + 13), then the weights.
+    let ps = poses(50, 3);
+    let expected: Vec<u64> = ps.iter().map(|p| evaluate(&model, &scan, p).cost).collect();
+    let mut chosen = None;
+    let (costs, summary) = client
+        .costs_and_weights(&ps, |c| {
+            let s = WeightScale::for_two_q(((c.iter().max().unwrap() - c.iter().min().unwrap()) / 4) as f64);
+            chosen = Some(s);
+            s
+        })
+        .unwrap();
+    assert_eq!(costs, expected);
+    let scale = chosen.unwrap();
+    assert_eq!(summary.weights, weights(&expected, &scale));
+    assert_eq!(summary.min_cost, *expected.iter().min().unwrap());
+    assert_eq!(summary.w_sum as u64, summary.weights.iter().map(|&w| w as u64).sum::<u64>());
+
+    // One frame with FIRST and LAST; then weigh the same costs again with another scale.
+    let r = client.evaluate(true, true, scale, &ps[..5]).unwrap();
+    assert_eq!(r.costs, expected[..5]);
+    assert_eq!(r.summary.unwrap().weights, weights(&expected[..5], &scale));
+    let other = WeightScale::for_two_q(1e9);
+    assert_eq!(client.weigh(other).unwrap().weights, weights(&expected[..5], &other));
+    assert_eq!(client.stats().resends, 0);
+}
+
+#[test]
+fn nearest_in_frames_equals_the_reference() {
+    let (model, scan) = (cloud(400, 4), cloud(350, 5));
+    let (_board, mut client) = loaded(&model, &scan);
+    let pose = poses(1, 6)[0];
+    let r = client.nearest(10, 320, &pose).unwrap();
+    let e = evaluate(&model, &scan[10..330], &pose);
+    assert_eq!(r.first, 10);
+    assert_eq!(r.results, e.nearest);
+    assert_eq!(r.cost, e.cost);
+    // Past the scan in use: the board's own error, named.
+    match client.nearest(300, 100, &pose) {
+        Err(BoardError::Board { command: Command::Nearest, code: ErrorCode::OverCapacity }) => {}
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn board_errors_are_typed() {
+    let mut board = PtyBoard::reference();
+    let mut client = board.client();
+    // Nothing loaded, no sizes: Evaluate is over capacity.
+    let e = client.evaluate(true, false, WeightScale::default(), &poses(1, 1)).unwrap_err();
+    assert!(matches!(e, BoardError::Board { command: Command::Evaluate, code: ErrorCode::OverCapacity }), "{e:?}");
+    assert!(e.to_string().contains("OverCapacity"), "{e}");
+    // Host-side limits never reach the wire.
+    assert!(matches!(client.load_model(&cloud(4097, 1), |_, _| {}), Err(BoardError::Limit(_))));
+    assert!(matches!(client.costs(&poses(257, 1)), Err(BoardError::Limit(_))));
+}
+
+/// Flip one bit of the byte before the delimiter of the `which`-th reply (0-based).
+fn corrupt_replies(which: impl Fn(usize) -> bool + Send + 'static) -> PtyBoard {
+    let mut reference = reference_handler();
+    let mut replies = 0;
+    PtyBoard::serve(Box::new(move |bytes| {
+        let mut out = Vec::new();
+        for &b in bytes {
+            let mut r = reference(&[b])?;
+            if !r.is_empty() {
+                if which(replies) {
+                    let k = r.len() - 2;
+                    r[k] ^= if r[k] == 1 { 2 } else { 1 };
+                }
+                replies += 1;
+            }
+            out.extend(r);
+        }
+        Some(out)
+    }))
+}
+
+#[test]
+fn a_corrupted_reply_is_resent() {
+    let mut board = corrupt_replies(|k| k == 0);
+    let mut client = board.client();
+    let id = client.identify().unwrap();
+    assert_eq!(id.version, 1);
+    assert_eq!(client.stats().resends, 1);
+}
+
+#[test]
+fn a_corrupted_request_is_resent() {
+    // The board sees a bad CRC and answers with a frame error (sequence 0): the client resends.
+    let mut reference = reference_handler();
+    let mut corrupted = false;
+    let mut board = PtyBoard::serve(Box::new(move |bytes| {
+        let mut b = bytes.to_vec();
+        if !corrupted {
+            if let Some(i) = b.iter().rposition(|&x| x > 2) {
+                b[i] ^= 1;
+                corrupted = true;
+            }
+        }
+        reference(&b)
+    }));
+    let mut client = board.client();
+    client.identify().unwrap();
+    assert_eq!(client.stats().resends, 1);
+}
+
+#[test]
+fn a_lost_evaluate_reply_starts_the_iteration_over() {
+    let (model, scan) = (cloud(200, 7), cloud(100, 8));
+    // Replies: 0 identify, 1-2 model (170 + 30 points), 3 scan, 4 sizes, 5 first batch
+    // (FIRST), 6 second batch (no FIRST: lost once, not repeatable), 7.. the batches again.
+    let mut board = corrupt_replies(|k| k == 6);
+    let mut client = board.client();
+    client.identify().unwrap();
+    client.load_model(&model, |_, _| {}).unwrap();
+    client.load_scan(&scan, |_, _| {}).unwrap();
+    client.set_sizes(model.len(), scan.len()).unwrap();
+    let ps = poses(45, 9);
+    let scale = WeightScale::for_two_q(1e6);
+    let (costs, summary) = client.costs_and_weights(&ps, |_| scale).unwrap();
+    let expected: Vec<u64> = ps.iter().map(|p| evaluate(&model, &scan, p).cost).collect();
+    assert_eq!(costs, expected, "no costs stored twice");
+    assert_eq!(summary.weights, weights(&expected, &scale));
+    assert_eq!(client.stats().restarts, 1);
+}
+
+#[test]
+fn a_board_that_always_garbles_is_an_error_after_the_retries() {
+    let mut board = corrupt_replies(|_| true);
+    let mut client = board.client();
+    match client.identify() {
+        Err(BoardError::Retries { command: Command::Identify, attempts, .. }) => assert_eq!(attempts, MAX_RETRIES + 1),
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn a_silent_board_is_an_error_within_the_timeout() {
+    let mut board = PtyBoard::serve(Box::new(|_| Some(Vec::new())));
+    let mut client = board.client();
+    client.set_timeout(Duration::from_millis(300));
+    let start = Instant::now();
+    let e = client.identify().unwrap_err();
+    let took = start.elapsed();
+    assert!(matches!(e, BoardError::Timeout { command: Command::Identify, .. }), "{e:?}");
+    assert!(e.to_string().contains(&board.path), "{e}");
+    assert!(took >= Duration::from_millis(300), "{took:?}");
+    assert!(took < Duration::from_secs(5), "{took:?}");
+}
+
+#[test]
+fn a_board_that_goes_away_mid_transfer_is_a_clear_error() {
+    let mut reference = reference_handler();
+    let mut replies = 0;
+    // Answers identify and two load frames, then closes its end of the line.
+    let mut board = PtyBoard::serve(Box::new(move |bytes| {
+        let out = reference(bytes)?;
+        replies += out.iter().filter(|&&b| b == 0).count();
+        (replies <= 3).then_some(out)
+    }));
+    let mut client = board.client();
+    client.identify().unwrap();
+    let start = Instant::now();
+    let e = client.load_model(&cloud(2000, 1), |_, _| {}).unwrap_err();
+    assert!(matches!(e, BoardError::Io { .. }), "{e:?}");
+    assert!(e.to_string().contains(&board.path), "{e}");
+    assert!(start.elapsed() < Duration::from_secs(5));
+}
+
+#[test]
+fn a_missing_port_is_named() {
+    let e = BoardClient::open("/dev/does-not-exist-pficp", 921_600, Duration::from_secs(1)).unwrap_err();
+    assert!(matches!(e, BoardError::Open { .. }), "{e:?}");
+    assert!(e.to_string().contains("/dev/does-not-exist-pficp"), "{e}");
+    let e = BoardClient::open("/dev/null", 921_600, Duration::from_secs(1)).unwrap_err();
+    assert!(e.to_string().contains("/dev/null"), "{e}");
+}
+
+#[test]
+fn open_by_path_and_identify() {
+    let board = PtyBoard::reference();
+    let mut client = BoardClient::open(&board.path, 921_600, Duration::from_secs(2)).unwrap();
+    assert_eq!(client.identify().unwrap().lanes, BoardConfig::default().lanes as u8);
+}
+
+#[test]
+fn pf_icp_with_the_board_weights_registers_a_reduced_model_1() {
+    // An independent, noisy scan (so the filter really iterates), 400 + 300 points.
+    let id = ModelId::Model1;
+    let truth = id.table1_truth();
+    let diag = bbox_diagonal(&id.model_points(400));
+    let spec = ScanSpec { sampling: Sampling::Independent { points: 300 }, noise: 0.005 * diag, seed: 3 };
+    let ds = make(id, 400, &truth, &spec);
+    let nn = NearestNeighbours::new(&ds.model);
+    let settings = PfIcpSettings { clusters: 25, particles: 40, iterations: 30, seed: 3, ..Default::default() };
+    let mut board = PtyBoard::reference();
+    let mut client = board.client();
+    let mut uploads = Vec::new();
+    let start = Instant::now();
+    let r =
+        board_pf::register(&mut client, &nn, &ds.scan, &settings, &mut |u, done, total| uploads.push((u, done, total)))
+            .unwrap();
+    let took = start.elapsed();
+    let pose = &r.pf.registration.pose;
+    let e = PoseError::between(pose, &truth, diag);
+    eprintln!("board PF-ICP: {e:?}, {} iterations, {took:?}, {:?}", r.board.iterations, r.board.stats);
+    assert!(Tolerance::SUCCESS.accepts(pose, &truth, diag), "{e:?}");
+    assert_eq!((r.board.model_points, r.board.model_subsampled, r.board.scan_points), (400, false, 300));
+    assert_eq!(r.board.iterations, r.pf.registration.iterations);
+    assert!(r.board.iterations > 5, "the filter iterated on the board's weights");
+    assert_eq!(r.board.stats.resends, 0);
+    assert_eq!(uploads.last(), Some(&(Upload::Scan, 300, 300)));
+    assert!(uploads.contains(&(Upload::Model, 400, 400)));
+}
+
+#[test]
+fn a_model_too_big_for_the_board_is_subsampled_with_the_seed() {
+    let model: Vec<_> = (0..5000).map(|i| nalgebra::Point3::new(i as f64, (i * i % 7) as f64, 0.5)).collect();
+    let a = board_pf::board_model(&model, 4096, 1);
+    assert_eq!(a.len(), 4096);
+    assert_eq!(a, board_pf::board_model(&model, 4096, 1), "same seed, same points");
+    assert_ne!(a, board_pf::board_model(&model, 4096, 2));
+    assert!(a.windows(2).all(|w| w[0].x < w[1].x), "original order kept");
+    assert_eq!(board_pf::board_model(&model[..100], 4096, 1), model[..100].to_vec());
+}

@@ -1,0 +1,84 @@
+//! A board served on a pseudo-terminal: a thread reads the bytes the client writes to one
+//! end and answers through a handler (by default the byte-level reference,
+//! `pficp_fpga::board::BoardModel`). The client gets the other end, a real tty with a path.
+
+#![allow(dead_code)]
+
+use pficp_fpga::board::{BoardConfig, BoardModel};
+use serialport::{SerialPort, TTYPort};
+use std::io::{ErrorKind, Read, Write};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::Duration;
+
+/// What the board does with the bytes it read: the bytes it answers, or `None` to close
+/// its end of the line.
+pub type Handler = Box<dyn FnMut(&[u8]) -> Option<Vec<u8>> + Send>;
+
+/// The board thread and the client's end of the line.
+pub struct PtyBoard {
+    /// The client's end (a tty with a path), until taken.
+    pub client_end: Option<TTYPort>,
+    /// Its path (`/dev/pts/N`).
+    pub path: String,
+    stop: Arc<AtomicBool>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl PtyBoard {
+    /// Serve `handler` on a new pseudo-terminal.
+    pub fn serve(mut handler: Handler) -> PtyBoard {
+        let (mut board_end, client_end) = TTYPort::pair().expect("a pseudo-terminal");
+        let path = client_end.name().expect("the client end has a path");
+        board_end.set_timeout(Duration::from_millis(20)).unwrap();
+        let stop = Arc::new(AtomicBool::new(false));
+        let flag = stop.clone();
+        let thread = std::thread::spawn(move || {
+            let mut buf = [0u8; 4096];
+            while !flag.load(Ordering::Relaxed) {
+                let n = match board_end.read(&mut buf) {
+                    Ok(0) => break,
+                    Ok(n) => n,
+                    Err(e) if e.kind() == ErrorKind::TimedOut || e.kind() == ErrorKind::Interrupted => continue,
+                    Err(_) => break, // the client's end is gone
+                };
+                match handler(&buf[..n]) {
+                    Some(out) => {
+                        if !out.is_empty() && board_end.write_all(&out).is_err() {
+                            break;
+                        }
+                    }
+                    None => break,
+                }
+            }
+            // Dropping `board_end` closes the line: the client's reads fail.
+        });
+        PtyBoard { client_end: Some(client_end), path, stop, thread: Some(thread) }
+    }
+
+    /// The reference board.
+    pub fn reference() -> PtyBoard {
+        PtyBoard::serve(reference_handler())
+    }
+
+    /// A client on this line (takes the client's end).
+    pub fn client(&mut self) -> pficp::board::BoardClient {
+        pficp::board::BoardClient::from_port(Box::new(self.client_end.take().expect("one client per board")))
+    }
+}
+
+impl Drop for PtyBoard {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+/// The byte-level reference as a handler.
+pub fn reference_handler() -> Handler {
+    let mut board = BoardModel::new(BoardConfig::default());
+    Box::new(move |bytes| Some(board.receive_all(bytes)))
+}
