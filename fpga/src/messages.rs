@@ -393,13 +393,13 @@ mod tests {
         assert_eq!(NearestReply::decode(&n.encode(), &q), Ok(n));
     }
 
-    #[test]
-    fn request_sizes_fit_the_body_limit() {
+    // The frame limits, checked at compile time.
+    const _: () = {
         use crate::protocol::MAX_BODY;
         assert!(2 + 4 + POINT_BYTES * MAX_LOAD_POINTS <= MAX_BODY);
         assert!(2 + 6 + POSE_BYTES * MAX_POSES <= MAX_BODY);
         assert!(2 + 6 + POSE_BYTES * (MAX_POSES + 1) > MAX_BODY);
         assert!(2 + 10 + 7 * MAX_NEAREST <= MAX_BODY);
         assert!(2 + 10 + 7 * (MAX_NEAREST + 1) > MAX_BODY);
-    }
+    };
 }
