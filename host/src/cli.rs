@@ -9,6 +9,11 @@ use serde::Serialize;
 pub struct RegisterReport {
     /// Method name.
     pub method: String,
+    /// Where the particle weights were computed: `software` (the host) or `board`.
+    pub engine: String,
+    /// The board's serial port when `engine` is `board`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub port: Option<String>,
     /// Scale factor.
     pub scale: f64,
     /// Rotation, row-major.
@@ -34,6 +39,8 @@ impl RegisterReport {
         let m = r.pose.matrix4();
         RegisterReport {
             method: method.to_string(),
+            engine: "software".to_string(),
+            port: None,
             scale,
             rotation,
             translation,
@@ -45,10 +52,21 @@ impl RegisterReport {
         }
     }
 
+    /// The same report for a run whose particle weights came from the board on `port`.
+    pub fn on_board(mut self, port: &str) -> Self {
+        self.engine = "board".to_string();
+        self.port = Some(port.to_string());
+        self
+    }
+
     /// The human-readable form.
     pub fn text(&self) -> String {
         let mut s = String::new();
         s += &format!("method       {}\n", self.method);
+        match &self.port {
+            Some(port) => s += &format!("engine       {} ({port})\n", self.engine),
+            None => s += &format!("engine       {}\n", self.engine),
+        }
         s += &format!("scale        {:.6}\n", self.scale);
         for (name, v) in ["phi", "theta", "psi"].iter().zip(self.euler_deg) {
             s += &format!("{:<12} {:.4} deg\n", name, v);
@@ -103,9 +121,13 @@ mod tests {
         let pose = Pose::from_params(&[1.0, 2.0, 3.0, 0.5, 0.1, 0.2, 0.3]);
         let r = Registration { pose, msd: 0.25, iterations: 7, errors: vec![] };
         let v = serde_json::to_value(RegisterReport::new("icp", &r, 1.5)).unwrap();
-        for key in ["scale", "rotation", "translation", "euler_deg", "msd", "iterations", "seconds"] {
+        for key in ["scale", "rotation", "translation", "euler_deg", "msd", "iterations", "seconds", "engine"] {
             assert!(v.get(key).is_some(), "missing {key}");
         }
+        assert_eq!(v["engine"], "software");
+        assert!(v.get("port").is_none());
+        let b = serde_json::to_value(RegisterReport::new("pf-icp", &r, 1.5).on_board("/dev/ttyUSB0")).unwrap();
+        assert_eq!((b["engine"].as_str(), b["port"].as_str()), (Some("board"), Some("/dev/ttyUSB0")));
         assert_eq!(v["translation"][2], 3.0);
         assert_eq!(v["matrix"][0][3], 1.0);
         assert!((v["euler_deg"][2].as_f64().unwrap() - 0.3f64.to_degrees()).abs() < 1e-9);

@@ -6,6 +6,7 @@
 
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
+use pficp::board::BoardClient;
 use pficp::cli::{pose_table, RegisterReport};
 use pficp::cloud::Cloud;
 use pficp::datasets::{self, ModelId, Sampling, ScanSpec};
@@ -14,8 +15,9 @@ use pficp::io::{format_from_path, read_cloud, write_cloud};
 use pficp::methods::{self, Method, MethodSettings};
 use pficp::nn::NearestNeighbours;
 use pficp::pf_icp::PfIcpSettings;
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 #[derive(Parser)]
 #[command(name = "pficp", version, about = "PF-ICP point-cloud registration (particle filter + ICP + k-means)")]
@@ -38,6 +40,46 @@ enum Command {
     /// Time one PF-ICP registration per stage (model-1, 2,000 + 2,000 points, K = 100,
     /// 50 particles, 50 iterations); build with --release.
     Bench(BenchArgs),
+    /// Talk to the board over its serial port.
+    #[command(subcommand)]
+    Board(BoardCommand),
+}
+
+#[derive(Subcommand)]
+enum BoardCommand {
+    /// Print the board's Identify reply: protocol version, limits, clock, baud, sizes.
+    Info(BoardInfoArgs),
+}
+
+#[derive(clap::Args)]
+struct LinkArgs {
+    /// Serial line baud rate (the board's is set when it is generated).
+    #[arg(long, default_value_t = pficp::board::DEFAULT_BAUD)]
+    baud: u32,
+    /// Time allowed per reply in milliseconds (plus the board's modelled transfer and compute time).
+    #[arg(long, default_value_t = 2000)]
+    timeout_ms: u64,
+}
+
+impl LinkArgs {
+    fn open(&self, port: &str) -> Result<BoardClient> {
+        if self.timeout_ms == 0 {
+            bail!("--timeout-ms must be at least 1");
+        }
+        if self.baud == 0 {
+            bail!("--baud must be at least 1");
+        }
+        Ok(BoardClient::open(port, self.baud, Duration::from_millis(self.timeout_ms))?)
+    }
+}
+
+#[derive(clap::Args)]
+struct BoardInfoArgs {
+    /// The board's serial port (e.g. /dev/ttyUSB0).
+    #[arg(long)]
+    port: String,
+    #[command(flatten)]
+    link: LinkArgs,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -135,6 +177,11 @@ struct RegisterArgs {
     /// Write the scan, transformed into the model frame, to this file.
     #[arg(long)]
     out_aligned: Option<PathBuf>,
+    /// Weigh the particles on the board at this serial port (PF-ICP only).
+    #[arg(long, value_name = "PORT")]
+    board: Option<String>,
+    #[command(flatten)]
+    link: LinkArgs,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -238,6 +285,7 @@ fn main() {
         Command::Gen(a) => gen(&a),
         Command::Eval(a) => eval(&a),
         Command::Bench(a) => bench(&a),
+        Command::Board(BoardCommand::Info(a)) => board_info(&a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");
@@ -271,9 +319,44 @@ fn register(a: &RegisterArgs) -> Result<()> {
     if let Some(out) = &a.out_aligned {
         format_from_path(out)?;
     }
+    if a.board.is_some() && method != Method::PfIcp {
+        bail!("--board runs PF-ICP only (got --method {})", method.name());
+    }
+    // Open the port before the work starts: a missing or silent board fails at once.
+    let mut client = match &a.board {
+        Some(port) => {
+            let mut c = a.link.open(port)?;
+            let id = c.identify()?;
+            eprintln!("board on {port}: protocol {}, {} lanes at {} Hz", id.version, id.lanes, id.clock_hz);
+            Some(c)
+        }
+        None => None,
+    };
     eprintln!("registering {} scan points to {} model points with {}", scan.len(), model.len(), method.name());
     let nn = NearestNeighbours::new(model.points());
-    let outcome = methods::run(method, &nn, scan.points(), &MethodSettings { pf: settings });
+    let (outcome, engine) = match client.as_mut() {
+        None => (methods::run(method, &nn, scan.points(), &MethodSettings { pf: settings }), None),
+        Some(c) => {
+            let start = Instant::now();
+            let r = pficp::board_pf::register(c, &nn, scan.points(), &settings, &mut upload_progress())?;
+            let b = &r.board;
+            eprintln!(
+                "board: {} model points{}, {} scan points, {} iterations weighed, {} requests, {} resends",
+                b.model_points,
+                if b.model_subsampled { " (subsampled)" } else { "" },
+                b.scan_points,
+                b.iterations,
+                b.stats.requests,
+                b.stats.resends + b.stats.restarts
+            );
+            let outcome = methods::Outcome {
+                registration: r.pf.registration.clone(),
+                elapsed: start.elapsed(),
+                pf: Some(Box::new(r.pf)),
+            };
+            (outcome, a.board.as_deref())
+        }
+    };
     if let Some(pf) = &outcome.pf {
         let t = &pf.times;
         eprintln!(
@@ -284,7 +367,10 @@ fn register(a: &RegisterArgs) -> Result<()> {
             t.polish.as_secs_f64()
         );
     }
-    let report = RegisterReport::new(method.name(), &outcome.registration, outcome.elapsed.as_secs_f64());
+    let mut report = RegisterReport::new(method.name(), &outcome.registration, outcome.elapsed.as_secs_f64());
+    if let Some(port) = engine {
+        report = report.on_board(port);
+    }
     if a.json {
         println!("{}", serde_json::to_string(&report)?);
     } else {
@@ -295,6 +381,28 @@ fn register(a: &RegisterArgs) -> Result<()> {
         write_cloud(out, &aligned, format_from_path(out)?)?;
         eprintln!("wrote the aligned scan to {}", out.display());
     }
+    Ok(())
+}
+
+/// Upload progress on stderr: one updating line on a terminal, one line per store otherwise.
+fn upload_progress() -> impl FnMut(pficp::board_pf::Upload, usize, usize) + Send {
+    let tty = std::io::stderr().is_terminal();
+    move |store, done, total| {
+        if tty {
+            eprint!("\ruploading the {}: {done}/{total} points", store.name());
+            if done == total {
+                eprintln!();
+            }
+        } else if done == total {
+            eprintln!("uploaded the {}: {total} points", store.name());
+        }
+    }
+}
+
+fn board_info(a: &BoardInfoArgs) -> Result<()> {
+    let mut client = a.link.open(&a.port)?;
+    let id = client.identify()?;
+    print!("{}", pficp::board::identity_text(&a.port, &id));
     Ok(())
 }
 

@@ -4,6 +4,8 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+mod support;
+
 fn pficp(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_pficp")).args(args).output().expect("run pficp")
 }
@@ -140,4 +142,75 @@ fn same_seed_same_json_pose() {
         (v["rotation"].to_string(), v["translation"].to_string(), v["scale"].to_string())
     };
     assert_eq!(run("7"), run("7"));
+}
+
+#[test]
+fn a_missing_board_port_is_a_clear_error() {
+    assert_error(&pficp(&["board", "info", "--port", "/nonexistent"]), &["/nonexistent"]);
+    let dir = tempfile::tempdir().unwrap();
+    let good = write(dir.path(), "good.xyz", cloud_text(300).as_bytes());
+    assert_error(&register(&good, &good, &["--board", "/nonexistent/ttyUSB7"]), &["/nonexistent/ttyUSB7"]);
+    assert_error(&register(&good, &good, &["--board", "/nonexistent", "--method", "icp"]), &["--board", "PF-ICP"]);
+}
+
+#[test]
+fn a_silent_board_is_a_clear_error() {
+    let board = support::PtyBoard::serve(Box::new(|_| Some(Vec::new())));
+    let start = std::time::Instant::now();
+    let o = pficp(&["board", "info", "--port", &board.path, "--timeout-ms", "300"]);
+    assert_error(&o, &[&board.path, "did not answer"]);
+    assert!(start.elapsed() < std::time::Duration::from_secs(10));
+}
+
+#[test]
+fn board_info_prints_the_identity() {
+    let board = support::PtyBoard::reference();
+    let o = pficp(&["board", "info", "--port", &board.path]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8(o.stdout).unwrap();
+    for line in ["protocol version  1", "lanes             16", "max particles     256", "baud              921600"] {
+        assert!(out.contains(line), "{line:?} not in {out}");
+    }
+}
+
+#[test]
+fn register_on_the_board_prints_the_software_form() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().to_str().unwrap();
+    let o = pficp(&["gen", "--model", "model-1", "--out-dir", d, "--points", "300"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let files: Vec<String> = String::from_utf8(o.stdout).unwrap().lines().map(String::from).collect();
+    let (model, scan) = (Path::new(&files[0]), Path::new(&files[1]));
+    let small = ["--clusters", "30", "--particles", "30", "--iterations", "10"];
+    let board = support::PtyBoard::reference();
+    let on_board = |extra: &[&str]| {
+        let mut args = vec!["--board", board.path.as_str()];
+        args.extend_from_slice(&small);
+        args.extend_from_slice(extra);
+        let o = register(model, scan, &args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(stderr(&o).contains("uploaded the model: 300 points"), "{}", stderr(&o));
+        String::from_utf8(o.stdout).unwrap()
+    };
+    let json: serde_json::Value = serde_json::from_str(&on_board(&["--json"])).unwrap();
+    let soft = register(model, scan, &[&small[..], &["--json"]].concat());
+    let soft: serde_json::Value = serde_json::from_slice(&soft.stdout).unwrap();
+    let keys = |v: &serde_json::Value| {
+        let mut k: Vec<String> = v.as_object().unwrap().keys().filter(|k| *k != "port").cloned().collect();
+        k.sort();
+        k
+    };
+    assert_eq!(keys(&json), keys(&soft), "the same JSON keys");
+    assert_eq!((json["engine"].as_str(), soft["engine"].as_str()), (Some("board"), Some("software")));
+    assert_eq!(json["port"].as_str(), Some(board.path.as_str()));
+    let truth: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&files[2]).unwrap()).unwrap();
+    for i in 0..3 {
+        let (e, t) = (json["euler_deg"][i].as_f64().unwrap(), truth["euler_deg"][i].as_f64().unwrap());
+        assert!((e - t).abs() < 0.5, "angle {i}: {e} vs {t}");
+    }
+    let text = on_board(&[]);
+    let labels = |t: &str| t.lines().map(|l| l.split_whitespace().next().unwrap_or("").to_string()).collect::<Vec<_>>();
+    let soft_text = String::from_utf8(register(model, scan, &small).stdout).unwrap();
+    assert_eq!(labels(&text), labels(&soft_text), "the same text form:\n{text}\n{soft_text}");
+    assert!(text.contains(&format!("engine       board ({})", board.path)), "{text}");
 }
