@@ -157,7 +157,7 @@ impl SerialBoard {
     /// Nothing queued or on either line, and the engine not busy, for at least two bit
     /// periods (a frame's last byte reaches the engine a bit period after its stop bit).
     pub fn idle(&self) -> bool {
-        self.quiet > 2 * self.bit as u64
+        self.quiet > 2 * self.bit as u64 && self.outgoing.is_empty()
     }
 
     /// One clock.
