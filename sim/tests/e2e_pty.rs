@@ -1,0 +1,99 @@
+//! End to end: the real host client (`pficp::board`, through the real `serialport` crate)
+//! talks to `pficp-sim-board` (the Verilated board top at 921,600 baud, 16 lanes) over a
+//! pseudo-terminal. The simulated board runs with `--check`: every byte it sends is
+//! compared with the byte-level reference, and it says so when it stops.
+
+use pficp::board::BoardClient;
+use pficp::board_pf;
+use pficp::cloud::bbox_diagonal;
+use pficp::datasets::{make, ModelId, Sampling, ScanSpec};
+use pficp::methods::{PoseError, Tolerance};
+use pficp::nn::NearestNeighbours;
+use pficp::pf_icp::{self, PfIcpSettings};
+use std::io::{BufRead, BufReader, Read};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// A running `pficp-sim-board --check`.
+struct SimBoard {
+    child: Child,
+    path: String,
+}
+
+impl SimBoard {
+    fn start() -> SimBoard {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_pficp-sim-board"))
+            .arg("--check")
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("starting pficp-sim-board");
+        let mut first = String::new();
+        BufReader::new(child.stdout.take().unwrap()).read_line(&mut first).unwrap();
+        let path = first.trim().to_string();
+        assert!(path.starts_with("/dev/"), "first line is the device path: {path:?}");
+        SimBoard { child, path }
+    }
+
+    /// SIGTERM, then the exit status and stderr.
+    fn stop(mut self) -> (i32, String) {
+        let ok = Command::new("kill").args(["-TERM", &self.child.id().to_string()]).status().unwrap();
+        assert!(ok.success());
+        let status = self.child.wait().unwrap();
+        let mut err = String::new();
+        self.child.stderr.take().unwrap().read_to_string(&mut err).unwrap();
+        (status.code().expect("exited, not killed"), err)
+    }
+}
+
+fn register_both(id: ModelId, board: &SimBoard) {
+    let truth = id.table1_truth();
+    let diag = bbox_diagonal(&id.model_points(300));
+    let spec = ScanSpec { sampling: Sampling::Independent { points: 150 }, noise: 0.0, seed: 5 };
+    let ds = make(id, 300, &truth, &spec);
+    let nn = NearestNeighbours::new(&ds.model);
+    let settings = PfIcpSettings { clusters: 15, particles: 24, iterations: 12, seed: 5, ..Default::default() };
+    let software = pf_icp::register(&nn, &ds.scan, &settings);
+    // One client per registration: the port is opened and closed each time, as `pficp` does.
+    let mut client = BoardClient::open(&board.path, 921_600, Duration::from_secs(5)).expect("open the pty");
+    let t = Instant::now();
+    let r = board_pf::register(&mut client, &nn, &ds.scan, &settings, &mut |_, _, _| {}).expect("board registration");
+    let pose = &r.pf.registration.pose;
+    let vs_truth = PoseError::between(pose, &truth, diag);
+    let vs_software = PoseError::between(pose, &software.registration.pose, diag);
+    eprintln!(
+        "{}: board {} iterations in {:.1} s wall ({:?}); vs truth {vs_truth:?}; vs software {vs_software:?}",
+        id.name(),
+        r.board.iterations,
+        t.elapsed().as_secs_f64(),
+        r.board.stats
+    );
+    assert!(r.board.iterations >= 1);
+    // The board's result is the software mode's (within the success tolerance), and exactly
+    // as good against the truth whenever the software mode is.
+    let software_ok = Tolerance::SUCCESS.accepts(&software.registration.pose, &truth, diag);
+    eprintln!("{}: software mode within the success tolerance of the truth: {software_ok}", id.name());
+    if software_ok {
+        assert!(Tolerance::SUCCESS.accepts(pose, &truth, diag), "{}: vs truth {vs_truth:?}", id.name());
+    }
+    assert!(
+        Tolerance::SUCCESS.accepts(pose, &software.registration.pose, diag),
+        "{}: vs software mode {vs_software:?}",
+        id.name()
+    );
+}
+
+#[test]
+fn reduced_models_1_and_2_through_the_simulated_board() {
+    let board = SimBoard::start();
+    let mut client = BoardClient::open(&board.path, 921_600, Duration::from_secs(5)).unwrap();
+    let id = client.identify().unwrap();
+    assert_eq!((id.lanes, id.baud, id.clock_hz), (16, 921_600, 100_000_000));
+    drop(client);
+    register_both(ModelId::Model1, &board);
+    register_both(ModelId::Model2, &board);
+    let (code, err) = board.stop();
+    eprintln!("{err}");
+    assert_eq!(code, 0, "pficp-sim-board: {err}");
+    assert!(err.contains("all equal"), "{err}");
+}
