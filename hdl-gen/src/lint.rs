@@ -15,7 +15,8 @@ pub const TOP: &str = "top";
 pub const HEADER_MARK: &str = "// Written by hdl-gen (PF-ICP).";
 
 /// The Verilator lint waivers put at the top of the written file, each with its reason.
-/// `-Wall` gives exactly these two warning kinds on rust_hdl 0.46 output, both by construction.
+/// `-Wall` gives exactly these warning kinds on rust_hdl 0.46 output, all by construction
+/// (`UNUSEDPARAM` only on designs with enum state machines, such as the board).
 pub const WAIVERS: &[(&str, &str)] = &[
     (
         "WIDTH",
@@ -26,6 +27,11 @@ pub const WAIVERS: &[(&str, &str)] = &[
         "DECLFILENAME",
         "rust_hdl writes one file holding many modules (one per block instance), so module names \
          cannot match the file name.",
+    ),
+    (
+        "UNUSEDPARAM",
+        "rust_hdl declares a localparam for every variant of an enum state type in each module \
+         that holds one; a module need not name every variant.",
     ),
 ];
 

@@ -1,16 +1,21 @@
-//! `hdl-gen`: writes the pipeline's Verilog, lints it (Verilator) and reports its Spartan-6
-//! resources and logic depth (Yosys). See `hdl-gen --help`.
+//! `hdl-gen`: writes the PF-ICP Verilog (for the board also its UCF and ISE 14.7 script), lints
+//! it (Verilator) and reports its Spartan-6 resources and logic depth (Yosys). See `hdl-gen --help`.
 
 use anyhow::{bail, Context, Result};
 use clap::Parser;
-use hdl_gen::{lint, synthesise, write_verilog, Limits, SynthOptions, TOP};
+use hdl_gen::ucf::{top_ports, write_ucf, DEFAULT_PINMAP_PATH};
+use hdl_gen::{ise, lint, synthesise, write_verilog, Limits, PinMap, SynthOptions, TOP, VERILOG_FILE};
+use pficp_fpga::board::BoardConfig;
 use std::path::PathBuf;
 
-/// Writes DIR/pficp_pipeline.v, lints it with `verilator --lint-only -Wall`, synthesises it
-/// with Yosys `synth_xilinx -family xc6s -flatten` and writes DIR/resources.md and
+/// Writes DIR/pficp_pipeline.v; for the board also DIR/pficp_board.ucf (from the pin map) and
+/// DIR/build_ise.tcl (ISE 14.7: `cd DIR && xtclsh build_ise.tcl` gives top.bit; Vivado does not
+/// support Spartan-6). Lints the Verilog with `verilator --lint-only -Wall`, synthesises it with
+/// Yosys `synth_xilinx -family xc6s -flatten` and writes DIR/resources.md and
 /// DIR/resources.json (LUT/FF/DSP48A1/RAMB16/CARRY4/MUXF against the XC6SLX45, the longest
-/// logic path, a 7-series `sta` estimate). Exits non-zero if the lint is not clean, a tool
-/// is missing or fails, or the design exceeds the limits.
+/// logic path, a 7-series `sta` estimate). Exits non-zero if the pin map is malformed or does
+/// not fit the top, the lint is not clean, a tool is missing or fails, or the design exceeds
+/// the limits.
 #[derive(Parser, Debug)]
 #[command(name = "hdl-gen", version)]
 struct Cli {
@@ -20,21 +25,35 @@ struct Cli {
     /// Number of parallel lanes P of the generated pipeline.
     #[arg(long, value_name = "P", default_value_t = 16, conflicts_with = "verilog")]
     lanes: usize,
-    /// Which design to generate: the particle-weight pipeline (nearest-neighbour pipeline
-    /// and weight stage), the nearest-neighbour pipeline alone, or the weight stage alone.
-    #[arg(long, value_enum, default_value_t = Design::ParticleWeights, conflicts_with = "verilog")]
+    /// Which design to generate: the whole board (pins, UART, protocol engine, pipeline), the
+    /// particle-weight pipeline (nearest-neighbour pipeline and weight stage), the
+    /// nearest-neighbour pipeline alone, or the weight stage alone. Only the board has pins,
+    /// so only the board gets a UCF and an ISE script.
+    #[arg(long, value_enum, default_value_t = Design::Board, conflicts_with = "verilog")]
     design: Design,
-    /// Use the Verilog in FILE (top module `top`) instead of generating the pipeline.
+    /// Use the Verilog in FILE (top module `top`) instead of generating a design; with
+    /// --pinmap, also write its UCF and ISE script.
     #[arg(long, value_name = "FILE")]
     verilog: Option<PathBuf>,
+    /// The board pin map (TOML, constraints/README.md) [default: the committed
+    /// constraints/pinmap.toml, built in].
+    #[arg(long, value_name = "FILE")]
+    pinmap: Option<PathBuf>,
+    /// The board clock in Hz: the oscillator, as the board top has no DCM, so it must be the
+    /// pin map's frequency_hz [default: the pin map's (50 MHz on the committed map)].
+    #[arg(long, value_name = "HZ")]
+    clock_hz: Option<u32>,
+    /// The board's UART baud rate [default: 921600].
+    #[arg(long, value_name = "BAUD")]
+    baud: Option<u32>,
     /// Skip the Verilator lint.
     #[arg(long)]
     no_lint: bool,
     /// Skip the Yosys synthesis and the resource report.
     #[arg(long)]
     no_synth: bool,
-    /// Synthesise with I/O pads and the clock buffer (the default, `-noiopad -noclkbuf`,
-    /// suits the pipeline as a block inside the board top).
+    /// Synthesise with I/O pads and the clock buffer (always on for the board; the default,
+    /// `-noiopad -noclkbuf`, suits a block inside the board top).
     #[arg(long)]
     io_pads: bool,
     /// Fail if the design uses more than this percentage of the LUTs.
@@ -51,6 +70,8 @@ struct Cli {
 /// The generated designs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 enum Design {
+    /// `BoardTop`: the board top `top` (clock, reset_n, uart_rx, uart_tx, leds[3:0]).
+    Board,
     /// `ParticleWeightPipeline`: the nearest-neighbour pipeline feeding the weight stage.
     ParticleWeights,
     /// `NnPipeline` alone.
@@ -59,13 +80,28 @@ enum Design {
     Weights,
 }
 
+/// The design's name on the command line.
+fn design_name(design: Design) -> String {
+    use clap::ValueEnum;
+    design.to_possible_value().map(|v| v.get_name().to_string()).unwrap_or_default()
+}
+
 /// The design's Verilog with `lanes` lanes, from the RTL crate, and where it came from.
-fn generated_verilog(design: Design, lanes: usize) -> Result<(String, String)> {
-    use pficp_fpga::rtl::{particle_weights_verilog, pipeline_verilog, weight_stage_verilog, SUPPORTED_LANES};
+fn generated_verilog(design: Design, lanes: usize, board: &BoardConfig) -> Result<(String, String)> {
+    use pficp_fpga::rtl::{
+        board_verilog, particle_weights_verilog, pipeline_verilog, weight_stage_verilog, SUPPORTED_LANES,
+    };
     if design != Design::Weights && !SUPPORTED_LANES.contains(&lanes) {
         bail!("--lanes {lanes} is not supported by the RTL; use one of {SUPPORTED_LANES:?}");
     }
     Ok(match design {
+        Design::Board => (
+            board_verilog(board),
+            format!(
+                "pficp_fpga::rtl::board_verilog(BoardConfig {{ lanes: {}, clock_hz: {}, baud: {} }})",
+                board.lanes, board.clock_hz, board.baud
+            ),
+        ),
         Design::ParticleWeights => {
             (particle_weights_verilog(lanes), format!("pficp_fpga::rtl::particle_weights_verilog({lanes})"))
         }
@@ -74,16 +110,93 @@ fn generated_verilog(design: Design, lanes: usize) -> Result<(String, String)> {
     })
 }
 
+/// The board's generation parameters from the options and the pin map, checked.
+fn board_config(cli: &Cli, map: &PinMap) -> Result<BoardConfig> {
+    let clock_hz = match cli.clock_hz {
+        Some(hz) => hz,
+        None => u32::try_from(map.clock_hz)
+            .with_context(|| format!("the pin map's frequency_hz {} does not fit the design", map.clock_hz))?,
+    };
+    map.check_clock(clock_hz as u64)?;
+    let config = BoardConfig { lanes: cli.lanes, clock_hz, baud: cli.baud.unwrap_or(BoardConfig::default().baud) };
+    if config.baud == 0 || config.bit_clocks() < 4 {
+        bail!(
+            "--baud {} is too fast for a {} Hz clock: the UART needs at least 4 clocks per bit",
+            config.baud,
+            config.clock_hz
+        );
+    }
+    Ok(config)
+}
+
 fn run(cli: &Cli) -> Result<()> {
+    let board = cli.verilog.is_none() && cli.design == Design::Board;
+    let pins = board || (cli.verilog.is_some() && cli.pinmap.is_some());
+    if !pins {
+        if cli.pinmap.is_some() {
+            bail!(
+                "--pinmap applies to the board (--design board) or to --verilog FILE; the {} design has no pins",
+                design_name(cli.design)
+            );
+        }
+        if cli.clock_hz.is_some() || cli.baud.is_some() {
+            bail!("--clock-hz and --baud apply to the board (--design board) only");
+        }
+    }
+    if cli.verilog.is_some() && cli.baud.is_some() {
+        bail!("--baud applies to the generated board (--design board), not to --verilog");
+    }
+    // The pin map first: a bad one fails before anything is generated.
+    let map = if pins { Some(PinMap::load(cli.pinmap.as_deref())?) } else { None };
+    let config = match &map {
+        Some(m) if board => board_config(cli, m)?,
+        _ => BoardConfig { lanes: cli.lanes, ..BoardConfig::default() },
+    };
     let (verilog, source) = match &cli.verilog {
         Some(f) => {
             let v = std::fs::read_to_string(f).with_context(|| format!("could not read --verilog {}", f.display()))?;
             (v, format!("{} (top `{TOP}`)", f.display()))
         }
-        None => generated_verilog(cli.design, cli.lanes)?,
+        None => generated_verilog(cli.design, cli.lanes, &config)?,
     };
     let path = write_verilog(&verilog, &cli.out)?;
     println!("wrote {} ({source})", path.display());
+    if board {
+        println!(
+            "UART: {} clocks per bit at {} Hz: {:.0} baud ({:+.2} % from {})",
+            config.bit_clocks(),
+            config.clock_hz,
+            config.actual_baud(),
+            (config.actual_baud() / config.baud as f64 - 1.0) * 100.0,
+            config.baud
+        );
+    }
+    match &map {
+        Some(map) => {
+            let clock_hz = cli.clock_hz.map(u64::from).unwrap_or(map.clock_hz);
+            let ports = top_ports(&verilog, TOP)?;
+            let ucf = write_ucf(map, &ports, clock_hz, &cli.out)?;
+            let origin =
+                if cli.pinmap.is_none() { format!("{DEFAULT_PINMAP_PATH}, built in") } else { map.origin.clone() };
+            println!("wrote {} (pin map {origin}: {})", ucf.display(), map.board);
+            let tcl = ise::write_script(VERILOG_FILE, hdl_gen::UCF_FILE, TOP, &cli.out)?;
+            println!(
+                "wrote {} (ISE 14.7: cd {} && xtclsh {} gives {}; Vivado does not support Spartan-6)",
+                tcl.display(),
+                cli.out.display(),
+                ise::TCL_FILE,
+                ise::bitstream(TOP)
+            );
+        }
+        None => println!(
+            "no UCF or ISE script: {} is a block without pins (the board, --design board, has them)",
+            if cli.verilog.is_some() {
+                "--verilog without --pinmap".to_string()
+            } else {
+                format!("the {} design", design_name(cli.design))
+            }
+        ),
+    }
 
     if !cli.no_lint {
         let report = lint(&verilog, &cli.out)?;
@@ -92,7 +205,8 @@ fn run(cli: &Cli) -> Result<()> {
     if cli.no_synth {
         return Ok(());
     }
-    let opts = SynthOptions { io_pads: cli.io_pads, ..SynthOptions::default() };
+    // The board has real pins: keep its I/O and clock buffers.
+    let opts = SynthOptions { io_pads: cli.io_pads || board, ..SynthOptions::default() };
     let mut res = synthesise(&verilog, &cli.out, &opts)?;
     res.source = source;
     let limits = Limits { max_lut_percent: cli.max_lut_percent, max_dsp: cli.max_dsp, max_bram: cli.max_bram };

@@ -54,7 +54,8 @@ fn io_pads_option_keeps_the_buffers() {
     assert_eq!(r.dsp, 1);
 }
 
-/// Each waiver is needed: without them, Verilator -Wall reports exactly WIDTH and DECLFILENAME.
+/// Without the waivers, Verilator -Wall reports exactly WIDTH and DECLFILENAME on the tiny
+/// design; with them it is clean. (UNUSEDPARAM is needed by the board: `cli_board_one_lane`.)
 #[test]
 fn waivers_are_needed_and_sufficient() {
     let dir = fresh_dir("hdl-gen-no-waivers");
@@ -149,12 +150,13 @@ fn cli_rejects_unsupported_lanes() {
     assert!(stderr.contains("--lanes 3 is not supported"), "{stderr}");
 }
 
-/// The generated particle-weight pipeline (the default design) lints clean with only the two
-/// waivers, and fits the limits (1 lane keeps the test short).
+/// The generated particle-weight pipeline lints clean with the waivers and fits the limits
+/// (1 lane keeps the test short).
 #[test]
 fn cli_generated_pipeline_one_lane() {
     let dir = fresh_dir("hdl-gen-cli-pipeline");
-    let (okay, stdout, stderr) = hdl_gen(&["--out", dir.to_str().unwrap(), "--lanes", "1"]);
+    let (okay, stdout, stderr) =
+        hdl_gen(&["--out", dir.to_str().unwrap(), "--lanes", "1", "--design", "particle-weights"]);
     assert!(okay, "{stdout}\n{stderr}");
     assert!(stdout.contains("pficp_fpga::rtl::particle_weights_verilog(1)"), "{stdout}");
     assert!(stdout.contains("lint: clean"), "{stdout}");
@@ -176,4 +178,39 @@ fn cli_design_nn_one_lane() {
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("resources.json")).unwrap()).unwrap();
     assert_eq!(json["resources"]["dsp"].as_u64().unwrap(), 9 + 3, "transform 9 + one lane 3: {json}");
+}
+
+/// The board (the default design): lints clean with the three waivers, each of which it needs,
+/// synthesises with its 8 pins (clock, reset_n, uart_rx, uart_tx, leds[3:0]) and one BUFG, fits
+/// the limits, and comes with its UCF and ISE script.
+#[test]
+fn cli_board_one_lane() {
+    let dir = fresh_dir("hdl-gen-cli-board");
+    let (okay, stdout, stderr) = hdl_gen(&["--out", dir.to_str().unwrap(), "--lanes", "1"]);
+    assert!(okay, "{stdout}\n{stderr}");
+    assert!(stdout.contains("pficp_fpga::rtl::board_verilog(BoardConfig { lanes: 1,"), "{stdout}");
+    assert!(stdout.contains("lint: clean"), "{stdout}");
+    assert!(stdout.contains("**within limits**"), "{stdout}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("resources.json")).unwrap()).unwrap();
+    assert_eq!(json["resources"]["io_buffers"], 8, "{json}");
+    assert_eq!(json["resources"]["bufg"], 1, "{json}");
+    assert!(json["resources"]["dsp"].as_u64().unwrap() >= 3, "{json}");
+    for f in [hdl_gen::UCF_FILE, hdl_gen::ise::TCL_FILE, "resources.md", "yosys.log"] {
+        assert!(dir.join(f).is_file(), "{f}");
+    }
+    // Every waiver is needed by the board: without them, -Wall reports exactly their codes.
+    let raw = dir.join("raw_board.v");
+    std::fs::write(
+        &raw,
+        pficp_fpga::rtl::board_verilog(&pficp_fpga::board::BoardConfig { lanes: 1, ..Default::default() }),
+    )
+    .unwrap();
+    let r = ok(lint_file(&raw));
+    let mut codes: Vec<&str> = r.messages.iter().filter_map(|m| m.code.as_deref()).collect();
+    codes.sort();
+    codes.dedup();
+    let mut waivers: Vec<&str> = hdl_gen::lint::WAIVERS.iter().map(|(c, _)| *c).collect();
+    waivers.sort();
+    assert_eq!(codes, waivers, "{}", r.output);
 }
