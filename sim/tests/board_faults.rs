@@ -1,0 +1,237 @@
+//! Faults through the Verilated board (fast-UART build, at its bit timing): random bytes,
+//! truncated frames, bad CRCs, overlong frames and random requests, each answered exactly
+//! as the byte-level reference answers (or dropped as it drops them); frames while busy;
+//! reset in the middle of a command. The board never hangs (it is idle again within a
+//! bound after every frame) and its stores are intact afterwards.
+
+use pficp_fpga::board::{BoardConfig, BoardModel};
+use pficp_fpga::format::{FxPoint, FxPose, WeightScale};
+use pficp_fpga::messages::{self, EvaluateRequest, NearestRequest};
+use pficp_fpga::protocol::{Command, ErrorCode, Frame, MAX_FRAME};
+use pficp_sim::serial::SerialBoard;
+
+/// Clocks any single frame may take on the fast board before the test calls it a hang.
+const HANG: u64 = 5_000_000;
+
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.0 >> 33
+    }
+    fn below(&mut self, n: u64) -> u64 {
+        self.next() % n
+    }
+    fn bytes(&mut self, n: usize) -> Vec<u8> {
+        (0..n).map(|_| self.next() as u8).collect()
+    }
+}
+
+fn seed() -> u64 {
+    std::env::var("PFICP_FUZZ_SEED").ok().and_then(|s| s.parse().ok()).unwrap_or(11)
+}
+
+fn cloud(n: usize, rng: &mut Rng) -> Vec<FxPoint> {
+    (0..n).map(|_| [0; 3].map(|_: i16| rng.below(12001) as i16 - 6000)).collect()
+}
+
+fn pose(k: u64) -> FxPose {
+    let a = 0.3 * k as f64;
+    FxPose::from_f64(&[a.cos(), -a.sin(), 0.0, a.sin(), a.cos(), 0.0, 0.0, 0.0, 1.0], &[0.02, 0.0, -0.01])
+}
+
+fn frame(cmd: Command, seq: u8, data: Vec<u8>) -> Vec<u8> {
+    Frame { code: cmd as u8, seq, data }.encode()
+}
+
+/// A board (and its reference) with 64 model and 16 scan points loaded.
+fn loaded(rng: &mut Rng) -> SerialBoard {
+    let mut b = SerialBoard::new(BoardConfig::FAST_SIM).with_reference();
+    let model = cloud(64, rng);
+    let scan = cloud(16, rng);
+    for wire in [
+        frame(Command::LoadModel, 1, messages::load_request(0, &model)),
+        frame(Command::LoadScan, 2, messages::load_request(0, &scan)),
+        frame(Command::SetSizes, 3, messages::two_u16(64, 16)),
+    ] {
+        checked(&mut b, &wire);
+    }
+    b
+}
+
+/// Send bytes, wait until idle (or fail: a hang), check every byte against the reference.
+fn checked(b: &mut SerialBoard, wire: &[u8]) -> Vec<u8> {
+    let got = b.exchange(wire, HANG).unwrap_or_else(|c| panic!("the board did not go idle within {c} clocks"));
+    let (n, m) = b.comparison();
+    assert!(m.is_none(), "after {n} bytes: {}", m.unwrap());
+    assert_eq!(b.expected_pending(), 0, "the board sent less than the reference");
+    got
+}
+
+fn stores(m: &BoardModel) -> (Vec<u64>, Vec<u64>, (u16, u16), Vec<u64>) {
+    (m.model_store().to_vec(), m.scan_store().to_vec(), m.sizes(), m.stored_costs().to_vec())
+}
+
+#[test]
+fn random_and_broken_frames_are_answered_as_the_reference_answers() {
+    let mut rng = Rng(seed());
+    let mut b = loaded(&mut rng);
+    let before = stores(b.reference().unwrap());
+    let mut counts = [0usize; 5];
+    for round in 0..1000 {
+        let kind = (round % 5) as usize;
+        let wire: Vec<u8> = match kind {
+            // Random bytes (rarely a zero), then a delimiter.
+            0 => {
+                let n = 1 + rng.below(60) as usize;
+                let mut w = rng.bytes(n);
+                w.push(0);
+                w
+            }
+            // A valid request cut short.
+            1 => {
+                let w = frame(Command::Identify, rng.next() as u8, vec![]);
+                let cut = 1 + rng.below(w.len() as u64 - 1) as usize;
+                let mut t = w[..cut].to_vec();
+                t.push(0);
+                t
+            }
+            // A bit flipped in a read-only request (so an undetected flip cannot change state).
+            2 => {
+                let near = NearestRequest { first: 0, count: 16, pose: pose(round) };
+                let mut w = frame(Command::Nearest, rng.next() as u8, near.encode());
+                let i = rng.below(w.len() as u64 - 1) as usize;
+                w[i] ^= 1 << rng.below(8);
+                w
+            }
+            // Overlong: more than MAX_FRAME bytes before the delimiter.
+            3 => {
+                let mut w: Vec<u8> =
+                    (0..MAX_FRAME + 1 + rng.below(40) as usize).map(|_| 1 + rng.below(255) as u8).collect();
+                w.push(0);
+                w
+            }
+            // A well-formed frame with a random command code and random data (valid CRC):
+            // mostly command errors; loads and evaluations with random contents change state
+            // exactly as in the reference, so only read-only codes and errors are drawn here.
+            _ => {
+                let code = [0x00, 0x01, 0x04, 0x05, 0x06, 0x07, 0x42, 0x7f, 0x81, 0xff][rng.below(10) as usize];
+                let n = rng.below(40) as usize;
+                let data = rng.bytes(n);
+                let code = if code == 0x04 || code == 0x05 { code | 0x80 } else { code };
+                Frame { code, seq: rng.next() as u8, data }.encode()
+            }
+        };
+        counts[kind] += 1;
+        // One frame at a time, as a host that waits for each answer sends them (a frame that
+        // arrives while the board answers the previous one gets Busy, which the reference
+        // does not model: that rule has its own test below).
+        for segment in wire.split_inclusive(|&x| x == 0) {
+            checked(&mut b, segment);
+        }
+    }
+    let after = stores(b.reference().unwrap());
+    assert!(before == after, "rejected frames left the reference's stores as they were");
+    // The stores are intact on the board too: a full Nearest and an evaluation match.
+    let near = NearestRequest { first: 0, count: 16, pose: pose(1) };
+    checked(&mut b, &frame(Command::Nearest, 9, near.encode()));
+    let ev = EvaluateRequest {
+        first: true,
+        last: true,
+        scale: WeightScale::for_two_q(4.0e6),
+        poses: vec![pose(2), pose(3)],
+    };
+    checked(&mut b, &frame(Command::Evaluate, 10, ev.encode()));
+    eprintln!(
+        "fuzz through the RTL (seed {}): {} random, {} truncated, {} bit-flipped, {} overlong, {} random requests; {} bytes compared, {} clocks",
+        seed(),
+        counts[0],
+        counts[1],
+        counts[2],
+        counts[3],
+        counts[4],
+        b.comparison().0,
+        b.clocks()
+    );
+}
+
+#[test]
+fn frames_while_busy_get_one_busy_answer_after_the_current_one() {
+    let mut rng = Rng(seed() + 1);
+    let b = loaded(&mut rng);
+    // The reference of what follows, from the same state.
+    let mut reference = b.reference().unwrap().clone();
+    let ev = EvaluateRequest {
+        first: true,
+        last: true,
+        scale: WeightScale::for_two_q(4.0e6),
+        poses: (0..37).map(pose).collect(),
+    };
+    let ev_wire = frame(Command::Evaluate, 40, ev.encode());
+    let mut expected = reference.receive_all(&ev_wire);
+    expected.extend(Frame::error(41, ErrorCode::Busy, Command::Identify as u8).encode());
+    // From here on the board is checked by hand (the reference does not model Busy).
+    let mut b2 = SerialBoard::new(BoardConfig::FAST_SIM);
+    // Same stores: replay the loads without checking.
+    let mut rng2 = Rng(seed() + 1);
+    let model = cloud(64, &mut rng2);
+    let scan = cloud(16, &mut rng2);
+    for wire in [
+        frame(Command::LoadModel, 1, messages::load_request(0, &model)),
+        frame(Command::LoadScan, 2, messages::load_request(0, &scan)),
+        frame(Command::SetSizes, 3, messages::two_u16(64, 16)),
+    ] {
+        b2.exchange(&wire, HANG).unwrap();
+    }
+    drop(b);
+    // The Evaluate, then at once: an Identify (valid: Busy), a second valid frame and a
+    // corrupted one (both dropped: only the first busy frame is answered).
+    let mut burst = ev_wire.clone();
+    burst.extend(frame(Command::Identify, 41, vec![]));
+    burst.extend(frame(Command::Identify, 42, vec![]));
+    let mut bad = frame(Command::Identify, 43, vec![]);
+    bad[1] ^= 0x10;
+    burst.extend(bad);
+    let got = b2.exchange(&burst, HANG).expect("idle again");
+    assert_eq!(got, expected, "the Evaluate's answer, then one Busy for sequence 41");
+    // And afterwards the board is idle and answers normally.
+    let id = b2.exchange(&frame(Command::Identify, 44, vec![]), HANG).unwrap();
+    assert_eq!(id, reference.receive_all(&frame(Command::Identify, 44, vec![])));
+}
+
+#[test]
+fn reset_in_the_middle_of_a_command_returns_to_idle_with_the_stores_kept() {
+    let mut rng = Rng(seed() + 2);
+    let b = loaded(&mut rng);
+    let mut reference = b.reference().unwrap().clone();
+    let near = NearestRequest { first: 0, count: 16, pose: pose(4) };
+    let wire = frame(Command::Nearest, 50, near.encode());
+    let mut unchecked = SerialBoard::new(BoardConfig::FAST_SIM);
+    let mut rng2 = Rng(seed() + 2);
+    let model = cloud(64, &mut rng2);
+    let scan = cloud(16, &mut rng2);
+    for w in [
+        frame(Command::LoadModel, 1, messages::load_request(0, &model)),
+        frame(Command::LoadScan, 2, messages::load_request(0, &scan)),
+        frame(Command::SetSizes, 3, messages::two_u16(64, 16)),
+    ] {
+        unchecked.exchange(&w, HANG).unwrap();
+    }
+    drop(b);
+    for cut in [200u64, 1_500, 2_500] {
+        // Half a Nearest (still receiving, computing or answering), then reset.
+        unchecked.send(&wire);
+        unchecked.run(cut);
+        unchecked.set_reset(true);
+        unchecked.run(20);
+        unchecked.set_reset(false);
+        unchecked.run_until_idle(HANG).expect("idle after reset");
+        unchecked.take_received();
+        // A delimiter resynchronises the receiver after a frame cut by the reset.
+        let got = unchecked.exchange(&[0], HANG).unwrap();
+        assert!(got.is_empty() || got.ends_with(&[0]), "{got:?}");
+        let again = unchecked.exchange(&wire, HANG).unwrap();
+        assert_eq!(again, reference.receive_all(&wire), "cut at {cut}: the stores survived the reset");
+    }
+}
