@@ -12,9 +12,12 @@ pub struct BoardConfig {
     pub baud: u32,
 }
 
+/// The default board: 16 lanes, the design clock straight from the default pin map's 50 MHz
+/// oscillator (constraints/pinmap.toml: no DCM), 921,600 baud (54 clocks per bit). This is
+/// the board `hdl-gen` generates and `pficp-sim-board` serves.
 impl Default for BoardConfig {
     fn default() -> Self {
-        BoardConfig { lanes: 16, clock_hz: 100_000_000, baud: 921_600 }
+        BoardConfig { lanes: 16, clock_hz: 50_000_000, baud: 921_600 }
     }
 }
 

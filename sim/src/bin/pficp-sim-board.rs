@@ -4,7 +4,7 @@
 //!
 //! Prints the device path as the first line of stdout. The board's UART runs at its real
 //! bit timing in simulated clocks (the wall-clock rate is whatever Verilator manages, about
-//! a thousandth of real time at 100 MHz). Keeps serving when the host closes and reopens the
+//! about a fortieth of real time at 50 MHz). Keeps serving when the host closes and reopens the
 //! port; exits cleanly on SIGINT or SIGTERM with a summary on stderr. With `--check` the
 //! byte-level reference runs beside the RTL and every byte the board sends is compared;
 //! the exit code is 1 if any differed.
@@ -24,7 +24,7 @@ use std::time::{Duration, Instant};
 #[command(name = "pficp-sim-board", version, about = "Serve the Verilated PF-ICP board on a pseudo-terminal")]
 struct Args {
     /// Serve the fast-UART test build (4 lanes, 25 Mbaud) instead of the real board
-    /// (16 lanes, 921,600 baud at 100 MHz).
+    /// (16 lanes, 921,600 baud at 50 MHz, as hdl-gen generates it).
     #[arg(long)]
     fast: bool,
     /// Run the byte-level reference beside the RTL and compare every byte the board sends

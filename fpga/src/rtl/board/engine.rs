@@ -21,7 +21,9 @@ use rust_hdl::prelude::*;
 pub enum EngState {
     /// Waiting for a frame (or a pending Busy answer).
     Idle,
-    /// The six header bytes are in: check and dispatch.
+    /// The six header bytes are in: register the sums the checks need.
+    Decode,
+    /// Check and dispatch.
     Dispatch,
     /// Fetch: put the frame buffer address.
     FetchAddr,
@@ -136,6 +138,11 @@ pub struct CommandEngine<const P: usize> {
     start_r: DFF<Bit>,
     wi: DFF<Bits<9>>,
     ncost: DFF<Bits<48>>,
+    /// The checks' sums, registered a clock before Dispatch (short paths).
+    times6_r: DFF<Bits<20>>,
+    times27_r: DFF<Bits<20>>,
+    sum17_r: DFF<Bits<17>>,
+    new_count_r: DFF<Bits<10>>,
     // The scan stream into the pipeline: read-ahead of up to two points.
     sa: DFF<Bits<13>>,
     send: DFF<Bits<13>>,
@@ -220,6 +227,10 @@ impl<const P: usize> CommandEngine<P> {
             start_r: Default::default(),
             wi: Default::default(),
             ncost: Default::default(),
+            times6_r: Default::default(),
+            times27_r: Default::default(),
+            sum17_r: Default::default(),
+            new_count_r: Default::default(),
             sa: Default::default(),
             send: Default::default(),
             occ: Default::default(),
@@ -285,6 +296,10 @@ impl<const P: usize> Logic for CommandEngine<P> {
             start_r,
             wi,
             ncost,
+            times6_r,
+            times27_r,
+            sum17_r,
+            new_count_r,
             sa,
             send,
             occ,
@@ -335,6 +350,10 @@ impl<const P: usize> Logic for CommandEngine<P> {
         } else {
             self.new_count.next = bit_cast::<10, 9>(self.ws.count.val()) + bit_cast::<10, 8>(self.h_n.val());
         }
+        self.times6_r.d.next = self.times6.val();
+        self.times27_r.d.next = self.times27.val();
+        self.sum17_r.d.next = self.sum17.val();
+        self.new_count_r.d.next = self.new_count.val();
         self.sizes_unset.next = !self.model_count.q.val().any() || !self.scan_count.q.val().any();
 
         // The scan stream's control (its registers are updated after the state machine).
@@ -414,7 +433,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
                         self.dlen.d.next = self.len.val() - 4;
                         self.faddr.d.next = 2.into();
                         self.fcount.d.next = 6.into();
-                        self.ret.d.next = EngState::Dispatch;
+                        self.ret.d.next = EngState::Decode;
                         self.state.d.next = EngState::FetchAddr;
                     }
                 }
@@ -473,6 +492,9 @@ impl<const P: usize> Logic for CommandEngine<P> {
                     self.state.d.next = EngState::Idle;
                 }
             }
+            EngState::Decode => {
+                self.state.d.next = EngState::Dispatch;
+            }
             EngState::Dispatch => {
                 self.hdr.d.next = self.h.val();
                 self.e_cmd.d.next = self.cur_cmd.q.val();
@@ -489,10 +511,10 @@ impl<const P: usize> Logic for CommandEngine<P> {
                     if (self.dlen.q.val() < 4)
                         || !self.h_hi.val().any()
                         || (self.h_hi.val() > 170)
-                        || (bit_cast::<20, 11>(self.dlen.q.val()) != self.times6.val() + 4)
+                        || (bit_cast::<20, 11>(self.dlen.q.val()) != self.times6_r.q.val() + 4)
                     {
                         self.e_code.d.next = 2.into();
-                    } else if self.sum17.val() > 4096 {
+                    } else if self.sum17_r.q.val() > 4096 {
                         self.e_code.d.next = 4.into();
                     } else {
                         self.idx.d.next = 0.into();
@@ -518,11 +540,14 @@ impl<const P: usize> Logic for CommandEngine<P> {
                 } else if self.cur_cmd.q.val() == 5 {
                     if (self.dlen.q.val() < 6)
                         || (self.h_n.val() > 37)
-                        || (bit_cast::<20, 11>(self.dlen.q.val()) != self.times27.val() + 6)
+                        || (bit_cast::<20, 11>(self.dlen.q.val()) != self.times27_r.q.val() + 6)
                         || (!self.h_n.val().any() && !self.h.val().get_bit(1))
                     {
                         self.e_code.d.next = 2.into();
-                    } else if self.sizes_unset.val() || !self.new_count.val().any() || (self.new_count.val() > 256) {
+                    } else if self.sizes_unset.val()
+                        || !self.new_count_r.q.val().any()
+                        || (self.new_count_r.q.val() > 256)
+                    {
                         self.e_code.d.next = 4.into();
                     } else {
                         self.ret.d.next = EngState::EvBegin;
@@ -531,7 +556,8 @@ impl<const P: usize> Logic for CommandEngine<P> {
                 } else if self.cur_cmd.q.val() == 6 {
                     if (self.dlen.q.val() != 31) || !self.h_hi.val().any() || (self.h_hi.val() > 144) {
                         self.e_code.d.next = 2.into();
-                    } else if self.sizes_unset.val() || (self.sum17.val() > bit_cast::<17, 13>(self.scan_count.q.val()))
+                    } else if self.sizes_unset.val()
+                        || (self.sum17_r.q.val() > bit_cast::<17, 13>(self.scan_count.q.val()))
                     {
                         self.e_code.d.next = 4.into();
                     } else {
