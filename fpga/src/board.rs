@@ -427,8 +427,9 @@ mod tests {
 
     #[test]
     fn wire_bytes_are_exact() {
-        // Computed independently (a separate CRC-16/CCITT-FALSE and COBS in Python).
-        let mut b = BoardModel::new(BoardConfig::default());
+        // Computed independently (a separate CRC-16/CCITT-FALSE and COBS in Python) for a
+        // 16-lane board at 100 MHz and 921,600 baud.
+        let mut b = BoardModel::new(BoardConfig { lanes: 16, clock_hz: 100_000_000, baud: 921_600 });
         let request = [0x05, 0x01, 0x05, 0x9b, 0x7e, 0x00];
         let reply = [
             0x04, 0x81, 0x05, 0x01, 0x02, 0x10, 0x02, 0x10, 0x02, 0x10, 0x05, 0x01, 0x25, 0xaa, 0x90, 0x04, 0xe1, 0xf5,
