@@ -86,6 +86,8 @@ fn every_design_is_verilated() {
             ("particle_weights", 4, "Vpw4"),
             ("particle_weights", 16, "Vpw16"),
             ("weight_stage", 0, "Vweights"),
+            ("board", 0, "Vboard"),
+            ("board_fast", 0, "Vboardfast"),
         ]
     );
     let pw = VerilatedParticleWeights::new(16);
