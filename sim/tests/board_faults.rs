@@ -45,17 +45,31 @@ fn frame(cmd: Command, seq: u8, data: Vec<u8>) -> Vec<u8> {
     Frame { code: cmd as u8, seq, data }.encode()
 }
 
-/// A board (and its reference) with 64 model and 16 scan points loaded.
-fn loaded(rng: &mut Rng) -> SerialBoard {
-    let mut b = SerialBoard::new(BoardConfig::FAST_SIM).with_reference();
+/// The requests that load 64 model and 16 scan points (drawn from `rng`) and set the sizes.
+fn load_requests(rng: &mut Rng) -> [Vec<u8>; 3] {
     let model = cloud(64, rng);
     let scan = cloud(16, rng);
-    for wire in [
+    [
         frame(Command::LoadModel, 1, messages::load_request(0, &model)),
         frame(Command::LoadScan, 2, messages::load_request(0, &scan)),
         frame(Command::SetSizes, 3, messages::two_u16(64, 16)),
-    ] {
+    ]
+}
+
+/// A board (and its reference) with 64 model and 16 scan points loaded.
+fn loaded(rng: &mut Rng) -> SerialBoard {
+    let mut b = SerialBoard::new(BoardConfig::FAST_SIM).with_reference();
+    for wire in load_requests(rng) {
         checked(&mut b, &wire);
+    }
+    b
+}
+
+/// The same board without the reference (for what the reference does not model).
+fn loaded_unchecked(rng: &mut Rng) -> SerialBoard {
+    let mut b = SerialBoard::new(BoardConfig::FAST_SIM);
+    for wire in load_requests(rng) {
+        b.exchange(&wire, HANG).expect("idle after a load");
     }
     b
 }
@@ -172,18 +186,7 @@ fn frames_while_busy_get_one_busy_answer_after_the_current_one() {
     let mut expected = reference.receive_all(&ev_wire);
     expected.extend(Frame::error(41, ErrorCode::Busy, Command::Identify as u8).encode());
     // From here on the board is checked by hand (the reference does not model Busy).
-    let mut b2 = SerialBoard::new(BoardConfig::FAST_SIM);
-    // Same stores: replay the loads without checking.
-    let mut rng2 = Rng(seed() + 1);
-    let model = cloud(64, &mut rng2);
-    let scan = cloud(16, &mut rng2);
-    for wire in [
-        frame(Command::LoadModel, 1, messages::load_request(0, &model)),
-        frame(Command::LoadScan, 2, messages::load_request(0, &scan)),
-        frame(Command::SetSizes, 3, messages::two_u16(64, 16)),
-    ] {
-        b2.exchange(&wire, HANG).unwrap();
-    }
+    let mut b2 = loaded_unchecked(&mut Rng(seed() + 1));
     drop(b);
     // The Evaluate, then at once: an Identify (valid: Busy), a second valid frame and a
     // corrupted one (both dropped: only the first busy frame is answered).
@@ -207,17 +210,7 @@ fn reset_in_the_middle_of_a_command_returns_to_idle_with_the_stores_kept() {
     let mut reference = b.reference().unwrap().clone();
     let near = NearestRequest { first: 0, count: 16, pose: pose(4) };
     let wire = frame(Command::Nearest, 50, near.encode());
-    let mut unchecked = SerialBoard::new(BoardConfig::FAST_SIM);
-    let mut rng2 = Rng(seed() + 2);
-    let model = cloud(64, &mut rng2);
-    let scan = cloud(16, &mut rng2);
-    for w in [
-        frame(Command::LoadModel, 1, messages::load_request(0, &model)),
-        frame(Command::LoadScan, 2, messages::load_request(0, &scan)),
-        frame(Command::SetSizes, 3, messages::two_u16(64, 16)),
-    ] {
-        unchecked.exchange(&w, HANG).unwrap();
-    }
+    let mut unchecked = loaded_unchecked(&mut Rng(seed() + 2));
     drop(b);
     for cut in [200u64, 1_500, 2_500] {
         // Half a Nearest (still receiving, computing or answering), then reset.
