@@ -15,6 +15,7 @@ pub mod board;
 pub mod format;
 pub mod messages;
 pub mod particle_weights;
+pub mod pf;
 pub mod pipeline;
 pub mod protocol;
 #[cfg(feature = "rtl")]
