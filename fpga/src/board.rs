@@ -39,9 +39,10 @@ impl BoardConfig {
 
 use crate::format::{unpack_point, FxPoint, WeightScale, MAX_POINTS};
 use crate::messages::{
-    pose_from_bytes, two_u16, EvaluateReply, Identity, NearestReply, WeightSummary, FLAG_FIRST, FLAG_LAST,
-    MAX_LOAD_POINTS, MAX_NEAREST, MAX_POSES, POINT_BYTES, POSE_BYTES,
+    pose_from_bytes, two_u16, EvaluateReply, Identity, NearestReply, ResultReply, RunState, StatusReply, WeightSummary,
+    FLAG_FIRST, FLAG_LAST, MAX_LOAD_POINTS, MAX_NEAREST, MAX_POSES, POINT_BYTES, POSE_BYTES, RUN_REPLY_BYTES,
 };
+use crate::pf::{PfConfig, PfOutcome};
 use crate::pipeline::evaluate;
 use crate::protocol::{Command, Deframer, ErrorCode, Frame};
 use crate::weights::{weights, COST_MAX, MAX_PARTICLES};
@@ -57,9 +58,11 @@ pub const LOAD_HEADER_BYTES: usize = 4;
 
 /// The byte-level reference of the whole board (docs/protocol.md): the receiver
 /// ([`Deframer`]), the command engine, the model and scan stores (4,096 48-bit words each,
-/// [`crate::format::pack_point`]), the sizes and the stored particle costs. It models a host
-/// that waits for every answer, so the board is always idle when a byte arrives and
-/// `Busy` never happens (the RTL tests check the busy rules).
+/// [`crate::format::pack_point`]), the sizes, the stored particle costs and the outcome of
+/// the last on-board filter run. It models a host that waits for every answer, so the
+/// board is always idle when a byte arrives and `Busy` never happens (the RTL tests check
+/// the busy rules). Being timeless, it runs the whole filter ([`crate::pf::run`]) when Run
+/// arrives, so it is never "running": Status says 0 or 2, never 1.
 #[derive(Clone, Debug)]
 pub struct BoardModel {
     config: BoardConfig,
@@ -68,6 +71,7 @@ pub struct BoardModel {
     model_count: u16,
     scan_count: u16,
     costs: Vec<u64>,
+    outcome: Option<PfOutcome>,
     deframer: Deframer,
 }
 
@@ -85,6 +89,7 @@ impl BoardModel {
             model_count: 0,
             scan_count: 0,
             costs: Vec::with_capacity(MAX_PARTICLES),
+            outcome: None,
             deframer: Deframer::default(),
         }
     }
@@ -94,9 +99,11 @@ impl BoardModel {
         self.config
     }
 
-    /// `reset_n`: the receiver forgets a partial frame; stores, sizes and stored costs are kept.
+    /// `reset_n`: the receiver forgets a partial frame and the filter's outcome (Status
+    /// state 0 again); stores, sizes and stored costs are kept.
     pub fn reset(&mut self) {
         self.deframer = Deframer::default();
+        self.outcome = None;
     }
 
     /// One byte from the host (the board idle: a host that waits for every answer). Returns
@@ -145,6 +152,20 @@ impl BoardModel {
         &self.costs
     }
 
+    /// The outcome of the last filter run (Run) since power-up or reset.
+    pub fn pf_outcome(&self) -> Option<&PfOutcome> {
+        self.outcome.as_ref()
+    }
+
+    /// What Status answers: state 0 before any run, else 2 with the outcome's iterations
+    /// and best cost.
+    pub fn status(&self) -> StatusReply {
+        match &self.outcome {
+            None => StatusReply::IDLE,
+            Some(o) => StatusReply { state: RunState::Done, iterations: o.iterations, best_cost: o.best.cost },
+        }
+    }
+
     fn points(store: &[u64], range: std::ops::Range<usize>) -> Vec<FxPoint> {
         store[range].iter().map(|&w| unpack_point(w)).collect()
     }
@@ -153,9 +174,10 @@ impl BoardModel {
     /// capacities), then the effect and the reply data.
     fn run(&mut self, f: &Frame) -> Result<Vec<u8>, ErrorCode> {
         use ErrorCode::{BadLength, OverCapacity, UnknownCommand};
-        // Only the request codes 0x01..=0x06: not 0x00, not Error (0x7F), not bit 7 set.
+        // Only the request codes 0x01..=0x09: not 0x00, not Error (0x7F), not bit 7 set.
+        // (Never running a filter, the model never answers Busy; the RTL does, while one runs.)
         let command = match f.code {
-            0x01..=0x06 => Command::from_code(f.code).ok_or(UnknownCommand)?,
+            0x01..=0x09 => Command::from_code(f.code).ok_or(UnknownCommand)?,
             _ => return Err(UnknownCommand),
         };
         let d = &f.data[..];
@@ -255,6 +277,32 @@ impl BoardModel {
                 let e = evaluate(&model, &scan, &pose_from_bytes(&d[4..]));
                 Ok(NearestReply { first: first as u16, cost: e.cost, results: e.nearest }.encode())
             }
+            Command::Run => {
+                let cfg = PfConfig::decode(d).map_err(|e| match e {
+                    crate::pf::ConfigError::Length(_) => BadLength,
+                    crate::pf::ConfigError::Capacity(..) => OverCapacity,
+                })?;
+                if self.model_count == 0 || self.scan_count == 0 {
+                    return Err(OverCapacity);
+                }
+                let model = Self::points(&self.model, 0..self.model_count as usize);
+                let scan = Self::points(&self.scan, 0..self.scan_count as usize);
+                self.outcome = Some(crate::pf::run(&cfg, |pose| crate::pf::evaluate(&model, &scan, pose)));
+                Ok(d[..RUN_REPLY_BYTES].to_vec())
+            }
+            Command::Status => {
+                if !d.is_empty() {
+                    return Err(BadLength);
+                }
+                Ok(self.status().encode())
+            }
+            Command::Result => {
+                if !d.is_empty() {
+                    return Err(BadLength);
+                }
+                let o = self.outcome.as_ref().ok_or(ErrorCode::NoResult)?;
+                Ok(ResultReply::of(o).encode())
+            }
             Command::Error => Err(UnknownCommand),
         }
     }
@@ -275,6 +323,9 @@ mod tests {
     const SET_SIZES: u8 = 0x04;
     const EVALUATE: u8 = 0x05;
     const NEAREST: u8 = 0x06;
+    const RUN: u8 = 0x07;
+    const STATUS: u8 = 0x08;
+    const RESULT: u8 = 0x09;
     /// Q3.15 one (the identity matrix's diagonal).
     const ONE: i32 = 1 << 15;
 
@@ -284,10 +335,16 @@ mod tests {
 
     /// Everything a command may change.
     #[derive(Debug, PartialEq)]
-    struct Snapshot(Vec<u64>, Vec<u64>, (u16, u16), Vec<u64>);
+    struct Snapshot(Vec<u64>, Vec<u64>, (u16, u16), Vec<u64>, Option<PfOutcome>);
 
     fn snap(b: &BoardModel) -> Snapshot {
-        Snapshot(b.model_store().to_vec(), b.scan_store().to_vec(), b.sizes(), b.stored_costs().to_vec())
+        Snapshot(
+            b.model_store().to_vec(),
+            b.scan_store().to_vec(),
+            b.sizes(),
+            b.stored_costs().to_vec(),
+            b.pf_outcome().cloned(),
+        )
     }
 
     /// Execute `f`, expect a normal reply; its data.
@@ -428,12 +485,12 @@ mod tests {
     #[test]
     fn wire_bytes_are_exact() {
         // Computed independently (a separate CRC-16/CCITT-FALSE and COBS in Python) for a
-        // 16-lane board at 100 MHz and 921,600 baud.
+        // 16-lane board at 100 MHz and 921,600 baud, protocol version 2.
         let mut b = BoardModel::new(BoardConfig { lanes: 16, clock_hz: 100_000_000, baud: 921_600 });
         let request = [0x05, 0x01, 0x05, 0x9b, 0x7e, 0x00];
         let reply = [
-            0x04, 0x81, 0x05, 0x01, 0x02, 0x10, 0x02, 0x10, 0x02, 0x10, 0x05, 0x01, 0x25, 0xaa, 0x90, 0x04, 0xe1, 0xf5,
-            0x05, 0x03, 0x10, 0x0e, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x03, 0xc3, 0xf3, 0x00,
+            0x04, 0x81, 0x05, 0x02, 0x02, 0x10, 0x02, 0x10, 0x02, 0x10, 0x05, 0x01, 0x25, 0xaa, 0x90, 0x04, 0xe1, 0xf5,
+            0x05, 0x03, 0x10, 0x0e, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x03, 0x41, 0x17, 0x00,
         ];
         for (k, &byte) in request.iter().enumerate() {
             let out = b.receive(byte);
@@ -463,7 +520,7 @@ mod tests {
             .iter()
             .map(|&(at, n)| le_at(&d, at, n))
             .collect();
-        assert_eq!(fields, vec![1, 4, 4096, 4096, 256, 37, 170, 144, 50_000_000, 115_200]);
+        assert_eq!(fields, vec![2, 4, 4096, 4096, 256, 37, 170, 144, 50_000_000, 115_200]);
         assert_eq!(&d[20..26], &[0; 6], "sizes and stored costs are 0 after power-up");
         ok(&mut b, req(LOAD_MODEL, 1, load_data(0, 1, &[[1, 2, 3]])));
         ok(&mut b, req(SET_SIZES, 2, u16s(1000, 4096)));
@@ -669,7 +726,7 @@ mod tests {
     #[test]
     fn unknown_commands_are_checked_first() {
         let mut b = loaded(20);
-        for code in [0x00, 0x07, 0x08, 0x42, 0x7e, 0x7f, 0x80, 0x81, 0x84, 0x85, 0x86, 0xff] {
+        for code in [0x00, 0x0a, 0x0b, 0x42, 0x7e, 0x7f, 0x80, 0x81, 0x84, 0x85, 0x86, 0x87, 0x88, 0x89, 0xff] {
             for data in [vec![], vec![0; 4], vec![1; 31], vec![0x11; 1029]] {
                 rejects(&mut b, req(code, 0x5a, data), ErrorCode::UnknownCommand);
             }
@@ -862,7 +919,7 @@ mod tests {
         let before = snap(&b);
         // 1,029 zero data bytes: body 1,031 bytes plus CRC, COBS adds 1 byte: 1,034 on the wire.
         for (code, e) in
-            [(0x09, ErrorCode::UnknownCommand), (LOAD_MODEL, ErrorCode::BadLength), (EVALUATE, ErrorCode::BadLength)]
+            [(0x0a, ErrorCode::UnknownCommand), (LOAD_MODEL, ErrorCode::BadLength), (EVALUATE, ErrorCode::BadLength)]
         {
             let w = wire(&[vec![code, 6], vec![0; 1029]].concat());
             assert_eq!(w.len(), MAX_FRAME + 1);
@@ -883,6 +940,7 @@ mod tests {
             wire(&[0x33, 0]),
             wire(&[SET_SIZES, 0, 0, 0, 0, 0]),
             vec![0x09, 0x01, 0x00],
+            wire(&[RESULT, 0]),
         ];
         let seen: Vec<u8> = streams
             .iter()
@@ -893,10 +951,182 @@ mod tests {
                 f.data[0]
             })
             .collect();
-        // BadCrc, BadLength, UnknownCommand, OverCapacity, BadFrame; Busy needs a host that
-        // does not wait (the RTL tests check it).
-        assert_eq!(seen, vec![1, 2, 3, 4, 6]);
+        // BadCrc, BadLength, UnknownCommand, OverCapacity, BadFrame, NoResult; Busy needs a
+        // host that does not wait or a running filter (the RTL tests check it).
+        assert_eq!(seen, vec![1, 2, 3, 4, 6, 7]);
         assert_eq!(ErrorCode::Busy as u8, 5);
+    }
+
+    /// A Run configuration for the grid: centre at the identity, a region of a few hundred
+    /// LSB (the scan's offsets), `seed` given.
+    fn run_cfg(particles: u16, iterations: u16, seed: u32) -> PfConfig {
+        use crate::pf::SCALE_FRAC;
+        PfConfig {
+            particles,
+            iterations,
+            temper_exp: 10,
+            centre: [0, 0, 0, 1 << SCALE_FRAC, 0, 0, 0],
+            sigma0: [20_000, 20_000, 20_000, 1 << 13, 1 << 13, 1 << 13, 1 << 13],
+            floor: [100, 100, 100, 10, 10, 10, 10],
+            seed,
+            thr_cost: 0,
+            thr_max: 0,
+        }
+    }
+
+    /// The filter on `board`'s stores, run directly (not through the command).
+    fn direct_run(b: &BoardModel, cfg: &PfConfig) -> PfOutcome {
+        let (m, s) = b.sizes();
+        let model = BoardModel::points(b.model_store(), 0..m as usize);
+        let scan = BoardModel::points(b.scan_store(), 0..s as usize);
+        crate::pf::run(cfg, |pose| crate::pf::evaluate(&model, &scan, pose))
+    }
+
+    #[test]
+    fn run_then_status_then_result() {
+        let mut b = loaded(20);
+        // Before any run: Status says 0, no iterations, cost 2^48 - 1; Result has none.
+        let d = ok(&mut b, req(STATUS, 1, vec![]));
+        assert_eq!(d, vec![0, 0, 0, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff]);
+        rejects(&mut b, req(RESULT, 2, vec![]), ErrorCode::NoResult);
+        assert!(b.pf_outcome().is_none());
+        // Some stored costs, which Run must leave alone.
+        ok(&mut b, req(EVALUATE, 3, eval_data(FLAG_FIRST, 0, 0, 2, &[shift([0; 3]), shift([9, 9, 9])])));
+        let costs = b.stored_costs().to_vec();
+        let cfg = run_cfg(12, 6, 77);
+        let data = cfg.encode();
+        assert_eq!(data.len(), crate::pf::RUN_BYTES);
+        let d = ok(&mut b, req(RUN, 4, data.clone()));
+        assert_eq!(d, vec![12, 0, 6, 0], "particles and iterations echoed");
+        assert_eq!(d, data[..4].to_vec());
+        let want = direct_run(&b, &cfg);
+        assert_eq!(b.pf_outcome(), Some(&want));
+        assert_eq!(b.stored_costs(), &costs[..], "Run keeps the stored costs");
+        assert!(want.best.cost <= want.start.cost);
+        // Status: done, the outcome's iterations and best cost.
+        let d = ok(&mut b, req(STATUS, 5, vec![]));
+        assert_eq!(d.len(), 9);
+        assert_eq!(d[0], 2);
+        assert_eq!(le_at(&d, 1, 2), want.iterations as u64);
+        assert_eq!(le_at(&d, 3, 6), want.best.cost);
+        // Result: iterations, cost, max_d2, the 7 parameters (3 bytes each), the pose.
+        let d = ok(&mut b, req(RESULT, 6, vec![]));
+        assert_eq!(d.len(), 61);
+        assert_eq!(le_at(&d, 0, 2), want.iterations as u64);
+        assert_eq!(le_at(&d, 2, 6), want.best.cost);
+        assert_eq!(le_at(&d, 8, 5), want.best.max_d2);
+        for k in 0..7 {
+            assert_eq!(crate::pf::wrap24(le_at(&d, 13 + 3 * k, 3) as i64), want.params[k], "parameter {k}");
+        }
+        assert_eq!(&d[34..], &pose_bytes(&crate::pf::pose_of(&want.params))[..]);
+        assert_eq!(ResultReply::decode(&d), Ok(ResultReply::of(&want)));
+        // Status and Result read only; Identify's stored count is unchanged.
+        let before = snap(&b);
+        ok(&mut b, req(RESULT, 7, vec![]));
+        ok(&mut b, req(STATUS, 8, vec![]));
+        let id = ok(&mut b, req(IDENTIFY, 9, vec![]));
+        assert_eq!(le_at(&id, 24, 2), 2);
+        assert!(snap(&b) == before);
+        // Another run replaces the outcome; the same request gives the same outcome again.
+        ok(&mut b, req(RUN, 10, run_cfg(12, 6, 78).encode()));
+        assert_ne!(b.pf_outcome(), Some(&want));
+        ok(&mut b, req(RUN, 11, data));
+        assert_eq!(b.pf_outcome(), Some(&want));
+        // Reset forgets it: state 0 and NoResult again; the stores stay.
+        b.reset();
+        assert_eq!(ok(&mut b, req(STATUS, 12, vec![])), StatusReply::IDLE.encode());
+        rejects(&mut b, req(RESULT, 13, vec![]), ErrorCode::NoResult);
+        assert_eq!(b.stored_costs(), &costs[..]);
+        assert_eq!(b.sizes(), (64, 20));
+    }
+
+    #[test]
+    fn the_filter_on_the_board_finds_a_shifted_grid() {
+        // The scan is the grid shifted by (500, -400, 300) LSB; the model the grid. The
+        // filter (region +-625 LSB per axis) must bring the translation near the opposite.
+        let mut b = BoardModel::new(BoardConfig::default());
+        ok(&mut b, req(LOAD_MODEL, 1, load_data(0, 64, &grid())));
+        let t = [500i16, -400, 300];
+        let scan: Vec<FxPoint> = grid().iter().map(|p| std::array::from_fn(|a| p[a] + t[a])).collect();
+        ok(&mut b, req(LOAD_SCAN, 2, load_data(0, 64, &scan)));
+        ok(&mut b, req(SET_SIZES, 3, u16s(64, 64)));
+        ok(&mut b, req(RUN, 4, run_cfg(40, 15, 5).encode()));
+        let o = b.pf_outcome().unwrap().clone();
+        assert!(o.best.cost * 10 < o.start.cost, "{} vs {}", o.best.cost, o.start.cost);
+        for a in 0..3 {
+            let got = crate::pf::translation(o.params[a]);
+            assert!((got + t[a] as i32).abs() < 100, "axis {a}: {got}");
+        }
+        assert_eq!(o.iterations, 15, "no threshold: every iteration runs");
+        // A threshold the start already meets stops after the first iteration.
+        let mut cfg = run_cfg(8, 30, 5);
+        cfg.thr_cost = (1 << 48) - 1;
+        cfg.thr_max = (1 << 34) - 1;
+        ok(&mut b, req(RUN, 5, cfg.encode()));
+        assert_eq!(b.pf_outcome().unwrap().iterations, 1);
+        assert_eq!(ok(&mut b, req(STATUS, 6, vec![]))[1..3], [1, 0]);
+    }
+
+    #[test]
+    fn run_checks() {
+        use ErrorCode::{BadLength, OverCapacity};
+        let good = run_cfg(4, 2, 1).encode();
+        let mut fresh = BoardModel::new(BoardConfig::default());
+        let mut b = loaded(20);
+        // An earlier outcome, which rejected Runs must keep.
+        ok(&mut b, req(RUN, 1, run_cfg(3, 1, 9).encode()));
+        for board in [&mut fresh, &mut b] {
+            for data in [
+                vec![],
+                good[..4].to_vec(),
+                good[..149].to_vec(),
+                [good.clone(), vec![0]].concat(),
+                vec![0; 151],
+                // Lengths before capacities: no particles, but one byte short.
+                run_cfg(0, 0, 1).encode()[..149].to_vec(),
+            ] {
+                rejects(board, req(RUN, 2, data), BadLength);
+            }
+            for (particles, iterations) in [(0, 5), (257, 5), (0xffff, 5), (4, 0), (0, 0)] {
+                rejects(board, req(RUN, 3, run_cfg(particles, iterations, 1).encode()), OverCapacity);
+            }
+        }
+        // Sizes unset (power-up).
+        rejects(&mut fresh, req(RUN, 4, good.clone()), OverCapacity);
+        // Only the model loaded is still no sizes.
+        ok(&mut fresh, req(LOAD_MODEL, 5, load_data(0, 64, &grid())));
+        rejects(&mut fresh, req(RUN, 6, good.clone()), OverCapacity);
+        // The limits themselves are accepted: 256 particles, 1 iteration; 1 particle.
+        ok(&mut b, req(RUN, 7, run_cfg(256, 1, 2).encode()));
+        assert_eq!(b.pf_outcome().unwrap().history[0].particles.len(), 256);
+        ok(&mut b, req(RUN, 8, run_cfg(1, 3, 2).encode()));
+        // The unused byte after temper_exp and the high bits of the fields are ignored,
+        // exactly as PfConfig::decode takes them.
+        let mut odd = run_cfg(5, 2, 3).encode();
+        odd[5] = 0xa5;
+        odd[4] |= 0xc0;
+        ok(&mut b, req(RUN, 9, odd.clone()));
+        let cfg = PfConfig::decode(&odd).unwrap();
+        assert_eq!(cfg, run_cfg(5, 2, 3));
+        assert_eq!(b.pf_outcome(), Some(&direct_run(&b, &cfg)));
+    }
+
+    #[test]
+    fn status_and_result_checks() {
+        use ErrorCode::{BadLength, NoResult};
+        let mut b = loaded(20);
+        for len in [1, 4, 9, 61, 150] {
+            rejects(&mut b, req(STATUS, 1, vec![0; len]), BadLength);
+            // Lengths before NoResult.
+            rejects(&mut b, req(RESULT, 2, vec![0; len]), BadLength);
+        }
+        rejects(&mut b, req(RESULT, 3, vec![]), NoResult);
+        ok(&mut b, req(RUN, 4, run_cfg(2, 1, 1).encode()));
+        for len in [1, 61] {
+            rejects(&mut b, req(STATUS, 5, vec![0; len]), BadLength);
+            rejects(&mut b, req(RESULT, 6, vec![0; len]), BadLength);
+        }
+        assert_eq!(ok(&mut b, req(STATUS, 7, vec![]))[0], 2);
     }
 
     #[test]
@@ -909,5 +1139,20 @@ mod tests {
         b.reset();
         assert_eq!(b.receive_all(&w), identify_reply(&b, 8));
         assert!(snap(&b) == before);
+    }
+
+    #[test]
+    fn run_status_and_result_over_the_wire() {
+        let mut b = loaded(20);
+        let out = b.receive_all(&wire(&[STATUS, 4]));
+        assert_eq!(out, Frame { code: 0x88, seq: 4, data: StatusReply::IDLE.encode() }.encode());
+        let out = b.receive_all(&wire(&[RESULT, 5]));
+        assert_eq!(out, Frame::error(5, ErrorCode::NoResult, RESULT).encode());
+        let cfg = run_cfg(6, 2, 11);
+        let out = b.receive_all(&wire(&[&[RUN, 6][..], &cfg.encode()].concat()));
+        assert_eq!(out, Frame { code: 0x87, seq: 6, data: vec![6, 0, 2, 0] }.encode());
+        let out = b.receive_all(&wire(&[RESULT, 7]));
+        let want = ResultReply::of(b.pf_outcome().unwrap());
+        assert_eq!(out, Frame { code: 0x89, seq: 7, data: want.encode() }.encode());
     }
 }

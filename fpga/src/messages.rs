@@ -3,6 +3,7 @@
 //! are 6 bytes, poses 27 (the 216-bit word of [`FxPose::pack`]).
 
 use crate::format::{pack_point, unpack_point, FxPoint, FxPose, WeightScale, MAX_POINTS, POSE_BITS};
+use crate::pf::{Particle, PARAMS};
 use crate::protocol::VERSION;
 use crate::weights::MAX_PARTICLES;
 
@@ -22,6 +23,16 @@ pub const IDENTITY_BYTES: usize = 26;
 pub const FLAG_FIRST: u8 = 1;
 /// Evaluate flag: weigh every stored cost afterwards.
 pub const FLAG_LAST: u8 = 2;
+/// Data bytes of the Run reply: the request's particles and iterations echoed.
+pub const RUN_REPLY_BYTES: usize = 4;
+/// Data bytes of the Status reply.
+pub const STATUS_BYTES: usize = 9;
+/// Data bytes of the Result reply.
+pub const RESULT_BYTES: usize = 2 + 6 + 5 + 3 * PARAMS + POSE_BYTES;
+/// The best cost a Status reports before any run: `2^48 - 1`.
+pub const NO_COST: u64 = (1 << 48) - 1;
+/// Mask of a best point distance in the Result reply (34 bits).
+pub const MAX_D2_MASK: u64 = (1 << 34) - 1;
 
 /// Why a reply's data does not parse.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
@@ -359,6 +370,124 @@ impl NearestReply {
     }
 }
 
+/// The on-board filter's state in a Status reply.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub enum RunState {
+    /// No run since power-up or reset.
+    Idle = 0,
+    /// A filter is running.
+    Running = 1,
+    /// The last run finished; its result is ready.
+    Done = 2,
+}
+
+impl RunState {
+    /// The state of a byte.
+    pub fn from_byte(b: u8) -> Option<RunState> {
+        Some(match b {
+            0 => RunState::Idle,
+            1 => RunState::Running,
+            2 => RunState::Done,
+            _ => return None,
+        })
+    }
+}
+
+/// A Status reply: state, iterations completed, best cost so far.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StatusReply {
+    /// The filter's state.
+    pub state: RunState,
+    /// Iterations completed (0 when idle).
+    pub iterations: u16,
+    /// Best cost so far (48 bits; [`NO_COST`] when idle).
+    pub best_cost: u64,
+}
+
+impl StatusReply {
+    /// The reply of a board that has not run the filter since power-up or reset.
+    pub const IDLE: StatusReply = StatusReply { state: RunState::Idle, iterations: 0, best_cost: NO_COST };
+
+    /// The reply data.
+    pub fn encode(&self) -> Vec<u8> {
+        let mut out = Vec::with_capacity(STATUS_BYTES);
+        out.push(self.state as u8);
+        put(&mut out, self.iterations as u64, 2);
+        put(&mut out, self.best_cost, 6);
+        out
+    }
+
+    /// Parse the reply data (length and state checked).
+    pub fn decode(d: &[u8]) -> Result<Self, MessageError> {
+        need(d, STATUS_BYTES)?;
+        let state = RunState::from_byte(d[0]).ok_or(MessageError::Field {
+            field: "state",
+            got: d[0] as u64,
+            expected: RunState::Done as u64,
+        })?;
+        Ok(StatusReply { state, iterations: le(&d[1..3]) as u16, best_cost: le(&d[3..9]) })
+    }
+}
+
+/// A Result reply: the finished filter's best particle (or estimate) and its evaluation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ResultReply {
+    /// Iterations run.
+    pub iterations: u16,
+    /// Its cost (48 bits).
+    pub cost: u64,
+    /// Its largest squared point distance (34 bits).
+    pub max_d2: u64,
+    /// Its parameters `[a, b, c, s, phi, theta, psi]` (24-bit two's complement each).
+    pub params: Particle,
+    /// Its pose as the board built it ([`crate::pf::pose_of`]).
+    pub pose: FxPose,
+}
+
+impl ResultReply {
+    /// The reply for a filter's outcome.
+    pub fn of(outcome: &crate::pf::PfOutcome) -> Self {
+        ResultReply {
+            iterations: outcome.iterations,
+            cost: outcome.best.cost,
+            max_d2: outcome.best.max_d2,
+            params: outcome.params,
+            pose: outcome.pose,
+        }
+    }
+
+    /// The reply data: iterations u16, cost u48, max_d2 u40 (34 bits), the 7 parameters
+    /// as 3 bytes each, the pose (27 bytes).
+    pub fn encode(&self) -> Vec<u8> {
+        let mut out = Vec::with_capacity(RESULT_BYTES);
+        put(&mut out, self.iterations as u64, 2);
+        put(&mut out, self.cost & NO_COST, 6);
+        put(&mut out, self.max_d2 & MAX_D2_MASK, 5);
+        for &p in &self.params {
+            put(&mut out, p as u32 as u64 & 0xff_ffff, 3);
+        }
+        out.extend_from_slice(&pose_bytes(&self.pose));
+        out
+    }
+
+    /// Parse the reply data (length checked; parameters sign-extended from 24 bits).
+    pub fn decode(d: &[u8]) -> Result<Self, MessageError> {
+        need(d, RESULT_BYTES)?;
+        let max_d2 = le(&d[8..13]);
+        if max_d2 > MAX_D2_MASK {
+            return Err(MessageError::Field { field: "max_d2", got: max_d2, expected: MAX_D2_MASK });
+        }
+        Ok(ResultReply {
+            iterations: le(&d[0..2]) as u16,
+            cost: le(&d[2..8]),
+            max_d2,
+            params: std::array::from_fn(|k| crate::pf::wrap24(le(&d[13 + 3 * k..16 + 3 * k]) as i64)),
+            pose: pose_from_bytes(&d[13 + 3 * PARAMS..]),
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -391,6 +520,42 @@ mod tests {
         assert_eq!(q.encode().len(), 31);
         let n = NearestReply { first: 3, cost: 99, results: vec![(4095, (1 << 34) - 1), (0, 0)] };
         assert_eq!(NearestReply::decode(&n.encode(), &q), Ok(n));
+    }
+
+    #[test]
+    fn status_and_result_round_trip_with_length_checks() {
+        for s in [
+            StatusReply::IDLE,
+            StatusReply { state: RunState::Running, iterations: 7, best_cost: 123_456_789 },
+            StatusReply { state: RunState::Done, iterations: 65535, best_cost: NO_COST },
+        ] {
+            let d = s.encode();
+            assert_eq!(d.len(), STATUS_BYTES);
+            assert_eq!(StatusReply::decode(&d), Ok(s));
+            assert!(matches!(StatusReply::decode(&d[1..]), Err(MessageError::Length { got: 8, expected: 9 })));
+        }
+        assert_eq!(StatusReply::IDLE.encode(), vec![0, 0, 0, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff]);
+        let mut bad = StatusReply::IDLE.encode();
+        bad[0] = 3;
+        assert!(matches!(StatusReply::decode(&bad), Err(MessageError::Field { field: "state", got: 3, .. })));
+        let r = ResultReply {
+            iterations: 513,
+            cost: (1 << 48) - 2,
+            max_d2: (1 << 34) - 1,
+            params: [-1, 1, -(1 << 23), (1 << 23) - 1, 0, 12345, -54321],
+            pose: FxPose { m: [1, -1, 2, -2, 131071, -131072, 0, 5, -5], t: [7, -7, 100] },
+        };
+        let d = r.encode();
+        assert_eq!(d.len(), RESULT_BYTES);
+        assert_eq!(RESULT_BYTES, 61);
+        assert_eq!(&d[13..16], &[0xff, 0xff, 0xff], "-1 as 24-bit two's complement");
+        assert_eq!(&d[19..22], &[0, 0, 0x80]);
+        assert_eq!(ResultReply::decode(&d), Ok(r));
+        assert!(matches!(ResultReply::decode(&d[..60]), Err(MessageError::Length { got: 60, expected: 61 })));
+        assert!(ResultReply::decode(&[d.clone(), vec![0]].concat()).is_err());
+        let mut wide = d.clone();
+        wide[12] = 0x04; // bit 34 of max_d2
+        assert!(matches!(ResultReply::decode(&wide), Err(MessageError::Field { field: "max_d2", .. })));
     }
 
     // The frame limits, checked at compile time.

@@ -13,7 +13,7 @@ pub const MAX_FRAME: usize = MAX_BODY + 2 + (MAX_BODY + 2) / 254 + 2;
 /// The frame delimiter.
 pub const DELIMITER: u8 = 0x00;
 /// Protocol version reported by `Identify`.
-pub const VERSION: u16 = 1;
+pub const VERSION: u16 = 2;
 
 /// CRC-16/CCITT-FALSE: polynomial 0x1021, initial value 0xFFFF, no reflection, no final XOR.
 pub fn crc16(data: &[u8]) -> u16 {
@@ -88,6 +88,12 @@ pub enum Command {
     Evaluate = 0x05,
     /// Nearest model index and squared distance of every scan point for one pose.
     Nearest = 0x06,
+    /// Start the on-board particle filter (`pf::PfConfig`); it runs in the background.
+    Run = 0x07,
+    /// The filter's state, iterations done and best cost so far (answered while running).
+    Status = 0x08,
+    /// The finished filter's best particle, its cost and pose.
+    Result = 0x09,
     /// Error reply (board to host only).
     Error = 0x7f,
 }
@@ -102,6 +108,9 @@ impl Command {
             0x04 => Command::SetSizes,
             0x05 => Command::Evaluate,
             0x06 => Command::Nearest,
+            0x07 => Command::Run,
+            0x08 => Command::Status,
+            0x09 => Command::Result,
             0x7f => Command::Error,
             _ => return None,
         })
@@ -120,10 +129,12 @@ pub enum ErrorCode {
     UnknownCommand = 3,
     /// An offset, count or size beyond the board's stores.
     OverCapacity = 4,
-    /// A command arrived while the board was busy.
+    /// A command arrived while the board was busy (answering, or running the filter).
     Busy = 5,
     /// Malformed COBS.
     BadFrame = 6,
+    /// Result asked before any filter run finished since power-up or reset.
+    NoResult = 7,
 }
 
 impl ErrorCode {
@@ -136,6 +147,7 @@ impl ErrorCode {
             4 => ErrorCode::OverCapacity,
             5 => ErrorCode::Busy,
             6 => ErrorCode::BadFrame,
+            7 => ErrorCode::NoResult,
             _ => return None,
         })
     }
@@ -331,5 +343,13 @@ mod tests {
         assert_eq!(Command::from_code(e.data[1]), Some(Command::Evaluate));
         assert_eq!(Command::from_code(0x85), Some(Command::Evaluate));
         assert_eq!(Command::from_code(0x42), None);
+        for (code, c) in [(0x07, Command::Run), (0x08, Command::Status), (0x09, Command::Result)] {
+            assert_eq!(Command::from_code(code), Some(c));
+            assert_eq!(Command::from_code(code | 0x80), Some(c));
+            assert_eq!(c as u8, code);
+        }
+        assert_eq!(Command::from_code(0x0a), None);
+        assert_eq!(ErrorCode::from_byte(7), Some(ErrorCode::NoResult));
+        assert_eq!(ErrorCode::from_byte(8), None);
     }
 }

@@ -8,8 +8,10 @@
 use pficp_fpga::board::{BoardConfig, BoardModel};
 use pficp_fpga::format::{unpack_point, FxPoint, WeightScale};
 use pficp_fpga::messages::{
-    parse_two_u16, pose_from_bytes, EvaluateReply, Identity, NearestReply, NearestRequest, FLAG_FIRST, FLAG_LAST,
+    parse_two_u16, pose_from_bytes, EvaluateReply, Identity, NearestReply, NearestRequest, ResultReply, RunState,
+    StatusReply, FLAG_FIRST, FLAG_LAST,
 };
+use pficp_fpga::pf::{self, PfConfig, PfOutcome, RUN_BYTES};
 use pficp_fpga::pipeline::evaluate;
 use pficp_fpga::protocol::{Deframer, ErrorCode, Frame, MAX_FRAME};
 use pficp_fpga::weights::weights;
@@ -54,13 +56,14 @@ impl Rng {
     }
 }
 
-/// Stores, sizes and stored costs.
+/// Stores, sizes, stored costs and the filter's outcome.
 #[derive(Clone, PartialEq, Eq)]
 struct Snapshot {
     model: Vec<u64>,
     scan: Vec<u64>,
     sizes: (u16, u16),
     costs: Vec<u64>,
+    outcome: Option<PfOutcome>,
 }
 
 impl Snapshot {
@@ -70,11 +73,13 @@ impl Snapshot {
             scan: b.scan_store().to_vec(),
             sizes: b.sizes(),
             costs: b.stored_costs().to_vec(),
+            outcome: b.pf_outcome().cloned(),
         }
     }
     fn same_as(&self, b: &BoardModel) -> bool {
         self.sizes == b.sizes()
             && self.costs == b.stored_costs()
+            && self.outcome.as_ref() == b.pf_outcome()
             && self.model == b.model_store()
             && self.scan == b.scan_store()
     }
@@ -99,16 +104,17 @@ fn replies(out: &[u8]) -> Vec<Frame> {
             let e = ErrorCode::from_byte(f.data[0]).expect("unknown error code");
             assert_ne!(e, ErrorCode::Busy, "a waiting host never sees Busy");
         } else {
-            assert!((0x81..=0x86).contains(&f.code), "{f:?}");
+            assert!((0x81..=0x89).contains(&f.code), "{f:?}");
         }
     }
     frames
 }
 
 /// The verdict docs/protocol.md gives for a frame that passed the receiver, written
-/// independently of the model: `Ok` or the error code.
-fn verdict(sizes: (u16, u16), stored: usize, code: u8, d: &[u8]) -> Result<(), ErrorCode> {
-    use ErrorCode::{BadLength, OverCapacity, UnknownCommand};
+/// independently of the model: `Ok` or the error code. `ran`: a filter run has finished
+/// since power-up (the model never runs one in the background, so never Busy).
+fn verdict(sizes: (u16, u16), stored: usize, ran: bool, code: u8, d: &[u8]) -> Result<(), ErrorCode> {
+    use ErrorCode::{BadLength, NoResult, OverCapacity, UnknownCommand};
     let field = |at: usize| d[at] as usize + 256 * d[at + 1] as usize;
     let (model, scan) = (sizes.0 as usize, sizes.1 as usize);
     match code {
@@ -144,6 +150,13 @@ fn verdict(sizes: (u16, u16), stored: usize, code: u8, d: &[u8]) -> Result<(), E
         0x06 if d.len() != 31 || field(2) == 0 || field(2) > 144 => Err(BadLength),
         0x06 if model == 0 || scan == 0 || field(0) + field(2) > scan => Err(OverCapacity),
         0x06 => Ok(()),
+        0x07 if d.len() != 150 => Err(BadLength),
+        0x07 if field(0) == 0 || field(0) > 256 || field(2) == 0 || model == 0 || scan == 0 => Err(OverCapacity),
+        0x07 => Ok(()),
+        0x08 | 0x09 if !d.is_empty() => Err(BadLength),
+        0x08 => Ok(()),
+        0x09 if !ran => Err(NoResult),
+        0x09 => Ok(()),
         _ => Err(UnknownCommand),
     }
 }
@@ -152,7 +165,7 @@ fn verdict(sizes: (u16, u16), stored: usize, code: u8, d: &[u8]) -> Result<(), E
 fn check_reply(request: &Frame, reply: &Frame, before: &Snapshot, b: &BoardModel) {
     assert_eq!(reply.seq, request.seq, "the sequence is echoed");
     let d = &request.data;
-    let want = verdict(before.sizes, before.costs.len(), request.code, d);
+    let want = verdict(before.sizes, before.costs.len(), before.outcome.is_some(), request.code, d);
     if reply.code == 0xff {
         assert_eq!(Err(ErrorCode::from_byte(reply.data[0]).unwrap()), want, "request {:#04x} {d:?}", request.code);
         assert_eq!(reply.data[1], request.code);
@@ -234,6 +247,34 @@ fn check_reply(request: &Frame, reply: &Frame, before: &Snapshot, b: &BoardModel
             assert_eq!((reply.cost, reply.results), (e.cost, e.nearest));
             assert!(before.same_as(b));
         }
+        0x07 => {
+            assert_eq!(&r[..], &d[..4], "particles and iterations echoed");
+            let cfg = PfConfig::decode(d).expect("a Run the doc accepts decodes");
+            let model: Vec<FxPoint> =
+                before.model[..before.sizes.0 as usize].iter().map(|&w| unpack_point(w)).collect();
+            let scan: Vec<FxPoint> = before.scan[..before.sizes.1 as usize].iter().map(|&w| unpack_point(w)).collect();
+            let want = pf::run(&cfg, |pose| pf::evaluate(&model, &scan, pose));
+            assert_eq!(b.pf_outcome(), Some(&want));
+            assert!(before.sizes == b.sizes() && before.costs == b.stored_costs(), "Run changed the stores");
+            assert!(before.model == b.model_store() && before.scan == b.scan_store());
+        }
+        0x08 => {
+            let s = StatusReply::decode(r).expect("Status reply layout");
+            let want = match &before.outcome {
+                None => StatusReply { state: RunState::Idle, iterations: 0, best_cost: (1 << 48) - 1 },
+                Some(o) => StatusReply { state: RunState::Done, iterations: o.iterations, best_cost: o.best.cost },
+            };
+            assert_eq!(s, want);
+            assert!(before.same_as(b));
+        }
+        0x09 => {
+            let o = before.outcome.as_ref().expect("a result only after a run");
+            let got = ResultReply::decode(r).expect("Result reply layout");
+            assert_eq!(got.iterations, o.iterations);
+            assert_eq!((got.cost, got.max_d2, got.params), (o.best.cost, o.best.max_d2, o.params));
+            assert_eq!(got.pose, pf::pose_of(&o.params));
+            assert!(before.same_as(b));
+        }
         _ => unreachable!(),
     }
 }
@@ -246,7 +287,7 @@ fn le16(v: u64) -> [u8; 2] {
 /// small so Evaluate stays cheap).
 fn random_request(r: &mut Rng, scan_count: u16) -> Frame {
     let any = r.byte();
-    let code = if r.chance(85) { r.range(1, 6) as u8 } else { r.pick(&[0x00, 0x07, 0x7f, 0x80, 0x85, any]) };
+    let code = if r.chance(85) { r.range(1, 9) as u8 } else { r.pick(&[0x00, 0x0a, 0x7f, 0x80, 0x85, 0x87, any]) };
     let seq = r.byte();
     let shape = r.below(100);
     let mut d = match code {
@@ -295,6 +336,17 @@ fn random_request(r: &mut Rng, scan_count: u16) -> Frame {
             d.extend(r.bytes(27));
             d
         }
+        0x07 => {
+            // Small runs (the filter runs at once): 1 to 6 particles, 1 to 3 iterations;
+            // sometimes out of range.
+            let particles = if r.chance(85) { r.range(1, 6) } else { r.pick(&[0, 257, 0xffff, 256]) };
+            let iterations = if r.chance(90) { r.range(1, 3) } else { 0 };
+            let (particles, iterations) = if particles == 256 { (256, 1) } else { (particles, iterations) };
+            let mut d = [le16(particles), le16(iterations)].concat();
+            d.extend(r.bytes(RUN_BYTES - 4));
+            d
+        }
+        0x08 | 0x09 => Vec::new(),
         _ => {
             let n = r.range(0, 40) as usize;
             r.bytes(n)
@@ -316,7 +368,9 @@ fn random_request(r: &mut Rng, scan_count: u16) -> Frame {
 fn valid_request(r: &mut Rng, b: &BoardModel) -> Frame {
     loop {
         let f = random_request(r, b.sizes().1);
-        if verdict(b.sizes(), b.stored_costs().len(), f.code, &f.data).is_ok() && f.data.len() < 300 {
+        if verdict(b.sizes(), b.stored_costs().len(), b.pf_outcome().is_some(), f.code, &f.data).is_ok()
+            && f.data.len() < 300
+        {
             return f;
         }
     }
@@ -330,13 +384,16 @@ struct Fuzz {
     errors_out: [usize; 8],
     executed: usize,
     overlong_requests: usize,
+    /// Accepted Run and Result requests.
+    runs: usize,
+    results: usize,
 }
 
 impl Fuzz {
     fn new() -> Fuzz {
         let b = BoardModel::new(BoardConfig::default());
         let snap = Snapshot::of(&b);
-        Fuzz { b, snap, frames_out: 0, errors_out: [0; 8], executed: 0, overlong_requests: 0 }
+        Fuzz { b, snap, frames_out: 0, errors_out: [0; 8], executed: 0, overlong_requests: 0, runs: 0, results: 0 }
     }
 
     /// Feed garbage byte by byte: every output is empty (no delimiter) or exactly one
@@ -386,6 +443,8 @@ impl Fuzz {
             self.errors_out[frames[0].data[0] as usize] += 1;
         } else {
             self.executed += 1;
+            self.runs += (f.code == 0x07) as usize;
+            self.results += (f.code == 0x09) as usize;
             self.snap = Snapshot::of(&self.b);
         }
         // Keep Evaluate cheap: at most 64 model and 48 scan points in use.
@@ -490,7 +549,7 @@ fn fuzz_the_board() {
     eprintln!(
         "fuzz: {} random streams, {} truncated, {} bit-flipped, {} overlong, {} requests with random data; \
          {} of them too long for the receiver; {} reply frames ({} executed), errors by code {:?} (BadCrc, BadLength, UnknownCommand, OverCapacity, \
-         Busy, BadFrame), {:.2} s",
+         Busy, BadFrame, NoResult), {:.2} s",
         counts[0],
         counts[1],
         counts[2],
@@ -499,12 +558,13 @@ fn fuzz_the_board() {
         z.overlong_requests,
         z.frames_out,
         z.executed,
-        &z.errors_out[1..7],
+        &z.errors_out[1..8],
         took.as_secs_f64()
     );
     for code in [1, 2, 3, 4, 6] {
         assert!(z.errors_out[code] > 0, "error code {code} never came up");
     }
+    assert!(z.runs > 0 && z.results > 0, "{} runs, {} results", z.runs, z.results);
     assert_eq!(z.errors_out[ErrorCode::Busy as usize], 0);
 }
 

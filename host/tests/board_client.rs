@@ -160,7 +160,7 @@ fn a_corrupted_reply_is_resent() {
     let mut board = corrupt_replies(|k| k == 0);
     let mut client = board.client();
     let id = client.identify().unwrap();
-    assert_eq!(id.version, 1);
+    assert_eq!(id.version, pficp_fpga::protocol::VERSION);
     assert_eq!(client.stats().resends, 1);
 }
 

@@ -168,7 +168,7 @@ fn board_info_prints_the_identity() {
     let o = pficp(&["board", "info", "--port", &board.path]);
     assert!(o.status.success(), "{}", stderr(&o));
     let out = String::from_utf8(o.stdout).unwrap();
-    for line in ["protocol version  1", "lanes             16", "max particles     256", "baud              921600"] {
+    for line in ["protocol version  2", "lanes             16", "max particles     256", "baud              921600"] {
         assert!(out.contains(line), "{line:?} not in {out}");
     }
 }
