@@ -99,6 +99,32 @@ const WEIGHT_STAGE_PORTS: &[PortSpec] = &[
 const BOARD_PORTS: &[PortSpec] =
     &[("clock", true, 1), ("reset_n", true, 1), ("uart_rx", true, 1), ("uart_tx", false, 1), ("leds", false, 4)];
 
+/// The ports of the particle-filter sequencer (`fpga/src/rtl/board/sequencer.rs`).
+const SEQUENCER_PORTS: &[PortSpec] = &[
+    ("clock", true, 1),
+    ("reset", true, 1),
+    ("cfg_we", true, 1),
+    ("cfg_addr", true, 5),
+    ("cfg_data", true, 48),
+    ("go", true, 1),
+    ("nn_ready", true, 1),
+    ("cost_valid", true, 1),
+    ("cost", true, 48),
+    ("nn_valid", true, 1),
+    ("nn_dist", true, 34),
+    ("start", false, 1),
+    ("pose", false, 216),
+    ("running", false, 1),
+    ("finished", false, 1),
+    ("iterations", false, 16),
+    ("best_cost", false, 48),
+    ("best_max", false, 34),
+    ("params", false, 168),
+    ("p_we", false, 1),
+    ("p_waddr", false, 12),
+    ("p_wdata", false, 24),
+];
+
 /// One generated design.
 struct Design {
     /// `Model::design` in `models.rs` (and the Verilog file's stem).
@@ -116,7 +142,7 @@ struct Design {
 }
 
 /// Every design that is verilated.
-const DESIGNS: [Design; 5] = [
+const DESIGNS: [Design; 6] = [
     Design {
         name: "pipeline",
         prefix: "Vpipe",
@@ -148,6 +174,14 @@ const DESIGNS: [Design; 5] = [
         verilog: |_| pficp_fpga::rtl::board_verilog(&pficp_fpga::board::BoardConfig::default()),
         ports: &[BOARD_PORTS],
         spec: "fpga/src/rtl/board/top.rs (sim/build.rs BOARD_PORTS)",
+    },
+    Design {
+        name: "sequencer",
+        prefix: "Vseq",
+        per_lane: false,
+        verilog: |_| pficp_fpga::rtl::sequencer_verilog(),
+        ports: &[SEQUENCER_PORTS],
+        spec: "fpga/src/rtl/board/sequencer.rs (sim/build.rs SEQUENCER_PORTS)",
     },
     Design {
         name: "board_fast",
@@ -284,9 +318,6 @@ fn check_ports(parsed: Vec<Port>, design: &Design, header: &Path) -> Vec<Port> {
         if !design.port_specs().any(|q| q.0 == p.name) {
             problems.push(format!("unexpected port {}", p.name));
         }
-        if !p.input && p.width > 64 {
-            problems.push(format!("output {} is wider than 64 bits", p.name));
-        }
     }
     if !problems.is_empty() {
         panic!("the ports of {} do not match {}:\n  {}", header.display(), design.spec, problems.join("\n  "));
@@ -399,8 +430,21 @@ void pficp_{f}_trace_close(void* p) {{
     writeln!(c, "  const {prefix}* t = static_cast<H*>(p)->top;").unwrap();
     let mut k = 0;
     for p in ports.iter().filter(|p| !p.input) {
-        writeln!(c, "  out[{k}] = (uint64_t)t->{};", p.name).unwrap();
-        k += 1;
+        if p.words == 0 {
+            writeln!(c, "  out[{k}] = (uint64_t)t->{};", p.name).unwrap();
+            k += 1;
+        } else {
+            // Wide outputs: ceil(width / 64) little-endian u64 words.
+            for w in 0..p.width.div_ceil(64) {
+                let hi = if 2 * w + 1 < p.words {
+                    format!(" | ((uint64_t)t->{}[{}] << 32)", p.name, 2 * w + 1)
+                } else {
+                    String::new()
+                };
+                writeln!(c, "  out[{k}] = (uint64_t)t->{}[{}]{hi};", p.name, 2 * w).unwrap();
+                k += 1;
+            }
+        }
     }
     writeln!(c, "}}\n}}").unwrap();
     std::fs::write(cpp, c).unwrap();
@@ -593,7 +637,12 @@ fn build_model(job: &Job, out: &Path, compiler: &cc::Tool) -> Built {
          fn pficp_{f}_set_inputs(h: *mut c_void, v: *const u64);\n    \
          fn pficp_{f}_get_outputs(h: *mut c_void, v: *mut u64);\n}}\n"
     );
-    let outputs: Vec<String> = ports.iter().filter(|p| !p.input).map(|p| format!("{:?}", p.name)).collect();
+    // A wide output's name once per u64 word.
+    let outputs: Vec<String> = ports
+        .iter()
+        .filter(|p| !p.input)
+        .flat_map(|p| std::iter::repeat_n(format!("{:?}", p.name), p.width.div_ceil(64)))
+        .collect();
     let entry = format!(
         "    Model {{ design: \"{}\", lanes: {}, prefix: \"{prefix}\", verilog: \"{}\", in_words: {n_in}, \
          out_words: {n_out}, outputs: &[{}], new: pficp_{f}_new, free: pficp_{f}_free, tick: pficp_{f}_tick, \

@@ -19,7 +19,7 @@
 //! wrapped 24-bit difference, which for angles is exactly the wrap-around-free offset the
 //! circular mean needs (the region is never wider than half a turn).
 
-use crate::format::{exp_table, FxPose, EXP_ENTRIES, MATRIX_FRAC, POSE_BITS};
+use crate::format::{exp_table, FxPose, EXP_ENTRIES};
 
 /// Parameters per particle: `[a, b, c, s, phi, theta, psi]`.
 pub const PARAMS: usize = 7;
@@ -563,6 +563,7 @@ pub fn run(cfg: &PfConfig, mut eval: impl FnMut(&FxPose) -> Evaluated) -> PfOutc
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::format::{MATRIX_FRAC, POSE_BITS};
 
     fn turn(deg: f64) -> i32 {
         wrap24((deg / 360.0 * (1u64 << 24) as f64).round() as i64)

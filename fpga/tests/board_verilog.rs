@@ -22,3 +22,18 @@ fn board_verilog_has_the_pins_and_lints_clean() {
         .expect("verilator not found: install it with `apt-get install -y verilator yosys` (tests/run-all does)");
     assert!(out.status.success(), "lint of {}:\n{}", file.display(), String::from_utf8_lossy(&out.stderr));
 }
+
+#[test]
+fn sequencer_verilog_lints_clean() {
+    let v = pficp_fpga::rtl::sequencer_verilog();
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("sequencer_verilog");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("sequencer.v");
+    std::fs::write(&file, &v).unwrap();
+    let out = std::process::Command::new("verilator")
+        .args(["--lint-only", "-Wall", "-Wno-WIDTH", "-Wno-DECLFILENAME", "-Wno-UNUSEDPARAM", "--top-module", "top"])
+        .arg(&file)
+        .output()
+        .expect("verilator not found: install it with `apt-get install -y verilator yosys` (tests/run-all does)");
+    assert!(out.status.success(), "lint of {}:\n{}", file.display(), String::from_utf8_lossy(&out.stderr));
+}

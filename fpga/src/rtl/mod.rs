@@ -144,3 +144,10 @@ pub fn board_verilog(config: &crate::board::BoardConfig) -> String {
         n => panic!("board_verilog: {n} lanes is not supported; use one of {SUPPORTED_LANES:?}"),
     }
 }
+
+/// Verilog of the particle-filter sequencer alone (`PfSequencer`, the co-simulation's unit).
+pub fn sequencer_verilog() -> String {
+    let mut uut = board::sequencer::PfSequencer::new();
+    uut.connect_all();
+    dedup_modules(&generate_verilog(&uut))
+}

@@ -13,6 +13,7 @@ pub mod crc;
 pub mod engine;
 pub mod frame_rx;
 pub mod reply_tx;
+pub mod sequencer;
 pub mod top;
 pub mod uart;
 
