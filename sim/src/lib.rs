@@ -23,6 +23,7 @@ use pficp_fpga::board::BoardConfig;
 use pficp_fpga::format::{pack_point, FxPoint, FxPose, WeightScale, MAX_POINTS};
 use pficp_fpga::particle_weights::{ParticleWeightModel, PwInputs, PwOutputs};
 use pficp_fpga::pipeline::{Evaluation, Inputs, Outputs, PipelineModel};
+use pficp_fpga::sequencer::{SeqInputs, SeqOutputs};
 use pficp_fpga::weights::{WeightInputs, WeightModel, WeightOutputs, MAX_PARTICLES};
 use std::ffi::CString;
 use std::fmt;
@@ -64,6 +65,7 @@ const PARTICLE_WEIGHTS: &str = "particle_weights";
 const WEIGHT_STAGE: &str = "weight_stage";
 const BOARD: &str = "board";
 const BOARD_FAST: &str = "board_fast";
+const SEQUENCER: &str = "sequencer";
 
 /// Lane counts with a Verilated pipeline (and particle-weight pipeline): the build verilates
 /// 4 and 16 unless `PFICP_SIM_LANES` says otherwise.
@@ -394,6 +396,80 @@ impl VerilatedBoard {
     pub fn pins(&self) -> BoardPins {
         let o = self.core.outputs::<2>();
         BoardPins { uart_tx: o[0] != 0, leds: o[1] as u8 }
+    }
+}
+
+/// The Verilated particle-filter sequencer alone (`PfSequencer`, docs/sequencer.md).
+pub struct VerilatedSequencer {
+    core: Core,
+}
+
+verilated_common!(VerilatedSequencer, SeqInputs);
+
+/// Output words of the sequencer, one name per `u64` (wide ports repeat).
+const SEQUENCER_OUTPUT_WORDS: [&str; 16] = [
+    "start",
+    "pose",
+    "pose",
+    "pose",
+    "pose",
+    "running",
+    "finished",
+    "iterations",
+    "best_cost",
+    "best_max",
+    "params",
+    "params",
+    "params",
+    "p_we",
+    "p_waddr",
+    "p_wdata",
+];
+
+impl VerilatedSequencer {
+    /// The sequencer after power-up (idle, no result).
+    pub fn new() -> Self {
+        VerilatedSequencer { core: Core::new(SEQUENCER, 0, 10, &SEQUENCER_OUTPUT_WORDS) }
+    }
+
+    /// Drive the input ports (masked to the port widths).
+    pub fn set_inputs(&mut self, i: &SeqInputs) {
+        self.core.set_inputs(&[
+            i.reset as u64,
+            i.cfg_we as u64,
+            i.cfg_addr as u64,
+            i.cfg_data,
+            i.go as u64,
+            i.nn_ready as u64,
+            i.cost_valid as u64,
+            i.cost,
+            i.nn_valid as u64,
+            i.nn_dist,
+        ])
+    }
+
+    /// The output ports now.
+    pub fn outputs(&self) -> SeqOutputs {
+        let o = self.core.outputs::<16>();
+        SeqOutputs {
+            start: o[0] != 0,
+            pose: [o[1], o[2], o[3], o[4]],
+            running: o[5] != 0,
+            finished: o[6] != 0,
+            iterations: o[7] as u16,
+            best_cost: o[8],
+            best_max: o[9],
+            params: [o[10], o[11], o[12]],
+            p_we: o[13] != 0,
+            p_waddr: o[14] as u16,
+            p_wdata: o[15] as u32,
+        }
+    }
+}
+
+impl Default for VerilatedSequencer {
+    fn default() -> Self {
+        Self::new()
     }
 }
 

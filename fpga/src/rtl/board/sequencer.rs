@@ -302,6 +302,7 @@ pub struct PfSequencer {
     diff24: Signal<Local, Bits<24>>,
     diff26: Signal<Local, Bits<26>>,
     lim26: Signal<Local, Bits<26>>,
+    neg_lim26: Signal<Local, Bits<26>>,
     v24: Signal<Local, Bits<24>>,
     ang: Signal<Local, Bits<24>>,
     ang_x: Signal<Local, Bits<24>>,
@@ -471,6 +472,7 @@ impl PfSequencer {
             diff24: Default::default(),
             diff26: Default::default(),
             lim26: Default::default(),
+            neg_lim26: Default::default(),
             v24: Default::default(),
             ang: Default::default(),
             ang_x: Default::default(),
@@ -510,10 +512,69 @@ impl Logic for PfSequencer {
     #[hdl_gen]
     fn update(&mut self) {
         dff_setup!(
-            self, clock, n_part, n_iter, tq, seed, thr_cost, thr_max, state, ret, ret2, rng, k, iter_done, run_r,
-            fin_r, first, half, i, j, pd, spread, pa, cra, wra, x_r, off, start_r, pose_r, maxd, costr, cmin, imin,
-            best_cost_r, best_max_r, p, mask, cnt, pre, sh, w_sum, acc, lft, rgt, m_a, m_b, m_acc, m_cnt, dv_n,
-            dv_d, dv_rem, dv_cnt, cx, cy, cz, ci, cj, cflip, pc, op_kind, op_dst, op_b, opa
+            self,
+            clock,
+            n_part,
+            n_iter,
+            tq,
+            seed,
+            thr_cost,
+            thr_max,
+            state,
+            ret,
+            ret2,
+            rng,
+            k,
+            iter_done,
+            run_r,
+            fin_r,
+            first,
+            half,
+            i,
+            j,
+            pd,
+            spread,
+            pa,
+            cra,
+            wra,
+            x_r,
+            off,
+            start_r,
+            pose_r,
+            maxd,
+            costr,
+            cmin,
+            imin,
+            best_cost_r,
+            best_max_r,
+            p,
+            mask,
+            cnt,
+            pre,
+            sh,
+            w_sum,
+            acc,
+            lft,
+            rgt,
+            m_a,
+            m_b,
+            m_acc,
+            m_cnt,
+            dv_n,
+            dv_d,
+            dv_rem,
+            dv_cnt,
+            cx,
+            cy,
+            cz,
+            ci,
+            cj,
+            cflip,
+            pc,
+            op_kind,
+            op_dst,
+            op_b,
+            opa
         );
         for q in 0..7 {
             self.centre[q].clock.next = self.clock.val();
@@ -586,9 +647,10 @@ impl Logic for PfSequencer {
             self.ref24.next = self.sel_est.val();
         }
         self.diff24.next = self.x_r.q.val() - self.ref24.val();
-        self.diff26.next =
-            bit_cast::<26, 24>(self.diff24.val() ^ bits::<24>(0x80_0000)) - bits::<26>(0x80_0000);
+        self.diff26.next = bit_cast::<26, 24>(self.diff24.val() ^ bits::<24>(0x80_0000)) - bits::<26>(0x80_0000);
         self.lim26.next = bit_cast::<26, 22>(self.sel_sigma.val()) << 1;
+        // Negations go through a Local: in a Verilog compare, `0 - x` would be 32 bits wide.
+        self.neg_lim26.next = bits::<26>(0) - self.lim26.val();
         self.v24.next = self.sel_centre.val() + self.off.q.val().get_bits::<24>(0);
         self.v_fix.next = self.v24.val();
         if (self.pd.q.val() == 3) && (self.v24.val().get_bit(23) || !self.v24.val().any()) {
@@ -649,8 +711,8 @@ impl Logic for PfSequencer {
         if self.cj.q.val() == 2 {
             self.tr_in.next = self.cur[2].q.val();
         }
-        self.tr_y.next = (bit_cast::<25, 24>(self.tr_in.val() ^ bits::<24>(0x80_0000)) - bits::<25>(0x80_0000))
-            + bits::<25>(32);
+        self.tr_y.next =
+            (bit_cast::<25, 24>(self.tr_in.val() ^ bits::<24>(0x80_0000)) - bits::<25>(0x80_0000)) + bits::<25>(32);
         self.tr_t.next = bit_cast::<19, 25>(self.tr_y.val() >> 6);
         self.tr_sat.next = self.tr_t.val().get_bits::<18>(0);
         if (self.tr_t.val() ^ bits::<19>(0x4_0000)) > bits::<19>(0x5_ffff) {
@@ -711,7 +773,8 @@ impl Logic for PfSequencer {
         self.cram.read_address.next = self.cra.q.val();
         self.cram.write_enable.next = false;
         self.cram.write_address.next = self.i.q.val().get_bits::<8>(0);
-        self.cram.write_data.next = bit_cast::<82, 48>(self.costr.q.val()) | (bit_cast::<82, 34>(self.maxd.q.val()) << 48);
+        self.cram.write_data.next =
+            bit_cast::<82, 48>(self.costr.q.val()) | (bit_cast::<82, 34>(self.maxd.q.val()) << 48);
         self.wram.read_address.next = self.wra.q.val();
         self.wram.write_enable.next = false;
         self.wram.write_address.next = self.i.q.val().get_bits::<8>(0);
@@ -943,10 +1006,8 @@ impl Logic for PfSequencer {
                 if (self.off.q.val() ^ bits::<26>(0x200_0000)) > (self.lim26.val() ^ bits::<26>(0x200_0000)) {
                     self.off.d.next = self.lim26.val();
                 }
-                if (self.off.q.val() ^ bits::<26>(0x200_0000))
-                    < ((bits::<26>(0) - self.lim26.val()) ^ bits::<26>(0x200_0000))
-                {
-                    self.off.d.next = bits::<26>(0) - self.lim26.val();
+                if (self.off.q.val() ^ bits::<26>(0x200_0000)) < (self.neg_lim26.val() ^ bits::<26>(0x200_0000)) {
+                    self.off.d.next = self.neg_lim26.val();
                 }
                 self.state.d.next = SeqState::PropWrite;
             }
@@ -1062,7 +1123,8 @@ impl Logic for PfSequencer {
             }
             SeqState::BestRec => {
                 // The cost record of `imin` is on the RAM's output from this clock on.
-                self.pa.d.next = (bit_cast::<12, 1>(self.half.q.val()) << 11) | (bit_cast::<12, 8>(self.imin.q.val()) << 3);
+                self.pa.d.next =
+                    (bit_cast::<12, 1>(self.half.q.val()) << 11) | (bit_cast::<12, 8>(self.imin.q.val()) << 3);
                 self.state.d.next = SeqState::BestAddr;
             }
             SeqState::BestAddr => {
@@ -1123,8 +1185,7 @@ impl Logic for PfSequencer {
             SeqState::SumDiv => {
                 if !self.m_cnt.q.val().any() {
                     self.acc.d.next = self.acc.q.val()
-                        + (bit_cast::<48, 44>(self.m_acc.q.val() ^ self.sign44.val())
-                            - self.sign48_44.val());
+                        + (bit_cast::<48, 44>(self.m_acc.q.val() ^ self.sign44.val()) - self.sign48_44.val());
                     self.i.d.next = self.i.q.val() + 1;
                     if (self.i.q.val() + 1) == self.n_part.q.val() {
                         self.state.d.next = SeqState::SumDivGo;
