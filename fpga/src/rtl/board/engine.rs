@@ -12,6 +12,7 @@ use crate::messages::{Identity, MAX_LOAD_POINTS, MAX_NEAREST, MAX_POSES};
 
 // The limits are literals in the kernel (`#[hdl_gen]` takes no paths): keep them equal.
 const _: () = assert!(MAX_LOAD_POINTS == 170 && MAX_POSES == 37 && MAX_NEAREST == 144);
+use super::sequencer::PfSequencer;
 use crate::rtl::pipeline::NnPipeline;
 use crate::rtl::weight_stage::WeightStage;
 use rust_hdl::prelude::*;
@@ -77,6 +78,20 @@ pub enum EngState {
     NrLoop,
     /// Nearest: append a result.
     NrRead,
+    /// Run: next configuration word or the header word.
+    RunNext,
+    /// Run: write the fetched word.
+    RunWrite,
+    /// Run: start the sequencer, answer.
+    RunGo,
+    /// Status: the 9 data bytes.
+    StBody,
+    /// Result: iterations, cost, largest distance.
+    ResBody1,
+    /// Result: the parameters.
+    ResBody2,
+    /// Result: the pose.
+    ResBody3,
 }
 
 /// The command engine with a `P`-lane pipeline, its stores and the reply sender.
@@ -159,7 +174,9 @@ pub struct CommandEngine<const P: usize> {
     aux: RAM<Bits<46>, 8>,
     nn: NnPipeline<P>,
     ws: WeightStage,
+    filter: PfSequencer,
     sender: ReplySender,
+    all48: Constant<Bits<48>>,
     h: Signal<Local, Bits<48>>,
     h_lo: Signal<Local, Bits<16>>,
     h_hi: Signal<Local, Bits<16>>,
@@ -245,7 +262,9 @@ impl<const P: usize> CommandEngine<P> {
             aux: Default::default(),
             nn: NnPipeline::new(),
             ws: WeightStage::new(),
+            filter: PfSequencer::new(),
             sender: ReplySender::new(bit_clocks),
+            all48: Constant::new(Bits::<48>::from((1u64 << 48) - 1)),
             h: Default::default(),
             h_lo: Default::default(),
             h_hi: Default::default(),
@@ -312,6 +331,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
         );
         self.nn.clock.next = self.clock.val();
         self.ws.clock.next = self.clock.val();
+        self.filter.clock.next = self.clock.val();
         self.sender.clock.next = self.clock.val();
         self.frame_buf.read_clock.next = self.clock.val();
         self.frame_buf.write_clock.next = self.clock.val();
@@ -379,6 +399,20 @@ impl<const P: usize> Logic for CommandEngine<P> {
         self.nn.start.next = self.start_r.q.val();
         self.start_r.d.next = false;
         self.nn.pose.next = self.inbuf.q.val();
+        // The sequencer: it owns the pipeline while it runs (no other command uses it then).
+        self.filter.reset.next = self.reset.val();
+        self.filter.cfg_we.next = false;
+        self.filter.cfg_addr.next = self.idx.q.val().get_bits::<5>(0);
+        self.filter.cfg_data.next = self.inbuf.q.val().get_bits::<48>(168);
+        self.filter.go.next = false;
+        self.filter.nn_ready.next = !self.nn.busy.val() && !self.streaming.val() && !self.start_r.q.val();
+        self.filter.cost_valid.next = self.nn.cost_valid.val();
+        self.filter.cost.next = self.nn.cost.val();
+        self.filter.nn_valid.next = self.nn.nn_valid.val();
+        self.filter.nn_dist.next = self.nn.nn_dist.val();
+        if self.filter.running.val() {
+            self.nn.pose.next = self.filter.pose.val();
+        }
         self.scan_store.write_enable.next = false;
         self.scan_store.write_address.next = self.waddr.q.val();
         self.scan_store.write_data.next = self.inbuf.q.val().get_bits::<48>(168);
@@ -500,7 +534,13 @@ impl<const P: usize> Logic for CommandEngine<P> {
                 self.e_cmd.d.next = self.cur_cmd.q.val();
                 self.e_seq.d.next = self.cur_seq.q.val();
                 self.state.d.next = EngState::ErrHeader;
-                if self.cur_cmd.q.val() == 1 {
+                if self.filter.running.val()
+                    && (self.cur_cmd.q.val() >= 2)
+                    && (self.cur_cmd.q.val() <= 9)
+                    && (self.cur_cmd.q.val() != 8)
+                {
+                    self.e_code.d.next = 5.into();
+                } else if self.cur_cmd.q.val() == 1 {
                     if self.dlen.q.val().any() {
                         self.e_code.d.next = 2.into();
                     } else {
@@ -566,9 +606,96 @@ impl<const P: usize> Logic for CommandEngine<P> {
                         self.ret.d.next = EngState::NrRun;
                         self.state.d.next = EngState::FetchAddr;
                     }
+                } else if self.cur_cmd.q.val() == 7 {
+                    if self.dlen.q.val() != 150 {
+                        self.e_code.d.next = 2.into();
+                    } else if !self.h_lo.val().any()
+                        || (self.h_lo.val() > 256)
+                        || !self.h_hi.val().any()
+                        || self.sizes_unset.val()
+                    {
+                        self.e_code.d.next = 4.into();
+                    } else {
+                        self.idx.d.next = 0.into();
+                        self.faddr.d.next = 8.into();
+                        self.state.d.next = EngState::RunNext;
+                    }
+                } else if self.cur_cmd.q.val() == 8 {
+                    if self.dlen.q.val().any() {
+                        self.e_code.d.next = 2.into();
+                    } else {
+                        self.ret.d.next = EngState::StBody;
+                        self.state.d.next = EngState::Header;
+                    }
+                } else if self.cur_cmd.q.val() == 9 {
+                    if self.dlen.q.val().any() {
+                        self.e_code.d.next = 2.into();
+                    } else if !self.filter.finished.val() {
+                        self.e_code.d.next = 7.into();
+                    } else {
+                        self.ret.d.next = EngState::ResBody1;
+                        self.state.d.next = EngState::Header;
+                    }
                 } else {
                     self.e_code.d.next = 3.into();
                 }
+            }
+            EngState::RunNext => {
+                if self.idx.q.val() == 24 {
+                    self.filter.cfg_we.next = true;
+                    self.filter.cfg_data.next = self.hdr.q.val();
+                    self.state.d.next = EngState::RunGo;
+                } else {
+                    self.fcount.d.next = 6.into();
+                    self.ret.d.next = EngState::RunWrite;
+                    self.state.d.next = EngState::FetchAddr;
+                }
+            }
+            EngState::RunWrite => {
+                self.filter.cfg_we.next = true;
+                self.idx.d.next = self.idx.q.val() + 1;
+                self.state.d.next = EngState::RunNext;
+            }
+            EngState::RunGo => {
+                self.filter.go.next = true;
+                self.ret.d.next = EngState::EchoBody;
+                self.state.d.next = EngState::Header;
+            }
+            EngState::StBody => {
+                if self.filter.running.val() {
+                    self.outbuf.d.next = bits::<216>(1)
+                        | (bit_cast::<216, 16>(self.filter.iterations.val()) << 8)
+                        | (bit_cast::<216, 48>(self.filter.best_cost.val()) << 24);
+                } else if self.filter.finished.val() {
+                    self.outbuf.d.next = bits::<216>(2)
+                        | (bit_cast::<216, 16>(self.filter.iterations.val()) << 8)
+                        | (bit_cast::<216, 48>(self.filter.best_cost.val()) << 24);
+                } else {
+                    self.outbuf.d.next = bit_cast::<216, 48>(self.all48.val()) << 24;
+                }
+                self.ecount.d.next = 9.into();
+                self.ret.d.next = EngState::Send;
+                self.state.d.next = EngState::Emit;
+            }
+            EngState::ResBody1 => {
+                self.outbuf.d.next = bit_cast::<216, 16>(self.filter.iterations.val())
+                    | (bit_cast::<216, 48>(self.filter.best_cost.val()) << 16)
+                    | (bit_cast::<216, 34>(self.filter.best_max.val()) << 64);
+                self.ecount.d.next = 13.into();
+                self.ret.d.next = EngState::ResBody2;
+                self.state.d.next = EngState::Emit;
+            }
+            EngState::ResBody2 => {
+                self.outbuf.d.next = bit_cast::<216, 168>(self.filter.params.val());
+                self.ecount.d.next = 21.into();
+                self.ret.d.next = EngState::ResBody3;
+                self.state.d.next = EngState::Emit;
+            }
+            EngState::ResBody3 => {
+                self.outbuf.d.next = self.filter.pose.val();
+                self.ecount.d.next = 27.into();
+                self.ret.d.next = EngState::Send;
+                self.state.d.next = EngState::Emit;
             }
             EngState::IdBody => {
                 self.outbuf.d.next = self.ident.val()
@@ -731,6 +858,13 @@ impl<const P: usize> Logic for CommandEngine<P> {
             _ => {
                 self.state.d.next = EngState::Idle;
             }
+        }
+
+        // The sequencer starts the pipeline on its pose and the whole scan store.
+        if self.filter.start.val() {
+            self.start_r.d.next = true;
+            self.sa.d.next = 0.into();
+            self.send.d.next = self.scan_count.q.val();
         }
 
         // The scan stream: read scan point `sa` when the two-entry queue has room for it.
