@@ -67,6 +67,11 @@ pub struct SerialBoard {
     compared: u64,
     mismatch: Option<ByteMismatch>,
     quiet: u64,
+    /// The board's bytes of the frame being received (compared at its delimiter).
+    frame_bytes: Vec<Option<u8>>,
+    /// Status replies of a running filter: not compared (a timeless reference cannot know
+    /// the progress), and the reference's Status reply dropped.
+    progress_frames: u64,
 }
 
 impl SerialBoard {
@@ -89,6 +94,8 @@ impl SerialBoard {
             compared: 0,
             mismatch: None,
             quiet: 0,
+            frame_bytes: Vec::new(),
+            progress_frames: 0,
         }
     }
 
@@ -231,13 +238,42 @@ impl SerialBoard {
         }
         let index = self.received_total;
         self.received_total += 1;
-        if self.reference.is_some() {
+        if self.reference.is_none() {
+            return;
+        }
+        self.frame_bytes.push(byte);
+        if byte != Some(0) {
+            return;
+        }
+        // A whole frame: a Status reply that says "running" is progress, not compared.
+        let frame: Vec<u8> = self.frame_bytes.iter().map(|b| b.unwrap_or(0)).collect();
+        let board_frames = std::mem::take(&mut self.frame_bytes);
+        let progress = pficp_fpga::protocol::Frame::decode(&frame[..frame.len() - 1])
+            .is_ok_and(|f| f.code == 0x88 && f.data.first() == Some(&1));
+        if progress {
+            self.progress_frames += 1;
+            // Drop the reference's answer to the same request (up to its delimiter).
+            while let Some(e) = self.expected.pop_front() {
+                if e == 0 {
+                    break;
+                }
+            }
+            return;
+        }
+        let first_index = index + 1 - board_frames.len() as u64;
+        for (k, actual) in board_frames.into_iter().enumerate() {
             let expected = self.expected.pop_front();
             self.compared += 1;
-            if expected != byte && self.mismatch.is_none() {
-                self.mismatch = Some(ByteMismatch { clock: self.clocks(), index, expected, actual: byte });
+            if expected != actual && self.mismatch.is_none() {
+                self.mismatch =
+                    Some(ByteMismatch { clock: self.clocks(), index: first_index + k as u64, expected, actual });
             }
         }
+    }
+
+    /// Status replies of a running filter seen so far (not compared with the reference).
+    pub fn progress_frames(&self) -> u64 {
+        self.progress_frames
     }
 
     /// Run `clocks` clocks.

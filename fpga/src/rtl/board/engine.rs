@@ -123,6 +123,8 @@ pub struct CommandEngine<const P: usize> {
     pub busy: Signal<Out, Bit>,
     /// The last answer was an error reply.
     pub error: Signal<Out, Bit>,
+    /// The particle filter is running.
+    pub running: Signal<Out, Bit>,
     /// The serial line out.
     pub tx: Signal<Out, Bit>,
     ident: Constant<Bits<216>>,
@@ -216,6 +218,7 @@ impl<const P: usize> CommandEngine<P> {
             busy_seen: Default::default(),
             busy: Default::default(),
             error: Default::default(),
+            running: Default::default(),
             tx: Default::default(),
             ident: Constant::new(ident),
             state: Default::default(),
@@ -343,6 +346,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
         // Outputs.
         self.busy.next = self.state.q.val() != EngState::Idle;
         self.error.next = self.err_led.q.val();
+        self.running.next = self.filter.running.val();
         self.tx.next = self.sender.tx.val();
         self.sender.reset.next = self.reset.val();
 

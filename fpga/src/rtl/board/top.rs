@@ -1,6 +1,6 @@
 //! `BoardTop<P>`: the FPGA's top level. Pins: `clock` (the oscillator, the design clock, no
 //! DCM), `reset_n` (active-low button), `uart_rx` / `uart_tx` (the USB-serial bridge),
-//! `leds` (0 heartbeat, 1 receive activity, 2 busy, 3 last answer was an error).
+//! `leds` (0 heartbeat, 1 receive activity, 2 busy (answering, or the particle filter running), 3 last answer was an error).
 
 use super::engine::CommandEngine;
 use super::frame_rx::FrameReceiver;
@@ -93,7 +93,7 @@ impl<const P: usize> Logic for BoardTop<P> {
         }
         self.leds.next = bit_cast::<4, 1>(self.heartbeat.q.val().get_bits::<1>(26))
             | (bit_cast::<4, 1>(self.rx_glow.q.val().get_bits::<1>(21)) << 1)
-            | (bit_cast::<4, 1>(self.engine.busy.val().into()) << 2)
+            | (bit_cast::<4, 1>((self.engine.busy.val() || self.engine.running.val()).into()) << 2)
             | (bit_cast::<4, 1>(self.engine.error.val().into()) << 3);
     }
 }

@@ -1,0 +1,132 @@
+//! The on-board particle filter through the Verilated board's serial pins: Run, Status while
+//! it runs (progress, not compared: the byte-level reference is timeless), Status and Result
+//! after it, byte for byte equal to the reference (so the pose bytes are `pf::run`'s).
+
+use pficp_fpga::board::BoardConfig;
+use pficp_fpga::format::{point, FxPoint};
+use pficp_fpga::messages::{self, ResultReply, RunState, StatusReply};
+use pficp_fpga::pf::{self, PfConfig, SCALE_FRAC};
+use pficp_fpga::protocol::{Command, Frame};
+use pficp_sim::serial::SerialBoard;
+
+fn cloud(n: usize, shift: [i16; 3]) -> Vec<FxPoint> {
+    (0..n)
+        .map(|i| {
+            let t = i as f64 * 0.37;
+            let p = point([0.6 * t.sin(), 0.5 * (1.7 * t).cos(), 0.4 * (0.5 * t).sin()]);
+            [p[0] - shift[0], p[1] - shift[1], p[2] - shift[2]]
+        })
+        .collect()
+}
+
+/// Send a request and run until its reply has arrived (not until idle: the filter may run
+/// on after the reply).
+fn exchange(b: &mut SerialBoard, frame: &Frame) -> Frame {
+    b.send(&frame.encode());
+    let mut got = Vec::new();
+    let mut clocks = 0u64;
+    while !got.contains(&0) {
+        b.step();
+        got.extend(b.take_received());
+        clocks += 1;
+        assert!(clocks < 50_000_000, "the board went quiet");
+    }
+    let (compared, mismatch) = b.comparison();
+    assert!(mismatch.is_none(), "after {compared} bytes: {}", mismatch.unwrap());
+    Frame::decode(&got[..got.len() - 1]).expect("a well-formed reply")
+}
+
+fn small_config() -> PfConfig {
+    PfConfig {
+        particles: 10,
+        iterations: 6,
+        temper_exp: 5,
+        centre: [0, 0, 0, 1 << SCALE_FRAC, 0, 0, 0],
+        sigma0: [1 << 17, 1 << 17, 1 << 17, 1 << 15, 1 << 16, 1 << 16, 1 << 16],
+        floor: [1 << 10, 1 << 10, 1 << 10, 1 << 10, 1 << 9, 1 << 9, 1 << 9],
+        seed: 11,
+        thr_cost: 0,
+        thr_max: 0,
+    }
+}
+
+fn req(cmd: Command, seq: u8, data: Vec<u8>) -> Frame {
+    Frame { code: cmd as u8, seq, data }
+}
+
+#[test]
+fn the_board_runs_the_filter_and_returns_the_reference_pose() {
+    let model = cloud(80, [0, 0, 0]);
+    let scan = cloud(30, [300, -150, 80]);
+    let mut b = SerialBoard::new(BoardConfig::FAST_SIM).with_reference();
+    b.run(100);
+    exchange(&mut b, &req(Command::LoadModel, 1, messages::load_request(0, &model)));
+    exchange(&mut b, &req(Command::LoadScan, 2, messages::load_request(0, &scan)));
+    // Result before any run: NoResult.
+    let r = exchange(&mut b, &req(Command::Result, 3, vec![]));
+    assert_eq!((r.code, r.data.first()), (0xff, Some(&7)), "{r:?}");
+    // Run before SetSizes: OverCapacity.
+    let cfg = small_config();
+    let r = exchange(&mut b, &req(Command::Run, 4, cfg.encode()));
+    assert_eq!((r.code, r.data.first()), (0xff, Some(&4)), "{r:?}");
+    exchange(&mut b, &req(Command::SetSizes, 5, messages::two_u16(80, 30)));
+    let r = exchange(&mut b, &req(Command::Run, 6, cfg.encode()));
+    assert_eq!(r.code, Command::Run as u8 | 0x80);
+    // While it runs: Status answers (progress).
+    let mut polls = 0;
+    let mut seq = 7u8;
+    loop {
+        let r = exchange(&mut b, &req(Command::Status, seq, vec![]));
+        seq = seq.wrapping_add(1);
+        let st = StatusReply::decode(&r.data).unwrap();
+        if st.state == RunState::Done {
+            break;
+        }
+        assert_eq!(st.state, RunState::Running);
+        polls += 1;
+        b.run(20_000);
+        assert!(polls < 10_000, "the filter did not finish");
+    }
+    assert!(b.progress_frames() >= 1, "at least one Status while running");
+    let r = exchange(&mut b, &req(Command::Result, seq, vec![]));
+    let result = ResultReply::decode(&r.data).unwrap();
+    let outcome = pf::run(&cfg, |pose| pf::evaluate(&model, &scan, pose));
+    assert_eq!(result.pose, outcome.pose);
+    assert_eq!(result.params, outcome.params);
+    assert_eq!((result.iterations, result.cost), (outcome.iterations, outcome.best.cost));
+    let (compared, _) = b.comparison();
+    println!("{polls} Status polls while running, {compared} bytes compared, {} clocks", b.clocks());
+}
+
+/// While the filter runs, commands that touch the stores, the pipeline or the result get
+/// Busy at once (the timeless reference cannot model this: no byte comparison here).
+#[test]
+fn commands_get_busy_while_the_filter_runs() {
+    let model = cloud(80, [0, 0, 0]);
+    let scan = cloud(30, [300, -150, 80]);
+    let mut b = SerialBoard::new(BoardConfig::FAST_SIM);
+    b.run(100);
+    exchange(&mut b, &req(Command::LoadModel, 1, messages::load_request(0, &model)));
+    exchange(&mut b, &req(Command::LoadScan, 2, messages::load_request(0, &scan)));
+    exchange(&mut b, &req(Command::SetSizes, 3, messages::two_u16(80, 30)));
+    exchange(&mut b, &req(Command::Run, 4, small_config().encode()));
+    let busy = [
+        req(Command::LoadScan, 5, messages::load_request(0, &scan[..3])),
+        req(Command::SetSizes, 6, messages::two_u16(80, 30)),
+        req(Command::Run, 7, small_config().encode()),
+        req(Command::Result, 8, vec![]),
+    ];
+    for f in &busy {
+        let r = exchange(&mut b, f);
+        assert_eq!((r.code, r.seq, r.data.first()), (0xff, f.seq, Some(&5)), "Busy for {:#04x}: {r:?}", f.code);
+    }
+    let r = exchange(&mut b, &req(Command::Identify, 9, vec![]));
+    assert_eq!(r.code, 0x81, "Identify is answered while running");
+    let st = StatusReply::decode(&exchange(&mut b, &req(Command::Status, 10, vec![])).data).unwrap();
+    assert_eq!(st.state, RunState::Running);
+    // The scan store was not touched: the result is the reference's.
+    b.run_until_idle(100_000_000).expect("the filter finishes");
+    let result = ResultReply::decode(&exchange(&mut b, &req(Command::Result, 11, vec![])).data).unwrap();
+    let outcome = pf::run(&small_config(), |pose| pf::evaluate(&model, &scan, pose));
+    assert_eq!(result.pose, outcome.pose);
+}
