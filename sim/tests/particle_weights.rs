@@ -87,6 +87,7 @@ fn every_design_is_verilated() {
             ("particle_weights", 16, "Vpw16"),
             ("weight_stage", 0, "Vweights"),
             ("board", 0, "Vboard"),
+            ("sequencer", 0, "Vseq"),
             ("board_fast", 0, "Vboardfast"),
         ]
     );
