@@ -1,0 +1,174 @@
+//! `pficp-onboard-bench`: the board time of one PF-ICP registration with the particle filter
+//! on the board (the default mode of `pficp register --board`), counted in clocks of the
+//! Verilated default board (the generated design: 16 lanes, the UCF's 50 MHz, 921,600 baud)
+//! driven through its serial pins at the UART's bit timing; beside the software mode's time
+//! on this machine.
+//!
+//! The board time is every clock from the first byte of the model load to the last byte of
+//! the Result reply: loading the model and the scan sample, SetSizes, Run, the filter, a
+//! Status poll every 50 ms of board time (as the host client polls), Status and Result.
+//! The board's bytes are compared with the byte-level reference on the way (Status replies
+//! of a running filter excepted). The prior and the polish run on the host (not timed here:
+//! the host's stages are the software mode's).
+//!
+//! `pficp-onboard-bench [--model-points 2000] [--scan-points 1000] [--board-points 100]
+//! [--particles 50] [--iterations 50] [--runs 3] [--seed 1]`; run in release.
+
+use anyhow::{bail, Context, Result};
+use clap::Parser;
+use pficp::board_pf;
+use pficp::cloud::bbox_diagonal;
+use pficp::datasets::{make, ModelId, Sampling, ScanSpec};
+use pficp::methods::PoseError;
+use pficp::nn::NearestNeighbours;
+use pficp::pf_icp::{self, PfIcpSettings};
+use pficp_fpga::board::BoardConfig;
+use pficp_fpga::messages::{self, ResultReply, RunState, StatusReply};
+use pficp_fpga::protocol::{Command, Frame};
+use pficp_sim::serial::SerialBoard;
+use std::time::{Duration, Instant};
+
+#[derive(Parser, Debug)]
+#[command(name = "pficp-onboard-bench", about = "Board time of one on-board registration beside the software mode")]
+struct Args {
+    /// Model points.
+    #[arg(long, default_value_t = 2000)]
+    model_points: usize,
+    /// Scan points.
+    #[arg(long, default_value_t = 1000)]
+    scan_points: usize,
+    /// Scan points on the board (the weight sample).
+    #[arg(long, default_value_t = 100)]
+    board_points: usize,
+    /// Particles.
+    #[arg(long, default_value_t = 50)]
+    particles: usize,
+    /// Iteration cap.
+    #[arg(long, default_value_t = 50)]
+    iterations: usize,
+    /// Software-mode runs (the median is reported).
+    #[arg(long, default_value_t = 3)]
+    runs: usize,
+    /// Seed of the dataset and the registration.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+}
+
+/// Send one request; run until its reply's delimiter; check the bytes so far.
+fn exchange(b: &mut SerialBoard, frame: &Frame) -> Result<Frame> {
+    b.send(&frame.encode());
+    let mut got = Vec::new();
+    let start = b.clocks();
+    while !got.contains(&0) {
+        b.step();
+        got.extend(b.take_received());
+        if b.clocks() - start > 2_000_000_000 {
+            bail!("the board went quiet");
+        }
+    }
+    if let (compared, Some(m)) = b.comparison() {
+        bail!("the board differs from the reference after {compared} bytes: {m}");
+    }
+    Frame::decode(&got[..got.len() - 1]).map_err(|e| anyhow::anyhow!("a malformed reply: {e:?}"))
+}
+
+fn main() -> Result<()> {
+    let a = Args::parse();
+    let id = ModelId::Model1;
+    let truth = id.table1_truth();
+    let spec = ScanSpec { sampling: Sampling::Independent { points: a.scan_points }, noise: 0.0, seed: a.seed };
+    let ds = make(id, a.model_points, &truth, &spec);
+    let nn = NearestNeighbours::new(&ds.model);
+    let diag = bbox_diagonal(&ds.model);
+    let settings =
+        PfIcpSettings { particles: a.particles, iterations: a.iterations, seed: a.seed, ..Default::default() };
+
+    // Software mode: median wall time of `runs`.
+    let mut times = Vec::new();
+    let mut soft = None;
+    for _ in 0..a.runs.max(1) {
+        let t = Instant::now();
+        let r = pf_icp::register(&nn, &ds.scan, &settings);
+        times.push(t.elapsed());
+        soft = Some(r);
+    }
+    times.sort();
+    let soft_time = times[times.len() / 2];
+    let soft = soft.context("no software run")?;
+
+    // The board.
+    let plan = board_pf::plan(&nn, &ds.scan, &settings, a.board_points, 4096);
+    let config = BoardConfig::default();
+    let mut b = SerialBoard::new(config).with_reference();
+    b.run(100);
+    let t0_clock = b.clocks();
+    let wall = Instant::now();
+    let mut seq = 1u8;
+    let mut next = |s: &mut u8| {
+        *s = s.wrapping_add(1).max(1);
+        *s
+    };
+    for (cmd, pts) in [(Command::LoadModel, &plan.model), (Command::LoadScan, &plan.scan)] {
+        for (k, chunk) in pts.chunks(messages::MAX_LOAD_POINTS).enumerate() {
+            let data = messages::load_request((k * messages::MAX_LOAD_POINTS) as u16, chunk);
+            let r = exchange(&mut b, &Frame { code: cmd as u8, seq: next(&mut seq), data })?;
+            if r.code != cmd as u8 | 0x80 {
+                bail!("load refused: {r:?}");
+            }
+        }
+    }
+    let sizes = messages::two_u16(plan.model.len() as u16, plan.scan.len() as u16);
+    exchange(&mut b, &Frame { code: Command::SetSizes as u8, seq: next(&mut seq), data: sizes })?;
+    let loaded_clock = b.clocks();
+    let r = exchange(&mut b, &Frame { code: Command::Run as u8, seq: next(&mut seq), data: plan.config.encode() })?;
+    if r.code != Command::Run as u8 | 0x80 {
+        bail!("Run refused: {r:?}");
+    }
+    let poll = config.clock_hz as u64 / 20;
+    let mut polls = 0;
+    loop {
+        b.run(poll);
+        let st = exchange(&mut b, &Frame { code: Command::Status as u8, seq: next(&mut seq), data: vec![] })?;
+        polls += 1;
+        if StatusReply::decode(&st.data)?.state == RunState::Done {
+            break;
+        }
+    }
+    let r = exchange(&mut b, &Frame { code: Command::Result as u8, seq: next(&mut seq), data: vec![] })?;
+    let result = ResultReply::decode(&r.data)?;
+    let clocks = b.clocks() - t0_clock;
+    let (sent, received) = b.byte_counts();
+    let (compared, _) = b.comparison();
+    let fin = board_pf::finish(&plan, &nn, &ds.scan, &settings, &result, Duration::ZERO);
+    let hz = config.clock_hz as f64;
+    let board_s = clocks as f64 / hz;
+    let soft_err = PoseError::between(&soft.registration.pose, &truth, diag);
+    let board_err = PoseError::between(&fin.registration.pose, &truth, diag);
+    println!(
+        "model-1, {} model points, {} scan points ({} on the board), {} particles, {} iterations cap",
+        a.model_points,
+        a.scan_points,
+        plan.scan.len(),
+        a.particles,
+        a.iterations
+    );
+    println!(
+        "board: {board_s:.3} s at {:.0} MHz ({clocks} clocks: loads {:.3} s, run to result {:.3} s; {} iterations; \
+         {sent} bytes in, {received} out, {polls} Status polls; {compared} bytes equal to the reference; \
+         simulated in {:.1} s)",
+        hz / 1e6,
+        (loaded_clock - t0_clock) as f64 / hz,
+        (b.clocks() - loaded_clock) as f64 / hz,
+        result.iterations,
+        wall.elapsed().as_secs_f64()
+    );
+    println!("software: {:.3} s (median of {})", soft_time.as_secs_f64(), times.len());
+    println!(
+        "accuracy vs truth: board + polish {:.3} deg, {:.3}% diagonal; software {:.3} deg, {:.3}% diagonal",
+        board_err.rotation_deg,
+        100.0 * board_err.translation_frac,
+        soft_err.rotation_deg,
+        100.0 * soft_err.translation_frac
+    );
+    Ok(())
+}
