@@ -1,9 +1,43 @@
 //! The cycle-accurate reference of the particle-filter sequencer
 //! (`rtl::board::sequencer::PfSequencer`, docs/sequencer.md): its ports, and
-//! [`SequencerModel`], register for register the RTL, whose datapath results are those of
-//! the functional reference [`crate::pf::run`].
+//! [`SequencerModel`], register for register and clock for clock the RTL, whose datapath
+//! results are those of the functional reference [`crate::pf::run`].
+//!
+//! [`SequencerModel::step`] is one rising edge (the input ports as they are before it:
+//! every `DFF` takes its `d`, the RAMs read first and then write); [`SequencerModel::outputs`]
+//! are the output ports after it (all from registers, except the particle RAM's write port
+//! `p_we / p_waddr / p_wdata`, which is combinational from the state, the registers and the
+//! RAM's read data, as in the RTL). Widths and wrap-arounds are the Verilog's: in particular
+//! `i + 1 == n_part` is compared at 32 bits as the generated Verilog does (rust_hdl's own
+//! simulation wraps `i + 1` at 9 bits; the two differ only for `n_part = 0`, which the
+//! engine never loads: there the Verilog, and this model, never leave the propagation).
+//!
+//! # Clocks per phase
+//!
+//! Measured on the model and checked exactly by `tests/sequencer_model.rs` (`n` particles;
+//! a state waiting for the serial multiplier spends 19 clocks in it, for the divider 49):
+//!
+//! | phase | clocks | states |
+//! |---|---|---|
+//! | pose ([`POSE_CLOCKS`]) | 588 | 3 x (CorInit, 18 CorStep, CorCos, CorSin) = 63, PoseScale 1, 23 multiplies x 22 (OpFetch, OpA, OpB, 19 OpMul), 5 additions x 3, 3 PoseT |
+//! | evaluation | 1 + pipeline | EvStart (1 when `nn_ready`), EvWait from `start` to the clock `cost_valid` is taken |
+//! | propagation, per parameter ([`PROPAGATE_CLOCKS`]) | 23 | PropAddr, PropRead, 19 PropMul, PropClamp, PropWrite (161 per particle, + PartStore 1 after its evaluation; IterBegin 1 per iteration) |
+//! | temperature, per pass ([`temper_pass_clocks`]) | 3n + 2 | TPass, n x (TAddr, TWait, TData), TCheck; passes = bit length of the median excess + 1 (1 to 49); then TSet 1 |
+//! | weights | 4n + 1 | n x (WAddr, WWait, WData, WIdx), BestCheck; + 16 when the best particle beats the best so far (BestRec, BestAddr, 7 x (BestWait, BestData)) |
+//! | estimate, spread: per parameter ([`sum_clocks`]) | 23n + 51 | SumBegin, n x (SumAddr, SumWait, SumData, SumMul, 19 SumDiv), SumDivGo, 49 SumDivWait; 7 parameters each: 14 (23n + 51) |
+//! | the estimate's evaluation, region, stop | 592 + evaluation | EstEval, pose, evaluation, EstDone, Centre, StopCheck |
+//! | resampling (not after the last iteration) | 41 + 16n + 23a | RsBegin, 19 RsL, RsWData, 19 RsWMul, RsDone; a = the last survivor's index: per advance RsLoop, RsWAddr, RsWWait, RsWData, 19 RsWMul; per survivor RsLoop, 7 x (CpWait, CpData), CpNext |
+//! | a run ([`run_clocks`]) | 590 + start evaluation + iterations + 590 | go (Idle), pose, evaluation, StartDone; ...; Fin, pose, FinDone |
+//!
+//! [`clocks_per_iteration`] adds these up exactly. Without the pipeline's time an iteration
+//! is `n (161 + 588 + 1) + 14 (23n + 51) + passes (3n + 2) + 20n + 23a + 652` clocks (with
+//! the best copied): about 1,100 to 1,200 clocks per particle with ~25 temperature passes,
+//! against the pipeline's ~10^4 per evaluation.
+//! For example 12 particles, 5 iterations, a 30-point scan with a 20-clock latency: 82,351
+//! clocks, of which 39,396 are poses and 22,890 estimate and spread.
 
-use crate::format::FxPose;
+use crate::format::{exp_table, FxPose};
+use crate::pf::{Particle, CORDIC_ATAN, CORDIC_K, PARAMS, POSE_PROGRAM};
 
 /// Input ports (before an edge).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -89,4 +123,1147 @@ pub fn unpack_pose(w: &[u64; 4]) -> FxPose {
         (((raw & 0x3_ffff) << 46) as i64 >> 46) as i32
     };
     FxPose { m: std::array::from_fn(field), t: std::array::from_fn(|k| field(9 + k)) }
+}
+// ---------------------------------------------------------------------------------------
+// The cycle-accurate model.
+// ---------------------------------------------------------------------------------------
+
+macro_rules! seq_states {
+    ($($(#[$doc:meta])* $name:ident),* $(,)?) => {
+        /// The RTL's states, in its order (`SeqState` of the RTL; `Idle` is 0).
+        #[derive(Copy, Clone, Debug, Default, PartialEq, Eq, Hash)]
+        pub enum SeqState {
+            #[default]
+            $($(#[$doc])* $name),*
+        }
+
+        impl SeqState {
+            /// Every state, in the RTL's order (the index is the state register's value).
+            pub const ALL: &'static [SeqState] = &[$(SeqState::$name),*];
+
+            /// The state's name in the RTL.
+            pub fn name(self) -> &'static str {
+                match self {
+                    $(SeqState::$name => stringify!($name)),*
+                }
+            }
+        }
+    };
+}
+
+seq_states! {
+    /// Waiting for `go`.
+    Idle,
+    /// Pose: reduce the next angle and load the CORDIC.
+    CorInit,
+    /// Pose: one CORDIC step.
+    CorStep,
+    /// Pose: write the cosine.
+    CorCos,
+    /// Pose: write the sine.
+    CorSin,
+    /// Pose: write the scale.
+    PoseScale,
+    /// Pose: fetch the next program step, read its first operand.
+    OpFetch,
+    /// Pose: take the first operand, read the second.
+    OpA,
+    /// Pose: take the second operand; add, subtract or start the multiply.
+    OpB,
+    /// Pose: wait for the product, write it.
+    OpMul,
+    /// Pose: the translation fields.
+    PoseT,
+    /// Evaluate: start the pipeline when it is ready.
+    EvStart,
+    /// Evaluate: wait for the cost.
+    EvWait,
+    /// The start's evaluation is in: it is the first best.
+    StartDone,
+    /// A new iteration.
+    IterBegin,
+    /// Propagate: address parameter `d` of particle `i`, draw.
+    PropAddr,
+    /// Propagate: start the step's multiply.
+    PropRead,
+    /// Propagate: wait for the step, add the offset.
+    PropMul,
+    /// Propagate: clamp into the region.
+    PropClamp,
+    /// Propagate: write the parameter.
+    PropWrite,
+    /// The particle's cost is in: store it.
+    PartStore,
+    /// Temperature: a pass over the costs.
+    TPass,
+    /// Temperature: address cost `i`.
+    TAddr,
+    /// Temperature: RAM latency.
+    TWait,
+    /// Temperature: count excesses below `2^p`.
+    TData,
+    /// Temperature: enough counted?
+    TCheck,
+    /// Temperature: the exponent.
+    TSet,
+    /// Weights: address cost `i`.
+    WAddr,
+    /// Weights: RAM latency.
+    WWait,
+    /// Weights: shift the excess.
+    WData,
+    /// Weights: table lookup, store, sum.
+    WIdx,
+    /// Best: a better particle?
+    BestCheck,
+    /// Best: read its cost record.
+    BestRec,
+    /// Best: copy parameter `d`: address.
+    BestAddr,
+    /// Best: RAM latency.
+    BestWait,
+    /// Best: take parameter `d`.
+    BestData,
+    /// Estimate / spread: begin parameter `d`.
+    SumBegin,
+    /// Estimate / spread: address particle `i`.
+    SumAddr,
+    /// Estimate / spread: RAM latency.
+    SumWait,
+    /// Estimate / spread: start the multiply.
+    SumData,
+    /// Estimate / spread: accumulate.
+    SumMul,
+    /// Estimate / spread: wait for the product, accumulate.
+    SumDiv,
+    /// Estimate / spread: start the division.
+    SumDivGo,
+    /// Estimate / spread: wait for it, write the result.
+    SumDivWait,
+    /// The estimate is in: evaluate it.
+    EstEval,
+    /// The estimate's cost is in.
+    EstDone,
+    /// The region's centre becomes the best.
+    Centre,
+    /// Stop rule.
+    StopCheck,
+    /// Resample: draw `u0`, start `u0 W`.
+    RsBegin,
+    /// Resample: take `L`, read `w_0`.
+    RsL,
+    /// Resample: RAM latency / start `n w_i`.
+    RsWAddr,
+    /// Resample: RAM latency.
+    RsWWait,
+    /// Resample: start `n w_i`.
+    RsWData,
+    /// Resample: add `n w_i 2^16` to `R`.
+    RsWMul,
+    /// Resample: advance the pointer or copy.
+    RsLoop,
+    /// Resample: RAM latency.
+    CpWait,
+    /// Resample: write parameter `d`.
+    CpData,
+    /// Resample: the next survivor.
+    CpNext,
+    /// The set is resampled: swap halves.
+    RsDone,
+    /// Done: the best's pose.
+    Fin,
+    /// Done: result ready.
+    FinDone,
+}
+
+/// `2^bits - 1`.
+const fn m(bits: u32) -> u64 {
+    if bits >= 64 {
+        u64::MAX
+    } else {
+        (1u64 << bits) - 1
+    }
+}
+
+/// Sign-extend the low `bits` of `v`.
+fn sx(v: u64, bits: u32) -> i64 {
+    ((v << (64 - bits)) as i64) >> (64 - bits)
+}
+
+/// The registers (every `DFF` of the RTL, and the RAMs' registered read data).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct Regs {
+    centre: [u64; PARAMS],
+    cap: [u64; PARAMS],
+    floor: [u64; PARAMS],
+    sigma: [u64; PARAMS],
+    est: [u64; PARAMS],
+    best: [u64; PARAMS],
+    cur: [u64; PARAMS],
+    n_part: u64,
+    n_iter: u64,
+    tq: u64,
+    seed: u64,
+    thr_cost: u64,
+    thr_max: u64,
+    state: SeqState,
+    ret: SeqState,
+    ret2: SeqState,
+    rng: u64,
+    k: u64,
+    iter_done: u64,
+    run_r: bool,
+    fin_r: bool,
+    first: bool,
+    half: bool,
+    i: u64,
+    j: u64,
+    pd: u64,
+    spread: bool,
+    pa: u64,
+    cra: u64,
+    wra: u64,
+    x_r: u64,
+    off: u64,
+    start_r: bool,
+    pose_r: [u64; 4],
+    maxd: u64,
+    costr: u64,
+    cmin: u64,
+    imin: u64,
+    best_cost_r: u64,
+    best_max_r: u64,
+    p: u64,
+    mask: u64,
+    cnt: u64,
+    pre: u64,
+    sh: u64,
+    w_sum: u64,
+    acc: u64,
+    lft: u64,
+    rgt: u64,
+    m_a: u64,
+    m_b: u64,
+    m_acc: u64,
+    m_cnt: u64,
+    dv_n: u64,
+    dv_d: u64,
+    dv_rem: u64,
+    dv_cnt: u64,
+    cx: u64,
+    cy: u64,
+    cz: u64,
+    ci: u64,
+    cj: u64,
+    cflip: bool,
+    pc: u64,
+    op_kind: u64,
+    op_dst: u64,
+    op_b: u64,
+    opa: u64,
+    // The RAMs' read data registers.
+    pram_q: u64,
+    cram_q: u128,
+    wram_q: u64,
+    rf_q: u64,
+}
+
+/// A RAM write port's signals.
+#[derive(Clone, Copy, Debug, Default)]
+struct WritePort<T> {
+    we: bool,
+    addr: usize,
+    data: T,
+}
+
+/// `pose >> 18 | v << 198` on the 216-bit pose word.
+fn shift_in18(w: [u64; 4], v: u64) -> [u64; 4] {
+    let mut o = [0u64; 4];
+    for k in 0..4 {
+        o[k] = w[k] >> 18;
+        if k < 3 {
+            o[k] |= w[k + 1] << 46;
+        }
+    }
+    o[3] = (o[3] & m(6)) | ((v & m(18)) << 6);
+    o
+}
+
+/// The cycle-accurate model of `PfSequencer`: [`SequencerModel::step`] is one rising edge
+/// (the inputs as they are before it), [`SequencerModel::outputs`] the ports after it.
+#[derive(Clone, Debug)]
+pub struct SequencerModel {
+    r: Regs,
+    pram: Vec<u32>,
+    cram: Vec<u128>,
+    wram: Vec<u16>,
+    rf: [u64; 32],
+    exp: [u16; crate::format::EXP_ENTRIES],
+    prog: [u64; 32],
+    atan: [u64; 32],
+}
+
+impl Default for SequencerModel {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl SequencerModel {
+    /// After power-up: every register, RAM and the register file zero (idle, no result).
+    pub fn new() -> Self {
+        let mut prog = [0u64; 32];
+        for (k, op) in POSE_PROGRAM.iter().enumerate() {
+            prog[k] = op.encode() as u64 & m(17);
+        }
+        let mut atan = [0u64; 32];
+        for (k, &t) in CORDIC_ATAN.iter().enumerate() {
+            atan[k] = t as u64 & m(22);
+        }
+        SequencerModel {
+            r: Regs::default(),
+            pram: vec![0; 1 << 12],
+            cram: vec![0; 1 << 8],
+            wram: vec![0; 1 << 8],
+            rf: [0; 32],
+            exp: exp_table(),
+            prog,
+            atan,
+        }
+    }
+
+    /// The state register.
+    pub fn state(&self) -> SeqState {
+        self.r.state
+    }
+
+    /// The state register's name in the RTL.
+    pub fn state_name(&self) -> &'static str {
+        self.r.state.name()
+    }
+
+    /// The configured particle count (the 9-bit `n_part` register).
+    pub fn particle_count(&self) -> usize {
+        self.r.n_part as usize
+    }
+
+    /// The half of the particle RAM the current iteration works on.
+    pub fn half(&self) -> usize {
+        self.r.half as usize
+    }
+
+    /// The first [`SequencerModel::particle_count`] particles (at most 256) of half `half`
+    /// of the particle RAM, sign-extended from 24 bits.
+    pub fn particles(&self, half: usize) -> Vec<Particle> {
+        let n = self.particle_count().min(crate::pf::MAX_PARTICLES);
+        (0..n)
+            .map(|i| std::array::from_fn(|d| sx(self.pram[((half & 1) << 11) | (i << 3) | d] as u64, 24) as i32))
+            .collect()
+    }
+
+    /// The sigma registers (22 bits each).
+    pub fn sigma(&self) -> [u32; PARAMS] {
+        self.r.sigma.map(|s| s as u32)
+    }
+
+    /// The region centre registers (the configured centre until the first region update).
+    pub fn centre(&self) -> Particle {
+        self.r.centre.map(|c| sx(c, 24) as i32)
+    }
+
+    /// The best particle or estimate so far (the `params` output).
+    pub fn best(&self) -> Particle {
+        self.r.best.map(|c| sx(c, 24) as i32)
+    }
+
+    /// The last estimate.
+    pub fn estimate(&self) -> Particle {
+        self.r.est.map(|c| sx(c, 24) as i32)
+    }
+
+    /// The iteration in progress, from 0 (the `k` register; `iterations` counts completed).
+    pub fn iteration(&self) -> u16 {
+        self.r.k as u16
+    }
+
+    /// The pram write port: combinational from the state and registers.
+    fn pram_port(&self) -> WritePort<u64> {
+        let r = &self.r;
+        let mut port = WritePort { we: false, addr: r.pa as usize, data: self.v_fix() };
+        match r.state {
+            SeqState::PropWrite => port.we = true,
+            SeqState::CpData => {
+                port.we = true;
+                port.addr = ((!r.half as usize) << 11) | (((r.j & m(8)) as usize) << 3) | r.pd as usize;
+                port.data = r.pram_q;
+            }
+            _ => {}
+        }
+        port
+    }
+
+    fn sel(&self, v: &[u64; PARAMS]) -> u64 {
+        let pd = self.r.pd as usize;
+        if pd < PARAMS {
+            v[pd]
+        } else {
+            v[0]
+        }
+    }
+
+    fn v_fix(&self) -> u64 {
+        let r = &self.r;
+        let v24 = (self.sel(&r.centre) + (r.off & m(24))) & m(24);
+        if r.pd == 3 && ((v24 >> 23) & 1 == 1 || v24 == 0) {
+            1
+        } else {
+            v24
+        }
+    }
+
+    /// Output ports (after the last edge).
+    pub fn outputs(&self) -> SeqOutputs {
+        let r = &self.r;
+        let mut params = [0u64; 3];
+        for (d, &b) in r.best.iter().enumerate() {
+            let at = 24 * d;
+            params[at / 64] |= b << (at % 64);
+            if at % 64 > 40 {
+                params[at / 64 + 1] |= b >> (64 - at % 64);
+            }
+        }
+        let port = self.pram_port();
+        SeqOutputs {
+            start: r.start_r,
+            pose: r.pose_r,
+            running: r.run_r,
+            finished: r.fin_r,
+            iterations: r.iter_done as u16,
+            best_cost: r.best_cost_r,
+            best_max: r.best_max_r,
+            params,
+            p_we: port.we,
+            p_waddr: port.addr as u16,
+            p_wdata: port.data as u32,
+        }
+    }
+
+    /// One rising clock edge; `i` are the input ports before it.
+    pub fn step(&mut self, i: &SeqInputs) {
+        let r = self.r;
+        let mut n = r;
+        let (cfg_addr, cfg_data) = ((i.cfg_addr as u64) & m(5), i.cfg_data & m(48));
+        let (cost_in, nn_dist) = (i.cost & m(48), i.nn_dist & m(34));
+
+        // ---- Combinational signals (in the kernel's order).
+        let sel_centre = self.sel(&r.centre);
+        let sel_sigma = self.sel(&r.sigma);
+        let sel_floor = self.sel(&r.floor);
+        let sel_cap = self.sel(&r.cap);
+        let sel_est = self.sel(&r.est);
+        let rng_t1 = (r.rng ^ (r.rng << 13)) & m(32);
+        let rng_t2 = rng_t1 ^ (rng_t1 >> 17);
+        let rng_next = (rng_t2 ^ (rng_t2 << 5)) & m(32);
+        let u_hi = (r.rng >> 16) & m(16);
+        let prod_sh14 = (r.m_acc >> 14) & m(26);
+        let prod_sh15 = (r.m_acc >> 15) & m(26);
+        let ref24 = if r.spread { sel_est } else { sel_centre };
+        let diff24 = r.x_r.wrapping_sub(ref24) & m(24);
+        let diff26 = sx(diff24, 24) as u64 & m(26);
+        let lim26 = (sel_sigma << 1) & m(26);
+        let v_fix = self.v_fix();
+        let ex_now = ((r.cram_q as u64) & m(48)).wrapping_sub(r.cmin) & m(48);
+        let ex_masked = ex_now & !r.mask & m(48);
+        let ang = match r.cj {
+            1 => r.cur[5],
+            2 => r.cur[6],
+            _ => r.cur[4],
+        };
+        let ang_x = ang ^ 0x80_0000;
+        let sel_atan = self.atan[r.ci as usize];
+        let ones22 = m(22);
+        let ashr22 = |v: u64, s: u64| -> u64 {
+            let l = if s >= 64 { 0 } else { v >> s };
+            if (v >> 21) & 1 == 1 {
+                (l | !(if s >= 64 { 0 } else { ones22 >> s })) & m(22)
+            } else {
+                l
+            }
+        };
+        let cx_sh = ashr22(r.cx, r.ci);
+        let cy_sh = ashr22(r.cy, r.ci);
+        let cor_out = if r.state == SeqState::CorSin { r.cy } else { r.cx };
+        let cor_sum = (cor_out + 2) & m(22);
+        let cor_r = (cor_sum >> 2) & m(20);
+        let cor_v = if r.cflip { 0u64.wrapping_sub(cor_r) & m(20) } else { cor_r };
+        let prog_word = self.prog[r.pc as usize];
+        let rf_b = r.rf_q;
+        let m_round16 = (r.m_acc + 0x8000) & m(44);
+        let m_round22 = (r.m_acc + 0x20_0000) & m(44);
+        let m_t22 = (m_round22 >> 22) & m(22);
+        let mut m_sat = m_t22 & m(18);
+        if (m_t22 ^ 0x20_0000) > 0x21_ffff {
+            m_sat = 0x1_ffff;
+        }
+        if (m_t22 ^ 0x20_0000) < 0x1e_0000 {
+            m_sat = 0x2_0000;
+        }
+        let tr_in = match r.cj {
+            1 => r.cur[1],
+            2 => r.cur[2],
+            _ => r.cur[0],
+        };
+        let tr_y = (sx(tr_in, 24) + 32) as u64 & m(25);
+        let tr_t = (tr_y >> 6) & m(19);
+        let mut tr_sat = tr_t & m(18);
+        if (tr_t ^ 0x4_0000) > 0x5_ffff {
+            tr_sat = 0x1_ffff;
+        }
+        if (tr_t ^ 0x4_0000) < 0x2_0000 {
+            tr_sat = 0x2_0000;
+        }
+        let acc_neg = (r.acc >> 47) & 1 == 1;
+        let acc_abs = if acc_neg { 0u64.wrapping_sub(r.acc) & m(48) } else { r.acc };
+        let q26 = r.dv_n & m(26);
+        let mean26 = if acc_neg { 0u64.wrapping_sub(q26) & m(26) } else { q26 };
+        let dev26 = (q26 + (q26 >> 2)) & m(26);
+        let mut sig_new = dev26 & m(22);
+        if dev26 > sel_cap {
+            sig_new = sel_cap;
+        }
+        if dev26 < sel_floor {
+            sig_new = sel_floor;
+        }
+        let est_v = (sel_centre + (mean26 & m(24))) & m(24);
+        let est_fix = if r.pd == 3 && ((est_v >> 23) & 1 == 1 || est_v == 0) { 1 } else { est_v };
+        let abs26 = if (diff26 >> 25) & 1 == 1 { 0u64.wrapping_sub(diff26) & m(26) } else { diff26 };
+        let maxd_next = if i.nn_valid && nn_dist > r.maxd { nn_dist } else { r.maxd };
+        let t_entry = if r.sh > 255 { 255 } else { r.sh & m(8) };
+        let exp_data = self.exp[t_entry as usize] as u64;
+        let mut e_tmp = r.tq;
+        if r.p > 2 && r.p - 2 > r.tq {
+            e_tmp = r.p - 2;
+        }
+
+        // ---- Memory ports and datapath controls: defaults.
+        let pram_w = self.pram_port();
+        let pram_ra = r.pa as usize;
+        let mut cram_w =
+            WritePort { we: false, addr: (r.i & m(8)) as usize, data: r.costr as u128 | (r.maxd as u128) << 48 };
+        let cram_ra = r.cra as usize;
+        let wram_w = WritePort { we: r.state == SeqState::WIdx, addr: (r.i & m(8)) as usize, data: exp_data as u16 };
+        let wram_ra = r.wra as usize;
+        let mut rf_ra = r.op_b as usize;
+        let mut rf_w = WritePort { we: false, addr: r.op_dst as usize, data: sx(cor_v, 20) as u64 & m(26) };
+        n.start_r = false;
+        let mut mul_go = false;
+        let mut mul_a_in = sel_sigma & m(26);
+        let mut mul_b_in = sx(u_hi, 16) as u64 & m(18);
+        let mut div_go = false;
+        let div_n_in = acc_abs;
+
+        // ---- Configuration writes.
+        if i.cfg_we {
+            let a = cfg_addr as usize;
+            if a < 7 {
+                n.centre[a] = cfg_data & m(24);
+            } else if a < 14 {
+                n.cap[a - 7] = cfg_data & m(22);
+            } else if a < 21 {
+                n.floor[a - 14] = cfg_data & m(22);
+            }
+            match a {
+                21 => n.seed = cfg_data & m(32),
+                22 => n.thr_cost = cfg_data,
+                23 => n.thr_max = cfg_data & m(34),
+                24 => {
+                    n.n_part = cfg_data & m(9);
+                    n.n_iter = (cfg_data >> 16) & m(16);
+                    n.tq = (cfg_data >> 32) & m(6);
+                }
+                _ => {}
+            }
+        }
+
+        // `(x + 1) == n_part` / `< n_part` are 32-bit in the Verilog: no wrap at 9 bits.
+        let last = |x: u64| x + 1 == r.n_part;
+        let pa_of = |half: bool, p: u64| ((half as u64) << 11) | ((p & m(8)) << 3);
+
+        use SeqState as S;
+        match r.state {
+            S::Idle => {
+                if i.go {
+                    for q in 0..PARAMS {
+                        n.sigma[q] = r.cap[q];
+                        if r.floor[q] > r.cap[q] {
+                            n.cap[q] = r.floor[q];
+                            n.sigma[q] = r.floor[q];
+                        }
+                        n.cur[q] = r.centre[q];
+                    }
+                    n.rng = if r.seed == 0 { 1 } else { r.seed };
+                    n.run_r = true;
+                    n.fin_r = false;
+                    n.iter_done = 0;
+                    n.k = 0;
+                    n.half = false;
+                    n.cj = 0;
+                    n.ret = S::EvStart;
+                    n.ret2 = S::StartDone;
+                    n.state = S::CorInit;
+                }
+            }
+            // ---- Pose subroutine.
+            S::CorInit => {
+                n.cx = CORDIC_K as u64;
+                n.cy = 0;
+                n.ci = 0;
+                n.cflip = false;
+                n.cz = sx(ang, 24) as u64 & m(25);
+                // `ang_x > 0xc0_0000 || ang_x < 0x40_0000`.
+                if !(0x40_0000..=0xc0_0000).contains(&ang_x) {
+                    n.cflip = true;
+                    n.cz = sx(ang_x, 24) as u64 & m(25);
+                }
+                n.state = S::CorStep;
+            }
+            S::CorStep => {
+                if (r.cz >> 24) & 1 == 0 {
+                    n.cx = r.cx.wrapping_sub(cy_sh) & m(22);
+                    n.cy = (r.cy + cx_sh) & m(22);
+                    n.cz = r.cz.wrapping_sub(sel_atan) & m(25);
+                } else {
+                    n.cx = (r.cx + cy_sh) & m(22);
+                    n.cy = r.cy.wrapping_sub(cx_sh) & m(22);
+                    n.cz = (r.cz + sel_atan) & m(25);
+                }
+                n.ci = (r.ci + 1) & m(5);
+                if r.ci == 17 {
+                    n.state = S::CorCos;
+                }
+            }
+            S::CorCos => {
+                rf_w.we = true;
+                rf_w.addr = ((r.cj << 1) & m(5)) as usize;
+                n.state = S::CorSin;
+            }
+            S::CorSin => {
+                rf_w.we = true;
+                rf_w.addr = (((r.cj << 1) + 1) & m(5)) as usize;
+                n.cj = (r.cj + 1) & m(2);
+                n.state = if r.cj == 2 { S::PoseScale } else { S::CorInit };
+            }
+            S::PoseScale => {
+                rf_w.we = true;
+                rf_w.addr = 6;
+                rf_w.data = sx(r.cur[3], 24) as u64 & m(26);
+                n.pc = 0;
+                n.cj = 0;
+                n.state = S::OpFetch;
+            }
+            S::OpFetch => {
+                rf_ra = ((prog_word >> 7) & m(5)) as usize;
+                n.op_kind = prog_word & m(2);
+                n.op_dst = (prog_word >> 2) & m(5);
+                n.op_b = (prog_word >> 12) & m(5);
+                n.state = S::OpA;
+            }
+            S::OpA => {
+                n.opa = r.rf_q;
+                n.state = S::OpB;
+            }
+            S::OpB => {
+                if (r.op_kind >> 1) & 1 == 1 {
+                    rf_w.we = true;
+                    rf_w.data =
+                        if r.op_kind & 1 == 1 { r.opa.wrapping_sub(rf_b) & m(26) } else { (r.opa + rf_b) & m(26) };
+                    n.pc = (r.pc + 1) & m(5);
+                    n.state = S::OpFetch;
+                } else {
+                    mul_go = true;
+                    mul_a_in = r.opa;
+                    mul_b_in = rf_b & m(18);
+                    n.state = S::OpMul;
+                }
+            }
+            S::OpMul => {
+                if r.m_cnt == 0 {
+                    if r.op_kind & 1 == 1 {
+                        n.pose_r = shift_in18(r.pose_r, m_sat);
+                    } else {
+                        rf_w.we = true;
+                        rf_w.data = (m_round16 >> 16) & m(26);
+                    }
+                    n.pc = (r.pc + 1) & m(5);
+                    n.state = if r.pc == 27 { S::PoseT } else { S::OpFetch };
+                }
+            }
+            S::PoseT => {
+                n.pose_r = shift_in18(r.pose_r, tr_sat);
+                n.cj = (r.cj + 1) & m(2);
+                if r.cj == 2 {
+                    n.state = r.ret;
+                }
+            }
+            // ---- Evaluate subroutine.
+            S::EvStart => {
+                if i.nn_ready {
+                    n.start_r = true;
+                    n.maxd = 0;
+                    n.state = S::EvWait;
+                }
+            }
+            S::EvWait => {
+                n.maxd = maxd_next;
+                if i.cost_valid {
+                    n.costr = cost_in;
+                    n.state = r.ret2;
+                }
+            }
+            S::StartDone => {
+                n.best_cost_r = r.costr;
+                n.best_max_r = r.maxd;
+                n.best = r.cur;
+                n.state = S::IterBegin;
+            }
+            // ---- One iteration.
+            S::IterBegin => {
+                n.i = 0;
+                n.pd = 0;
+                n.cmin = m(48);
+                n.imin = 0;
+                n.first = r.k == 0;
+                n.pa = (r.half as u64) << 11;
+                n.state = S::PropAddr;
+            }
+            S::PropAddr => {
+                n.rng = rng_next;
+                n.state = S::PropRead;
+            }
+            S::PropRead => {
+                mul_go = true;
+                n.state = S::PropMul;
+            }
+            S::PropMul => {
+                n.x_r = r.pram_q;
+                if r.m_cnt == 0 {
+                    n.off = if r.first { prod_sh14 } else { (diff26 + prod_sh15) & m(26) };
+                    n.state = S::PropClamp;
+                }
+            }
+            S::PropClamp => {
+                let neg_lim = 0u64.wrapping_sub(lim26) & m(26);
+                if (r.off ^ 0x200_0000) > (lim26 ^ 0x200_0000) {
+                    n.off = lim26;
+                }
+                if (r.off ^ 0x200_0000) < (neg_lim ^ 0x200_0000) {
+                    n.off = neg_lim;
+                }
+                n.state = S::PropWrite;
+            }
+            S::PropWrite => {
+                // (The write port is `pram_port`.)
+                if (r.pd as usize) < PARAMS {
+                    n.cur[r.pd as usize] = v_fix;
+                }
+                n.pa = (r.pa + 1) & m(12);
+                n.pd = (r.pd + 1) & m(3);
+                if r.pd == 6 {
+                    n.pd = 0;
+                    n.pa = (r.pa + 2) & m(12);
+                    n.cj = 0;
+                    n.ret = S::EvStart;
+                    n.ret2 = S::PartStore;
+                    n.state = S::CorInit;
+                } else {
+                    n.state = S::PropAddr;
+                }
+            }
+            S::PartStore => {
+                cram_w.we = true;
+                if r.costr < r.cmin {
+                    n.cmin = r.costr;
+                    n.imin = r.i & m(8);
+                }
+                n.i = (r.i + 1) & m(9);
+                if last(r.i) {
+                    n.p = 0;
+                    n.mask = 0;
+                    n.state = S::TPass;
+                } else {
+                    n.state = S::PropAddr;
+                }
+            }
+            // ---- Temperature.
+            S::TPass => {
+                n.i = 0;
+                n.cnt = 0;
+                n.state = S::TAddr;
+            }
+            S::TAddr => {
+                n.cra = r.i & m(8);
+                n.state = S::TWait;
+            }
+            S::TWait => n.state = S::TData,
+            S::TData => {
+                if ex_masked == 0 {
+                    n.cnt = (r.cnt + 1) & m(9);
+                }
+                n.i = (r.i + 1) & m(9);
+                n.state = if last(r.i) { S::TCheck } else { S::TAddr };
+            }
+            S::TCheck => {
+                if r.cnt > (r.n_part >> 1) {
+                    n.state = S::TSet;
+                } else {
+                    n.p = (r.p + 1) & m(6);
+                    n.mask = ((r.mask << 1) | 1) & m(48);
+                    n.state = S::TPass;
+                }
+            }
+            S::TSet => {
+                n.pre = if e_tmp > 5 { (e_tmp - 5) & m(6) } else { 0 };
+                n.i = 0;
+                n.w_sum = 0;
+                n.state = S::WAddr;
+            }
+            // ---- Weights.
+            S::WAddr => {
+                n.cra = r.i & m(8);
+                n.state = S::WWait;
+            }
+            S::WWait => n.state = S::WData,
+            S::WData => {
+                n.sh = if r.pre >= 64 { 0 } else { ex_now >> r.pre };
+                n.state = S::WIdx;
+            }
+            S::WIdx => {
+                // (The write enable is in `wram_w`.)
+                n.w_sum = (r.w_sum + exp_data) & m(24);
+                n.i = (r.i + 1) & m(9);
+                n.state = if last(r.i) { S::BestCheck } else { S::WAddr };
+            }
+            // ---- The best particle.
+            S::BestCheck => {
+                n.cra = r.imin;
+                n.pd = 0;
+                if r.cmin < r.best_cost_r {
+                    n.state = S::BestRec;
+                } else {
+                    n.spread = false;
+                    n.state = S::SumBegin;
+                }
+            }
+            S::BestRec => {
+                n.pa = pa_of(r.half, r.imin);
+                n.state = S::BestAddr;
+            }
+            S::BestAddr => {
+                n.best_cost_r = (r.cram_q as u64) & m(48);
+                n.best_max_r = ((r.cram_q >> 48) as u64) & m(34);
+                n.state = S::BestWait;
+            }
+            S::BestWait => n.state = S::BestData,
+            S::BestData => {
+                if (r.pd as usize) < PARAMS {
+                    n.best[r.pd as usize] = r.pram_q;
+                }
+                n.pa = (r.pa + 1) & m(12);
+                n.pd = (r.pd + 1) & m(3);
+                if r.pd == 6 {
+                    n.pd = 0;
+                    n.spread = false;
+                    n.state = S::SumBegin;
+                } else {
+                    n.state = S::BestWait;
+                }
+            }
+            // ---- Estimate and spread.
+            S::SumBegin => {
+                n.acc = 0;
+                n.i = 0;
+                n.state = S::SumAddr;
+            }
+            S::SumAddr => {
+                n.pa = pa_of(r.half, r.i) | r.pd;
+                n.wra = r.i & m(8);
+                n.state = S::SumWait;
+            }
+            S::SumWait => n.state = S::SumData,
+            S::SumData => {
+                n.x_r = r.pram_q;
+                n.state = S::SumMul;
+            }
+            S::SumMul => {
+                n.state = S::SumDiv;
+                mul_go = true;
+                mul_b_in = r.wram_q & m(18);
+                mul_a_in = if r.spread { abs26 } else { diff26 };
+            }
+            S::SumDiv => {
+                if r.m_cnt == 0 {
+                    let prod48 = (sx(r.m_acc, 44) as u64) & m(48);
+                    n.acc = (r.acc + prod48) & m(48);
+                    n.i = (r.i + 1) & m(9);
+                    n.state = if last(r.i) { S::SumDivGo } else { S::SumAddr };
+                }
+            }
+            S::SumDivGo => {
+                div_go = true;
+                n.state = S::SumDivWait;
+            }
+            S::SumDivWait => {
+                if r.dv_cnt == 0 {
+                    if (r.pd as usize) < PARAMS {
+                        if r.spread {
+                            n.sigma[r.pd as usize] = sig_new;
+                        } else {
+                            n.est[r.pd as usize] = est_fix;
+                        }
+                    }
+                    n.pd = (r.pd + 1) & m(3);
+                    n.state = S::SumBegin;
+                    if r.pd == 6 {
+                        n.pd = 0;
+                        if r.spread {
+                            n.state = S::EstEval;
+                        } else {
+                            n.spread = true;
+                        }
+                    }
+                }
+            }
+            S::EstEval => {
+                n.spread = false;
+                n.cur = r.est;
+                n.cj = 0;
+                n.ret = S::EvStart;
+                n.ret2 = S::EstDone;
+                n.state = S::CorInit;
+            }
+            S::EstDone => {
+                if r.costr < r.best_cost_r {
+                    n.best_cost_r = r.costr;
+                    n.best_max_r = r.maxd;
+                    n.best = r.est;
+                }
+                n.state = S::Centre;
+            }
+            S::Centre => {
+                n.centre = r.best;
+                n.iter_done = (r.k + 1) & m(16);
+                n.state = S::StopCheck;
+            }
+            S::StopCheck => {
+                if (r.best_cost_r <= r.thr_cost && r.best_max_r <= r.thr_max) || r.iter_done == r.n_iter {
+                    n.state = S::Fin;
+                } else {
+                    n.rng = rng_next;
+                    n.state = S::RsBegin;
+                }
+            }
+            // ---- Systematic resampling.
+            S::RsBegin => {
+                mul_go = true;
+                mul_a_in = r.w_sum;
+                mul_b_in = u_hi;
+                n.wra = 0;
+                n.i = 0;
+                n.j = 0;
+                n.rgt = 0;
+                n.state = S::RsL;
+            }
+            S::RsL => {
+                if r.m_cnt == 0 {
+                    n.lft = r.m_acc;
+                    n.state = S::RsWData;
+                }
+            }
+            S::RsWAddr => {
+                n.wra = r.i & m(8);
+                n.state = S::RsWWait;
+            }
+            S::RsWWait => n.state = S::RsWData,
+            S::RsWData => {
+                mul_go = true;
+                mul_a_in = r.n_part;
+                mul_b_in = r.wram_q;
+                n.state = S::RsWMul;
+            }
+            S::RsWMul => {
+                if r.m_cnt == 0 {
+                    n.rgt = (r.rgt + (r.m_acc << 16)) & m(50);
+                    n.state = S::RsLoop;
+                }
+            }
+            S::RsLoop => {
+                if r.lft > r.rgt && r.i + 1 < r.n_part {
+                    n.i = (r.i + 1) & m(9);
+                    n.state = S::RsWAddr;
+                } else {
+                    n.pd = 0;
+                    n.pa = pa_of(r.half, r.i);
+                    n.state = S::CpWait;
+                }
+            }
+            S::CpWait => n.state = S::CpData,
+            S::CpData => {
+                // (The write port is `pram_port`.)
+                n.pa = (r.pa + 1) & m(12);
+                n.pd = (r.pd + 1) & m(3);
+                n.state = if r.pd == 6 { S::CpNext } else { S::CpWait };
+            }
+            S::CpNext => {
+                n.lft = (r.lft + (r.w_sum << 16)) & m(50);
+                n.j = (r.j + 1) & m(9);
+                n.state = if last(r.j) { S::RsDone } else { S::RsLoop };
+            }
+            S::RsDone => {
+                n.half = !r.half;
+                n.k = (r.k + 1) & m(16);
+                n.state = S::IterBegin;
+            }
+            S::Fin => {
+                n.cur = r.best;
+                n.cj = 0;
+                n.ret = S::FinDone;
+                n.state = S::CorInit;
+            }
+            S::FinDone => {
+                n.run_r = false;
+                n.fin_r = true;
+                n.state = S::Idle;
+            }
+        }
+
+        // ---- The serial multiplier.
+        let m_neg = 0u64.wrapping_sub(r.m_a) & m(44);
+        if mul_go {
+            n.m_a = sx(mul_a_in & m(26), 26) as u64 & m(44);
+            n.m_b = mul_b_in & m(18);
+            n.m_acc = 0;
+            n.m_cnt = 18;
+        } else if r.m_cnt != 0 {
+            if r.m_b & 1 == 1 {
+                let add = if r.m_cnt == 1 { m_neg } else { r.m_a };
+                n.m_acc = (r.m_acc + add) & m(44);
+            }
+            n.m_a = (r.m_a << 1) & m(44);
+            n.m_b = r.m_b >> 1;
+            n.m_cnt = r.m_cnt - 1;
+        }
+        // ---- The serial divider.
+        let rem2 = ((r.dv_rem << 1) | ((r.dv_n >> 47) & 1)) & m(25);
+        if div_go {
+            n.dv_n = div_n_in;
+            n.dv_d = r.w_sum;
+            n.dv_rem = 0;
+            n.dv_cnt = 48;
+        } else if r.dv_cnt != 0 {
+            if rem2 >= r.dv_d {
+                n.dv_rem = (rem2 - r.dv_d) & m(25);
+                n.dv_n = ((r.dv_n << 1) | 1) & m(48);
+            } else {
+                n.dv_rem = rem2;
+                n.dv_n = (r.dv_n << 1) & m(48);
+            }
+            n.dv_cnt = r.dv_cnt - 1;
+        }
+
+        if i.reset {
+            n.state = S::Idle;
+            n.run_r = false;
+            n.fin_r = false;
+            n.m_cnt = 0;
+            n.dv_cnt = 0;
+        }
+
+        // ---- The memories: read first (the old contents), then write.
+        n.pram_q = self.pram[pram_ra] as u64;
+        n.cram_q = self.cram[cram_ra];
+        n.wram_q = self.wram[wram_ra] as u64;
+        n.rf_q = self.rf[rf_ra];
+        if pram_w.we {
+            self.pram[pram_w.addr] = (pram_w.data & m(24)) as u32;
+        }
+        if cram_w.we {
+            self.cram[cram_w.addr] = cram_w.data & ((1u128 << 82) - 1);
+        }
+        if wram_w.we {
+            self.wram[wram_w.addr] = wram_w.data;
+        }
+        if rf_w.we {
+            self.rf[rf_w.addr] = rf_w.data & m(26);
+        }
+        self.r = n;
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Clocks (measured on the model; `tests/sequencer_model.rs` checks them exactly).
+// ---------------------------------------------------------------------------------------
+
+/// Clocks of one pose (`cur` to `pose`: three CORDICs, the scale, the 28-step program, the
+/// translations), from entering `CorInit` to leaving the last `PoseT`.
+pub const POSE_CLOCKS: u64 = 3 * (1 + 18 + 2) + 1 + 23 * MUL_OP_CLOCKS + 5 * 3 + 3;
+/// Clocks of a multiply step of the pose program (fetch, two operands, 19 in `OpMul`).
+const MUL_OP_CLOCKS: u64 = 3 + SERIAL_MUL_WAIT;
+/// Clocks a state waiting for the serial multiplier spends in it (18 steps and the clock
+/// that takes the product).
+const SERIAL_MUL_WAIT: u64 = 19;
+/// Clocks a state waiting for the serial divider spends in it.
+const SERIAL_DIV_WAIT: u64 = 49;
+/// Clocks of the propagation of one parameter of one particle.
+pub const PROPAGATE_CLOCKS: u64 = 4 + SERIAL_MUL_WAIT;
+
+/// Clocks of one temperature pass over `n` costs (`TPass`, three per cost, `TCheck`).
+pub const fn temper_pass_clocks(n: u64) -> u64 {
+    3 * n + 2
+}
+
+/// Clocks of one parameter of the estimate or of the spread over `n` particles.
+pub const fn sum_clocks(n: u64) -> u64 {
+    n * (4 + SERIAL_MUL_WAIT) + 2 + SERIAL_DIV_WAIT
+}
+
+/// What the clocks of an iteration depend on besides the particle count.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct IterationShape {
+    /// Particles.
+    pub particles: u64,
+    /// Clocks in `EvStart` and `EvWait` over the iteration's `particles + 1` evaluations
+    /// (the pipeline's time: `1 +` clocks from `start` to `cost_valid` each, when ready).
+    pub eval_clocks: u64,
+    /// Temperature passes: the bit length of the median excess, plus one (1 to 49).
+    pub temper_passes: u64,
+    /// The best particle beat the best so far (its record and parameters are copied).
+    pub best_copied: bool,
+    /// `None` after the last iteration, else the resampling pointer's advances (the index
+    /// of the last survivor).
+    pub resample_advances: Option<u64>,
+}
+
+/// Clocks of one iteration, from entering `IterBegin` to entering the next `IterBegin`
+/// (or `Fin`).
+pub fn clocks_per_iteration(s: &IterationShape) -> u64 {
+    let n = s.particles;
+    let p = crate::pf::PARAMS as u64;
+    let propagate = 1 + n * (p * PROPAGATE_CLOCKS + POSE_CLOCKS + 1);
+    let temper = s.temper_passes * temper_pass_clocks(n) + 1;
+    let weights = 4 * n + 1 + if s.best_copied { 2 + 2 * p } else { 0 };
+    let sums = 2 * p * sum_clocks(n);
+    let estimate = 1 + POSE_CLOCKS + 3;
+    // RsBegin, RsL, RsWData and RsWMul for w_0, RsDone; an advance: RsLoop, RsWAddr,
+    // RsWWait, RsWData, RsWMul; a copy: RsLoop, CpWait and CpData per parameter, CpNext.
+    let resample = s
+        .resample_advances
+        .map_or(0, |a| (1 + SERIAL_MUL_WAIT + 1 + SERIAL_MUL_WAIT + 1) + (4 + SERIAL_MUL_WAIT) * a + (2 + 2 * p) * n);
+    propagate + s.eval_clocks + temper + weights + sums + estimate + resample
+}
+
+/// Clocks of a run, from the clock `go` is taken to the edge `finished` rises: the start's
+/// pose and evaluation (`start_eval_clocks` in `EvStart` and `EvWait`), the iterations, the
+/// best's pose.
+pub fn run_clocks(start_eval_clocks: u64, iterations: &[IterationShape]) -> u64 {
+    1 + POSE_CLOCKS + start_eval_clocks + 1 + iterations.iter().map(clocks_per_iteration).sum::<u64>() + 2 + POSE_CLOCKS
 }
