@@ -1,0 +1,165 @@
+//! Lockstep co-simulation of the particle-filter sequencer: the Verilated `PfSequencer` and its
+//! cycle-accurate mirror `SequencerModel` get the same inputs; every output port (start, pose,
+//! status, best, parameters, the particle-RAM write port) must be equal after every clock.
+//! Realistic runs with an emulated pipeline (random latencies, resets mid-run), and random
+//! inputs on every port.
+
+use pficp_fpga::format::{point, FxPoint};
+use pficp_fpga::pf::{self, PfConfig, SCALE_FRAC};
+use pficp_fpga::sequencer::{config_writes, unpack_pose, SeqInputs, SequencerModel};
+use pficp_sim::VerilatedSequencer;
+
+fn cloud(n: usize, shift: [i16; 3], phase: f64) -> Vec<FxPoint> {
+    (0..n)
+        .map(|i| {
+            let t = i as f64 * 0.37 + phase;
+            let p = point([0.6 * t.sin(), 0.5 * (1.7 * t).cos(), 0.4 * (0.5 * t).sin()]);
+            [p[0] - shift[0], p[1] - shift[1], p[2] - shift[2]]
+        })
+        .collect()
+}
+
+fn config(particles: u16, iterations: u16, seed: u32) -> PfConfig {
+    PfConfig {
+        particles,
+        iterations,
+        temper_exp: 5,
+        centre: [0, 0, 0, 1 << SCALE_FRAC, 0, 0, 0],
+        sigma0: [1 << 17, 1 << 17, 1 << 17, 1 << 15, 1 << 16, 1 << 16, 1 << 16],
+        floor: [1 << 10, 1 << 10, 1 << 10, 1 << 10, 1 << 9, 1 << 9, 1 << 9],
+        seed,
+        thr_cost: 0,
+        thr_max: 0,
+    }
+}
+
+struct Both {
+    rtl: VerilatedSequencer,
+    m: SequencerModel,
+    n: u64,
+}
+impl Both {
+    fn step(&mut self, i: &SeqInputs) {
+        let before = self.m.state_name();
+        self.rtl.step(i);
+        self.m.step(i);
+        self.n += 1;
+        let (a, b) = (self.rtl.outputs(), self.m.outputs());
+        assert_eq!(a, b, "clock {} (model was in {before}, now {}), inputs {i:?}", self.n, self.m.state_name());
+    }
+}
+
+fn realistic(cfg: &PfConfig, model: &[FxPoint], scan: &[FxPoint], seed: u32, reset_at: Option<u64>) -> u64 {
+    let mut b = Both { rtl: VerilatedSequencer::new(), m: SequencerModel::new(), n: 0 };
+    assert_eq!(b.rtl.outputs(), b.m.outputs());
+    let mut rng = pf::Xorshift32::new(seed);
+    for (a, w) in config_writes(cfg) {
+        b.step(&SeqInputs { cfg_we: true, cfg_addr: a, cfg_data: w, ..Default::default() });
+    }
+    b.step(&SeqInputs { go: true, ..Default::default() });
+    let mut pending: Option<(u64, Vec<u64>, u64)> = None;
+    let mut ready_at = 0;
+    let mut now = 0u64;
+    loop {
+        let o = b.m.outputs();
+        let mut i = SeqInputs { nn_ready: pending.is_none() && now >= ready_at && !o.start, ..Default::default() };
+        if o.start {
+            let pose = unpack_pose(&o.pose);
+            let e = pficp_fpga::pipeline::evaluate(model, scan, &pose);
+            pending = Some((now + (rng.next() % 40) as u64, e.nearest.iter().map(|n| n.1).collect(), e.cost));
+        }
+        if let Some((t0, d, c)) = &pending {
+            if now >= *t0 {
+                let k = (now - t0) as usize;
+                if k < d.len() {
+                    i.nn_valid = true;
+                    i.nn_dist = d[k];
+                } else {
+                    i.cost_valid = true;
+                    i.cost = *c;
+                }
+            }
+        }
+        if i.cost_valid {
+            pending = None;
+            ready_at = now + 1 + (rng.next() % 4) as u64;
+        }
+        if Some(now) == reset_at {
+            i.reset = true;
+            pending = None;
+        }
+        b.step(&i);
+        now += 1;
+        if b.m.outputs().finished {
+            return now;
+        }
+        if reset_at.is_some() && now > reset_at.unwrap() + 50 {
+            return now;
+        }
+        assert!(now < 5_000_000);
+    }
+}
+
+#[test]
+fn lockstep_realistic() {
+    let model = cloud(60, [0, 0, 0], 0.0);
+    let scan = cloud(30, [400, -200, 100], 0.05);
+    println!("{}", realistic(&config(12, 5, 7), &model, &scan, 3, None));
+    println!("{}", realistic(&config(1, 3, 9), &model, &scan, 4, None));
+    let mut c = config(7, 4, 0);
+    c.centre = [1000, -2000, 300, (1 << SCALE_FRAC) + 5000, 8_000_000, -8_300_000, 4_190_000];
+    c.temper_exp = 40;
+    println!("{}", realistic(&c, &model, &scan, 5, None));
+    let mut c = config(9, 3, 0xdead_beef);
+    c.centre[3] = 3000;
+    c.sigma0[3] = 1 << 14;
+    println!("{}", realistic(&c, &model, &scan, 6, None));
+    for at in [3u64, 400, 2000, 9000, 17000] {
+        realistic(&config(8, 4, 17), &model, &scan, 7, Some(at));
+    }
+    let mut c = config(10, 30, 21);
+    c.thr_cost = 1 << 40;
+    c.thr_max = (1 << 34) - 1;
+    realistic(&c, &model, &scan, 8, None);
+}
+
+/// Random inputs on every port, random configuration words.
+#[test]
+fn lockstep_random_inputs() {
+    for seed in 1..=10u32 {
+        let mut rng = pf::Xorshift32::new(seed * 2654435761);
+        let mut r = || rng.next() as u64;
+        let mut b = Both { rtl: VerilatedSequencer::new(), m: SequencerModel::new(), n: 0 };
+        let clocks = 200_000;
+        let mut hist = std::collections::HashMap::new();
+        let mut fins = 0u64;
+        for c in 0..clocks {
+            let x = r() | r() << 32;
+            let mut i = SeqInputs::default();
+            i.cfg_we = c < 30 || (b.m.state_name() == "Idle" && x % 16 == 0) || x % 7000 == 0;
+            i.cfg_addr = (r() % 32) as u8;
+            i.cfg_data = r() | r() << 32;
+            if c < 30 {
+                i.cfg_addr = (c % 25) as u8;
+            }
+            if i.cfg_addr == 24 && x % 50 != 0 {
+                // Mostly small particle counts and few iterations.
+                i.cfg_data = (r() % 12 + 1) | (r() % 4 + 1) << 16 | (r() % 64) << 32;
+            }
+            i.go = (x >> 8) % 64 == 0;
+            i.nn_ready = (x >> 16) % 4 != 0;
+            i.cost_valid = (x >> 20) % 8 == 0;
+            i.cost = r() & if x % 5 == 0 { u64::MAX } else { 0xffff_ffff };
+            i.nn_valid = (x >> 24) % 2 == 0;
+            i.nn_dist = r();
+            i.reset = (x >> 32) % 20_000 == 0;
+            b.step(&i);
+            *hist.entry(b.m.state_name()).or_insert(0u64) += 1;
+            if b.m.outputs().finished {
+                fins += 1;
+            }
+        }
+        println!("{} states visited, finished clocks {fins}", hist.len());
+        println!("seed {seed}: state {} iterations {}", b.m.state_name(), b.m.outputs().iterations);
+    }
+}
