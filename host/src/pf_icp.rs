@@ -230,14 +230,41 @@ pub fn weight_sample(scan: &[Point3<f64>], settings: &PfIcpSettings) -> Vec<Poin
     }
 }
 
-/// [`register`] with the particles' costs and weights from `weights` (`None`: the host's
-/// own, exactly as [`register`]). Stops at the first error of the source.
-pub fn register_with(
-    nn: &NearestNeighbours,
-    scan: &[Point3<f64>],
-    settings: &PfIcpSettings,
-    weights: Option<&dyn ParticleWeights>,
-) -> Result<PfIcpResult, WeighError> {
+/// Everything PF-ICP computes before its filter (stages 1 and 2): the weight sample, the
+/// start, the covariance and the filter's prior in the centred frame. The on-board filter
+/// (`crate::board_pf::register_on_board`) takes it from here without running the host's.
+#[derive(Clone, Debug)]
+pub struct Prior {
+    /// The scan points the particle costs are taken over ([`weight_sample`]).
+    pub sample: Vec<Point3<f64>>,
+    /// The start.
+    pub initial: InitialPose,
+    /// The covariance estimate.
+    pub covariance: IcpCovariance,
+    /// The centred frame the filter's states live in (the clouds' centroids).
+    pub frame: Centred,
+    /// The start in that frame: the filter's first centre.
+    pub init_params: Params,
+    /// Initial sigma per state (also the cap of the region update).
+    pub sigma0: Vec<f64>,
+    /// Smallest sigma per state.
+    pub floor: Vec<f64>,
+    /// The likelihood's `Q` (the variance of the subset MSDs).
+    pub q: f64,
+    /// Stop threshold on the average closest-point distance [units].
+    pub threshold_avg: f64,
+    /// Stop threshold on the largest closest-point distance [units].
+    pub threshold_max: f64,
+    /// The model's bounding-box diagonal.
+    pub diag: f64,
+    /// Wall time of the clustering and the start.
+    pub clustering_time: Duration,
+    /// Wall time of the covariance.
+    pub covariance_time: Duration,
+}
+
+/// Stages 1 and 2 of PF-ICP: the start (k-means), the covariance and the filter's prior.
+pub fn prior(nn: &NearestNeighbours, scan: &[Point3<f64>], settings: &PfIcpSettings) -> Prior {
     let model = nn.points();
     let diag = crate::cloud::bbox_diagonal(model);
     let sample = weight_sample(scan, settings);
@@ -263,9 +290,51 @@ pub fn register_with(
     let (_, variance) = covariance.stats_in(&frame, &initial.pose);
     let cap = sigma_cap(diag, initial.pose.scale);
     let floor = sigma_floor(diag, initial.pose.scale);
-    let prior = start_prior(initial.pairing, diag, initial.pose.scale);
+    let start = start_prior(initial.pairing, diag, initial.pose.scale);
     let sigma0: Vec<f64> =
-        variance.iter().enumerate().map(|(d, v)| v.sqrt().max(prior[d]).max(floor[d]).min(cap[d])).collect();
+        variance.iter().enumerate().map(|(d, v)| v.sqrt().max(start[d]).max(floor[d]).min(cap[d])).collect();
+    let q = covariance.msd_variance;
+    Prior {
+        sample,
+        initial,
+        covariance,
+        frame,
+        init_params,
+        sigma0,
+        floor,
+        q,
+        threshold_avg: settings.threshold_avg * diag,
+        threshold_max: settings.threshold_max * diag,
+        diag,
+        clustering_time: t1 - t0,
+        covariance_time: t2 - t1,
+    }
+}
+
+/// [`register`] with the particles' costs and weights from `weights` (`None`: the host's
+/// own, exactly as [`register`]). Stops at the first error of the source.
+pub fn register_with(
+    nn: &NearestNeighbours,
+    scan: &[Point3<f64>],
+    settings: &PfIcpSettings,
+    weights: Option<&dyn ParticleWeights>,
+) -> Result<PfIcpResult, WeighError> {
+    let Prior {
+        sample,
+        initial,
+        covariance,
+        frame,
+        init_params,
+        sigma0,
+        floor,
+        q,
+        threshold_avg,
+        threshold_max,
+        clustering_time,
+        covariance_time,
+        ..
+    } = prior(nn, scan, settings);
+    let t2 = Instant::now();
     if let Some(source) = weights {
         source.prepare(&sample)?;
     }
@@ -275,10 +344,10 @@ pub fn register_with(
         particles: settings.particles,
         iterations: settings.iterations,
         region_sigmas: settings.region_sigmas,
-        q: covariance.msd_variance,
+        q,
         sigma_floor: floor,
-        threshold_avg: settings.threshold_avg * diag,
-        threshold_max: settings.threshold_max * diag,
+        threshold_avg,
+        threshold_max,
         adaptive: settings.adaptive,
         seed: settings.seed.wrapping_add(1),
     };
@@ -297,7 +366,12 @@ pub fn register_with(
         covariance,
         filter_pose,
         filter_history: filtered.history.clone(),
-        times: StageTimes { clustering: t1 - t0, covariance: t2 - t1, filter: t3 - t2, polish: t4 - t3 },
+        times: StageTimes {
+            clustering: clustering_time,
+            covariance: covariance_time,
+            filter: t3 - t2,
+            polish: t4 - t3,
+        },
     })
 }
 
