@@ -1053,9 +1053,9 @@ mod tests {
         ok(&mut b, req(RUN, 4, run_cfg(40, 15, 5).encode()));
         let o = b.pf_outcome().unwrap().clone();
         assert!(o.best.cost * 10 < o.start.cost, "{} vs {}", o.best.cost, o.start.cost);
-        for a in 0..3 {
+        for (a, &shift) in t.iter().enumerate() {
             let got = crate::pf::translation(o.params[a]);
-            assert!((got + t[a] as i32).abs() < 100, "axis {a}: {got}");
+            assert!((got + shift as i32).abs() < 100, "axis {a}: {got}");
         }
         assert_eq!(o.iterations, 15, "no threshold: every iteration runs");
         // A threshold the start already meets stops after the first iteration.

@@ -21,13 +21,24 @@
 //!   some poses) is not repeatable when the board may have executed it (a lost reply):
 //!   then [`BoardError::ReplyLost`], and [`BoardClient::costs_and_weights`] starts the
 //!   iteration over from its FIRST batch.
-//! - Any other error reply is a [`BoardError::Board`] naming the code.
+//! - Any other error reply is a [`BoardError::Board`] naming the code. `Busy` for Run or
+//!   Result means the board is running a filter (docs/protocol.md, Running): it is not
+//!   resent but reported as [`BoardError::Board`].
+//! - **The on-board filter** ([`BoardClient::run`], [`BoardClient::status`],
+//!   [`BoardClient::result`], [`BoardClient::wait_for_run`]): Run is answered at once, but
+//!   a board that computes the whole filter before answering (the byte-level reference on
+//!   a pseudo-terminal) is allowed the modelled run time ([`BoardClient::run_allowance`])
+//!   for that answer too. A Run whose reply was lost is not simply sent again: Status
+//!   tells whether the first copy is running; if not, Run is sent again (the filter is
+//!   deterministic, so a repeated run gives the same result).
 
 use pficp_fpga::format::{FxPoint, FxPose, WeightScale};
 use pficp_fpga::messages::{
     load_request, parse_two_u16, two_u16, EvaluateReply, EvaluateRequest, Identity, MessageError, NearestReply,
-    NearestRequest, WeightSummary, IDENTITY_BYTES, MAX_LOAD_POINTS, MAX_NEAREST, MAX_POSES,
+    NearestRequest, ResultReply, RunState, StatusReply, WeightSummary, IDENTITY_BYTES, MAX_LOAD_POINTS, MAX_NEAREST,
+    MAX_POSES, RESULT_BYTES, RUN_REPLY_BYTES, STATUS_BYTES,
 };
+use pficp_fpga::pf::PfConfig;
 use pficp_fpga::pipeline::clocks_per_particle;
 use pficp_fpga::protocol::{Command, Deframer, ErrorCode, Frame, FrameError, DELIMITER, VERSION};
 use serialport::SerialPort;
@@ -44,6 +55,10 @@ pub const MAX_RETRIES: usize = 2;
 pub const MAX_POINTS: usize = pficp_fpga::format::MAX_POINTS;
 /// Most particles the board stores.
 pub const MAX_PARTICLES: usize = pficp_fpga::weights::MAX_PARTICLES;
+/// The modelled board time of a run is multiplied by this for the run's time limit.
+pub const RUN_SAFETY: u32 = 4;
+/// Time between two Status requests while a filter runs.
+pub const DEFAULT_POLL: Duration = Duration::from_millis(50);
 
 /// What went wrong talking to the board.
 #[derive(Debug, thiserror::Error)]
@@ -121,6 +136,25 @@ pub enum BoardError {
     /// The particle filter stopped for a reason of its own.
     #[error("the particle filter stopped: {0}")]
     Filter(String),
+    /// The on-board filter did not finish in time (the board answers Status, but keeps
+    /// running).
+    #[error(
+        "the board on {port} did not finish the filter within {} ms ({} ms modelled board time); last Status: {state:?}, {iterations} iterations",
+        waited.as_millis(),
+        modelled.as_millis()
+    )]
+    RunTimeout {
+        /// The port.
+        port: String,
+        /// Time waited since Run.
+        waited: Duration,
+        /// The modelled board time of the run.
+        modelled: Duration,
+        /// The last Status state.
+        state: RunState,
+        /// Iterations the last Status reported.
+        iterations: u16,
+    },
 }
 
 /// Counters of one client's traffic.
@@ -471,6 +505,131 @@ impl BoardClient {
         Ok(out)
     }
 
+    /// The board's clocks for the on-board filter of `cfg` over the sizes in use: the
+    /// bound of [`run_clocks_bound`] with the board's lanes (1 before Identify).
+    pub fn run_clocks(&self, cfg: &PfConfig) -> u64 {
+        run_clocks_bound(cfg.particles, cfg.iterations, self.sizes.1 as usize, self.sizes.0 as usize, self.lanes())
+    }
+
+    /// The modelled board time of the on-board filter of `cfg` ([`Self::run_clocks`] at the
+    /// board's clock; 100 MHz before Identify).
+    pub fn modelled_run_time(&self, cfg: &PfConfig) -> Duration {
+        let clock_hz = self.identity.map_or(100e6, |i| i.clock_hz.max(1) as f64);
+        Duration::from_secs_f64(self.run_clocks(cfg) as f64 / clock_hz)
+    }
+
+    /// How long a run of `cfg` may take before it is an error: [`RUN_SAFETY`] times the
+    /// modelled board time plus the timeout per reply.
+    pub fn run_allowance(&self, cfg: &PfConfig) -> Duration {
+        self.modelled_run_time(cfg) * RUN_SAFETY + self.timeout
+    }
+
+    /// Start the on-board filter (Run) over the model and scan in use; it runs in the
+    /// background. Particles (1 to the board's most) and iterations (at least 1) are checked
+    /// here; the board checks the sizes. A board already running a filter answers `Busy`:
+    /// [`BoardError::Board`].
+    pub fn run(&mut self, cfg: &PfConfig) -> Result<(), BoardError> {
+        let (n, k) = (cfg.particles as usize, cfg.iterations);
+        if n == 0 || n > self.max_particles() || k == 0 {
+            return Err(BoardError::Limit(format!(
+                "{n} particles and {k} iterations: the board runs 1 to {} particles, at least 1 iteration",
+                self.max_particles()
+            )));
+        }
+        let data = cfg.encode();
+        // A board that computes before it answers (the timeless reference) needs the run's time.
+        let extra = self.run_allowance(cfg).saturating_sub(self.timeout);
+        let mut lost = 0;
+        loop {
+            match self.transact_with(Command::Run, data.clone(), RUN_REPLY_BYTES, extra, 0, false) {
+                Ok(reply) => {
+                    if reply.data != data[..RUN_REPLY_BYTES] {
+                        let (p, i) = parse_two_u16(&reply.data)
+                            .map_err(|source| BoardError::Reply { command: Command::Run, source })?;
+                        return Err(BoardError::Reply {
+                            command: Command::Run,
+                            source: MessageError::Field {
+                                field: "particles, iterations",
+                                got: ((p as u64) << 16) | i as u64,
+                                expected: ((cfg.particles as u64) << 16) | cfg.iterations as u64,
+                            },
+                        });
+                    }
+                    return Ok(());
+                }
+                Err(BoardError::ReplyLost { command, reason }) => {
+                    // The board may have started it: then it is running now.
+                    if self.status()?.state == RunState::Running {
+                        self.stats.restarts += 1;
+                        return Ok(());
+                    }
+                    lost += 1;
+                    if lost > MAX_RETRIES {
+                        return Err(BoardError::ReplyLost { command, reason });
+                    }
+                    self.stats.resends += 1;
+                }
+                Err(e) => return Err(e),
+            }
+        }
+    }
+
+    /// The on-board filter's state, iterations done and best cost so far (Status).
+    pub fn status(&mut self) -> Result<StatusReply, BoardError> {
+        let reply = self.transact(Command::Status, Vec::new(), STATUS_BYTES, 0, true)?;
+        StatusReply::decode(&reply.data).map_err(|source| BoardError::Reply { command: Command::Status, source })
+    }
+
+    /// The finished filter's best particle, cost and pose (Result). A board still running
+    /// answers `Busy`, one that has run no filter since power-up or reset `NoResult`: both
+    /// [`BoardError::Board`].
+    pub fn result(&mut self) -> Result<ResultReply, BoardError> {
+        let reply = self.transact(Command::Result, Vec::new(), RESULT_BYTES, 0, true)?;
+        ResultReply::decode(&reply.data).map_err(|source| BoardError::Reply { command: Command::Result, source })
+    }
+
+    /// Poll Status every `every` until the filter is done (state 2); `progress` gets each
+    /// reply. Returns the last reply and the number of polls. A board still running after
+    /// `limit` (counted from the call) is a [`BoardError::RunTimeout`] naming `modelled`;
+    /// one that reports no run (state 0: reset?) a [`BoardError::Filter`]; one that stops
+    /// answering a [`BoardError::Timeout`] within the timeout per reply.
+    pub fn wait_for_run(
+        &mut self,
+        limit: Duration,
+        modelled: Duration,
+        every: Duration,
+        mut progress: impl FnMut(&StatusReply),
+    ) -> Result<(StatusReply, usize), BoardError> {
+        let start = Instant::now();
+        let mut polls = 0;
+        loop {
+            let s = self.status()?;
+            polls += 1;
+            progress(&s);
+            match s.state {
+                RunState::Done => return Ok((s, polls)),
+                RunState::Idle => {
+                    return Err(BoardError::Filter(format!(
+                        "the board on {} reports no filter run (was it reset?)",
+                        self.name
+                    )))
+                }
+                RunState::Running => {}
+            }
+            let waited = start.elapsed();
+            if waited >= limit {
+                return Err(BoardError::RunTimeout {
+                    port: self.name.clone(),
+                    waited,
+                    modelled,
+                    state: s.state,
+                    iterations: s.iterations,
+                });
+            }
+            std::thread::sleep(every.min(limit - waited));
+        }
+    }
+
     fn max_particles(&self) -> usize {
         self.identity.map_or(MAX_PARTICLES, |i| i.max_particles as usize).min(MAX_PARTICLES)
     }
@@ -504,10 +663,24 @@ impl BoardClient {
         clocks: u64,
         repeatable: bool,
     ) -> Result<Frame, BoardError> {
+        self.transact_with(command, data, reply_data, Duration::ZERO, clocks, repeatable)
+    }
+
+    /// [`Self::transact`] with `extra` time allowed for the reply. Run and Result answered
+    /// `Busy` are errors (the board runs a filter), not resent.
+    fn transact_with(
+        &mut self,
+        command: Command,
+        data: Vec<u8>,
+        reply_data: usize,
+        extra: Duration,
+        clocks: u64,
+        repeatable: bool,
+    ) -> Result<Frame, BoardError> {
         let seq = self.next_seq();
         let mut wire = vec![DELIMITER];
         wire.extend(Frame { code: command as u8, seq, data }.encode());
-        let allowed = self.timeout + self.board_time(wire.len(), reply_data, clocks);
+        let allowed = self.timeout + extra + self.board_time(wire.len(), reply_data, clocks);
         let mut last = String::new();
         for attempt in 0..=MAX_RETRIES {
             if attempt > 0 {
@@ -610,6 +783,9 @@ impl BoardClient {
         let code = ErrorCode::from_byte(frame.data[0]);
         if frame.seq == seq && frame.data[1] == command as u8 {
             return match code {
+                Some(ErrorCode::Busy) if matches!(command, Command::Run | Command::Result) => {
+                    Err(BoardError::Board { command, code: ErrorCode::Busy })
+                }
                 Some(c @ (ErrorCode::BadCrc | ErrorCode::Busy)) => {
                     Ok(Some(Read1::Resend { reason: format!("error reply {c:?}"), executed: false }))
                 }
@@ -632,6 +808,28 @@ impl BoardClient {
         }
         Ok(None)
     }
+}
+
+/// An upper bound on the on-board filter's clocks for `particles` and all `iterations` over
+/// `scan_points` and `model_points` on `lanes` lanes: the sequencer's exact count
+/// ([`pficp_fpga::sequencer::run_clocks`]) with every data-dependent part at its largest
+/// (49 temperature passes, a new best every iteration, the resampling pointer advancing
+/// through every particle) and each evaluation taking the pipeline's
+/// [`clocks_per_particle`] plus one clock: `particles x iterations + iterations + 1` poses.
+pub fn run_clocks_bound(particles: u16, iterations: u16, scan_points: usize, model_points: usize, lanes: usize) -> u64 {
+    use pficp_fpga::sequencer::{run_clocks, IterationShape};
+    let n = particles as u64;
+    let eval = 1 + clocks_per_particle(scan_points, model_points, lanes.max(1));
+    let shape = |last: bool| IterationShape {
+        particles: n,
+        eval_clocks: (n + 1) * eval,
+        temper_passes: 49,
+        best_copied: true,
+        resample_advances: (!last).then_some(n.saturating_sub(1)),
+    };
+    let k = iterations as usize;
+    let shapes: Vec<IterationShape> = (0..k).map(|i| shape(i + 1 == k)).collect();
+    run_clocks(eval, &shapes)
 }
 
 /// The Identify fields, one per line (`pficp board info`).

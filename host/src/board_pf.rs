@@ -1,6 +1,15 @@
-//! PF-ICP with the particle costs and weights computed on the board.
+//! PF-ICP with the board: two modes.
 //!
-//! The pipeline is [`crate::pf_icp::register_with`]'s: k-means start, covariance, particle
+//! - **On-board filter** ([`register_on_board`], the default of `pficp register --board`):
+//!   the host computes the start and the covariance (PF-ICP stages 1 and 2,
+//!   [`crate::pf_icp::prior`]), uploads the model and a sample of `board_points` scan
+//!   points, sends the prior as a Run request ([`pf_config`]), polls Status, reads Result
+//!   and polishes the board's pose with ICP on the whole scan. The filter itself (steps 6
+//!   to 8 of Algorithm 6) runs on the board, bit-exact with `pficp_fpga::pf::run`; it
+//!   refines nothing with ICP between iterations.
+//! - **Host-driven** ([`register`], `--host-driven`), described below.
+//!
+//! The host-driven pipeline is [`crate::pf_icp::register_with`]'s: k-means start, covariance, particle
 //! filter, ICP refinement every iteration and the polish all run on the host in f64; only
 //! step 2 of each filter iteration (costs and weights, Eq. 20, 21) runs on the board:
 //!
@@ -22,18 +31,23 @@
 //! nothing has to be un-normalised at the end but the costs.
 
 use crate::board::{BoardClient, BoardError, ClientStats, MAX_PARTICLES, MAX_POINTS};
-use crate::fixed::{normalised_pose, quantise_pose, Normalisation};
+use crate::fixed::{normalised_pose, original_pose, quantise_pose, Normalisation};
 use crate::geometry::Pose;
+use crate::icp::{icp, IcpSettings, Registration};
 use crate::nn::NearestNeighbours;
 use crate::particle_filter::{tempered_q, WeighError, Weighed};
-use crate::pf_icp::{register_with, ParticleWeights, PfIcpResult, PfIcpSettings};
+use crate::pf_icp::{
+    prior, register_with, weight_sample, ParticleWeights, PfIcpResult, PfIcpSettings, Prior, StageTimes,
+};
 use nalgebra::Point3;
 use pficp_fpga::format::{FxPoint, FxPose, WeightScale, DIST_FRAC};
-use pficp_fpga::messages::Identity;
-use pficp_fpga::protocol::VERSION;
+use pficp_fpga::messages::{Identity, ResultReply, RunState, MAX_D2_MASK, NO_COST};
+use pficp_fpga::pf::{wrap24, Particle, PfConfig, PARAMS, PARAM_BITS, SCALE, SCALE_FRAC, SIGMA_BITS, TRANSLATION_FRAC};
+use pficp_fpga::protocol::{Command, ErrorCode, VERSION};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use std::sync::Mutex;
+use std::time::{Duration, Instant};
 
 /// Which store an upload fills.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -160,9 +174,10 @@ pub fn register(
     progress: &mut (dyn FnMut(Upload, usize, usize) + Send),
 ) -> Result<BoardPfResult, BoardError> {
     let identity = client.identify()?;
-    if identity.version != VERSION {
+    // Version 2 only added Run, Status and Result: the host-driven commands are version 1's.
+    if identity.version != VERSION && identity.version != 1 {
         return Err(BoardError::Limit(format!(
-            "the board speaks protocol version {}, this host {VERSION}",
+            "the board speaks protocol version {}, this host {VERSION} (and 1 for the host-driven mode)",
             identity.version
         )));
     }
@@ -210,5 +225,365 @@ pub fn register(
             iterations: iterations.into_inner().expect("not poisoned"),
             stats: client.stats(),
         },
+    })
+}
+
+// ---------------------------------------------------------------------------------------
+// The on-board filter: the whole particle filter runs on the board (Run, Status, Result).
+// ---------------------------------------------------------------------------------------
+
+/// The default number of scan points the on-board filter weighs each particle over
+/// (docs/decisions.md, "The on-board filter: scan points per weight").
+pub const DEFAULT_BOARD_POINTS: usize = 100;
+
+/// Steps of the on-board registration, for progress reports.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OnBoardStep {
+    /// A store being uploaded: (points done, points).
+    Upload(Upload),
+    /// The filter running: (iterations done, the iteration cap).
+    Filter,
+}
+
+/// What the on-board filter gets from the host: the clouds on the board and the Run
+/// configuration, all derived from PF-ICP's prior ([`crate::pf_icp::prior`]).
+#[derive(Clone, Debug)]
+pub struct OnBoardPlan {
+    /// The host's prior (start, covariance, sigmas, thresholds).
+    pub prior: Prior,
+    /// The model's normalisation (its centroid and radius).
+    pub model_norm: Normalisation,
+    /// The scan's normalisation.
+    pub scan_norm: Normalisation,
+    /// The model points for the board, normalised and quantised.
+    pub model: Vec<FxPoint>,
+    /// Whether the model was subsampled to fit the board.
+    pub model_subsampled: bool,
+    /// The scan points for the board (the weight sample of `board_points`), normalised and
+    /// quantised.
+    pub scan: Vec<FxPoint>,
+    /// The Run request.
+    pub config: PfConfig,
+}
+
+/// `x * 2^frac` rounded and saturated to a 24-bit signed parameter.
+fn param24(x: f64, frac: u32) -> i32 {
+    let v = (x * (1u64 << frac) as f64).round();
+    v.clamp(-(1i64 << 23) as f64, ((1i64 << 23) - 1) as f64) as i32
+}
+
+/// An angle in radians as a binary angle (2^24 a turn, wrapped).
+fn binary_angle(rad: f64) -> i32 {
+    let turns = crate::geometry::wrap_angle(rad) / std::f64::consts::TAU;
+    wrap24((turns * (1u64 << PARAM_BITS) as f64).round() as i64)
+}
+
+/// A sigma in parameter LSBs: rounded, at least 1, at most `2^22 - 1`.
+fn sigma22(x: f64) -> u32 {
+    let v = x.round();
+    if v.is_nan() {
+        return 1;
+    }
+    v.clamp(1.0, ((1u64 << SIGMA_BITS) - 1) as f64) as u32
+}
+
+/// The board's 32-bit PRNG seed for a host seed: deterministic, never 0.
+pub fn board_seed(seed: u64) -> u32 {
+    // SplitMix64's finaliser on a stream of its own.
+    let mut z = seed.wrapping_add(0x6f6e_626f_6172_6421);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^= z >> 31;
+    match (z ^ (z >> 32)) as u32 {
+        0 => 1,
+        s => s,
+    }
+}
+
+/// The Run configuration for PF-ICP's prior, the clouds' normalisations and `scan_points`
+/// scan points on the board (`S`). In normalised coordinates the centred frame is the
+/// normalised pose, `d_n = (s r_scan / r_model) R m_n + t / r_model`, so:
+/// - centre: `t / r_model` (Q5.19), `s r_scan / r_model` (Q3.21), the Euler angles as
+///   binary angles (2^24 a turn);
+/// - `sigma0` and `floor` the same way (translations `/ r_model`, the scale
+///   `* r_scan / r_model`, angles in turns `* 2^24`), scaled by `region_sigmas / 2` (the
+///   board's region is `+-2 sigma`), at least 1 LSB and at most `2^22 - 1`;
+/// - `temper_exp = clamp(round(log2(2 Q_board)), 0, 63)`: the board's cost is the sum over
+///   the `S` points of squared distances in `2^-26` normalised units, so a cost in the
+///   software's units (the MSD) is `S 2^26 / r_model^2` board LSBs, and so is `Q` (the
+///   software weighs with `exp(-(c - c_min) / (2 Q))`, `Q` in the cost's units, exactly as
+///   the host-driven mode converts it);
+/// - `thr_cost = S (threshold_avg / r_model)^2 2^26`, `thr_max = (threshold_max /
+///   r_model)^2 2^26` (at most `2^34 - 1`);
+/// - the seed from [`board_seed`], particles and iterations from `settings`.
+pub fn pf_config(
+    prior: &Prior,
+    model_norm: &Normalisation,
+    scan_norm: &Normalisation,
+    scan_points: usize,
+    settings: &PfIcpSettings,
+) -> PfConfig {
+    let (rm, rs) = (model_norm.radius, scan_norm.radius);
+    let p = &prior.init_params;
+    let centre: Particle = [
+        param24(p[0] / rm, TRANSLATION_FRAC),
+        param24(p[1] / rm, TRANSLATION_FRAC),
+        param24(p[2] / rm, TRANSLATION_FRAC),
+        param24(p[3] * rs / rm, SCALE_FRAC).max(1),
+        binary_angle(p[4]),
+        binary_angle(p[5]),
+        binary_angle(p[6]),
+    ];
+    let widen = settings.region_sigmas / 2.0;
+    let lsb = |d: usize, x: f64| -> u32 {
+        let v = match d {
+            0..=2 => x / rm * (1u64 << TRANSLATION_FRAC) as f64,
+            3 => x * rs / rm * (1u64 << SCALE_FRAC) as f64,
+            _ => x / std::f64::consts::TAU * (1u64 << PARAM_BITS) as f64,
+        };
+        sigma22(v)
+    };
+    let sigma0: [u32; PARAMS] = std::array::from_fn(|d| lsb(d, prior.sigma0[d] * widen));
+    let floor: [u32; PARAMS] = std::array::from_fn(|d| lsb(d, prior.floor[d] * widen));
+    let per_msd = scan_points as f64 * (1u64 << DIST_FRAC) as f64 / (rm * rm);
+    let two_q = 2.0 * prior.q * per_msd;
+    let temper_exp = if two_q > 0.0 && two_q.is_finite() { two_q.log2().round().clamp(0.0, 63.0) as u8 } else { 0 };
+    let dist = |x: f64| (x / rm).powi(2) * (1u64 << DIST_FRAC) as f64;
+    let thr_cost = (scan_points as f64 * dist(prior.threshold_avg)).min(NO_COST as f64) as u64;
+    let thr_max = dist(prior.threshold_max).min(MAX_D2_MASK as f64) as u64;
+    PfConfig {
+        particles: settings.particles.min(u16::MAX as usize) as u16,
+        iterations: settings.iterations.min(u16::MAX as usize) as u16,
+        temper_exp,
+        centre,
+        sigma0,
+        floor,
+        seed: board_seed(settings.seed),
+        thr_cost,
+        thr_max,
+    }
+}
+
+/// The pose (scan to model, original frame) of the board's parameters.
+pub fn params_pose(params: &Particle, model_norm: &Normalisation, scan_norm: &Normalisation) -> Pose {
+    let t = |k: usize| params[k] as f64 / (1u64 << TRANSLATION_FRAC) as f64;
+    let a = |k: usize| params[k] as f64 / (1u64 << PARAM_BITS) as f64 * std::f64::consts::TAU;
+    let s = params[SCALE] as f64 / (1u64 << SCALE_FRAC) as f64;
+    let pose_n = Pose::from_params(&[t(0), t(1), t(2), s, a(4), a(5), a(6)]);
+    original_pose(&pose_n, scan_norm, model_norm)
+}
+
+/// A board cost (sum over `scan_points` of squared distances, Q8.26 normalised) in the
+/// software's units (MSD in the clouds' units).
+pub fn cost_msd(cost: u64, scan_points: usize, model_norm: &Normalisation) -> f64 {
+    cost as f64 * model_norm.radius * model_norm.radius / (scan_points.max(1) as f64 * (1u64 << DIST_FRAC) as f64)
+}
+
+/// Plan the on-board registration: PF-ICP's prior on the host, the model for the board
+/// (subsampled to `max_model` with the seed, as the host-driven mode does), the scan's
+/// weight sample of `board_points` (drawn with the seed as [`weight_sample`] does), both
+/// normalised by their own cloud and quantised, and the Run configuration
+/// ([`pf_config`]).
+pub fn plan(
+    nn: &NearestNeighbours,
+    scan: &[Point3<f64>],
+    settings: &PfIcpSettings,
+    board_points: usize,
+    max_model: usize,
+) -> OnBoardPlan {
+    plan_with_prior(prior(nn, scan, settings), nn, scan, settings, board_points, max_model)
+}
+
+/// [`plan`] with the prior already computed (it does not depend on `board_points`).
+pub fn plan_with_prior(
+    prior: Prior,
+    nn: &NearestNeighbours,
+    scan: &[Point3<f64>],
+    settings: &PfIcpSettings,
+    board_points: usize,
+    max_model: usize,
+) -> OnBoardPlan {
+    let model = nn.points();
+    let model_norm = Normalisation::of(model);
+    let scan_norm = Normalisation::of(scan);
+    let on_board = board_model(model, max_model, settings.seed);
+    let sample = weight_sample(scan, &PfIcpSettings { weight_points: board_points, ..settings.clone() });
+    let config = pf_config(&prior, &model_norm, &scan_norm, sample.len(), settings);
+    OnBoardPlan {
+        prior,
+        model: model_norm.quantise(&on_board),
+        model_subsampled: on_board.len() < model.len(),
+        scan: scan_norm.quantise(&sample),
+        model_norm,
+        scan_norm,
+        config,
+    }
+}
+
+/// What the board's filter found, in the host's terms: the filter's pose, the polish on the
+/// whole scan, and PF-ICP's result as the software mode gives it (the filter history is
+/// empty: the board reports only its best; `registration.errors` holds the board's best
+/// cost as an MSD of the sample, then the polished MSD).
+pub fn finish(
+    plan: &OnBoardPlan,
+    nn: &NearestNeighbours,
+    scan: &[Point3<f64>],
+    settings: &PfIcpSettings,
+    result: &ResultReply,
+    filter_time: Duration,
+) -> PfIcpResult {
+    let filter_pose = params_pose(&result.params, &plan.model_norm, &plan.scan_norm);
+    let t = Instant::now();
+    let polish = IcpSettings { max_iterations: settings.polish_iterations, ..Default::default() };
+    let polished = icp(nn, scan, &filter_pose, &polish);
+    let polish_time = t.elapsed();
+    let errors = vec![cost_msd(result.cost, plan.scan.len(), &plan.model_norm), polished.msd];
+    PfIcpResult {
+        registration: Registration {
+            pose: polished.pose,
+            msd: polished.msd,
+            iterations: result.iterations as usize,
+            errors,
+        },
+        initial: plan.prior.initial.clone(),
+        covariance: plan.prior.covariance.clone(),
+        filter_pose,
+        times: StageTimes {
+            clustering: plan.prior.clustering_time,
+            covariance: plan.prior.covariance_time,
+            filter: filter_time,
+            polish: polish_time,
+        },
+        filter_history: Vec::new(),
+    }
+}
+
+/// What the board did during one on-board registration.
+#[derive(Clone, Debug)]
+pub struct OnBoardReport {
+    /// The board's Identify reply before the run.
+    pub identity: Identity,
+    /// Model points in the board's model store.
+    pub model_points: usize,
+    /// Whether the model was subsampled to fit.
+    pub model_subsampled: bool,
+    /// Scan points the board weighs each particle over.
+    pub scan_points: usize,
+    /// The Run request.
+    pub config: PfConfig,
+    /// The board's Result.
+    pub result: ResultReply,
+    /// The best cost as the software's MSD (of the board's scan points, clouds' units).
+    pub cost_msd: f64,
+    /// Status requests while the filter ran.
+    pub polls: usize,
+    /// The modelled board time of the run.
+    pub modelled: Duration,
+    /// Wall time from Run to Result.
+    pub run_time: Duration,
+    /// The client's traffic counters.
+    pub stats: ClientStats,
+}
+
+/// PF-ICP's result with the filter on the board, and the board's part in it.
+#[derive(Clone, Debug)]
+pub struct OnBoardResult {
+    /// As [`crate::pf_icp::register`] returns.
+    pub pf: PfIcpResult,
+    /// The board's part.
+    pub board: OnBoardReport,
+}
+
+/// Register `scan` to the model behind `nn` with PF-ICP, the whole particle filter on the
+/// board behind `client` (protocol version 2: Run, Status, Result): the start and the
+/// covariance on the host ([`plan`]), the model and `board_points` scan points uploaded,
+/// Run, Status polled every `poll` (progress: [`OnBoardStep::Filter`] with the iterations
+/// done), Result, and the host's ICP polish on the whole scan ([`finish`]). A board that
+/// does not finish within [`BoardClient::run_allowance`] is a [`BoardError::RunTimeout`].
+pub fn register_on_board(
+    client: &mut BoardClient,
+    nn: &NearestNeighbours,
+    scan: &[Point3<f64>],
+    settings: &PfIcpSettings,
+    board_points: usize,
+    poll: Duration,
+    progress: &mut (dyn FnMut(OnBoardStep, usize, usize) + Send),
+) -> Result<OnBoardResult, BoardError> {
+    let identity = client.identify()?;
+    if identity.version != VERSION {
+        return Err(BoardError::Limit(format!(
+            "the board speaks protocol version {}, this host {VERSION} (the on-board filter needs {VERSION}; \
+             --host-driven works with version 1 boards)",
+            identity.version
+        )));
+    }
+    let max_particles = (identity.max_particles as usize).min(MAX_PARTICLES);
+    if settings.particles == 0 || settings.particles > max_particles {
+        return Err(BoardError::Limit(format!(
+            "{} particles: the board runs 1 to {max_particles}",
+            settings.particles
+        )));
+    }
+    if settings.iterations == 0 || settings.iterations > u16::MAX as usize {
+        return Err(BoardError::Limit(format!("{} iterations: the board runs 1 to {}", settings.iterations, u16::MAX)));
+    }
+    if settings.adaptive.is_some() {
+        return Err(BoardError::Limit("the on-board filter has a fixed particle count (no adaptation)".into()));
+    }
+    let max_scan = (identity.max_scan as usize).min(MAX_POINTS);
+    if board_points == 0 || board_points > max_scan {
+        return Err(BoardError::Limit(format!("{board_points} board scan points: the board holds 1 to {max_scan}")));
+    }
+    let status = client.status().map_err(|e| match e {
+        BoardError::Board { command: Command::Status, code: ErrorCode::UnknownCommand } => BoardError::Limit(format!(
+            "the board on {} does not know Status: no on-board filter in this design (use --host-driven)",
+            client.port_name()
+        )),
+        e => e,
+    })?;
+    if status.state == RunState::Running {
+        return Err(BoardError::Filter(format!(
+            "the board on {} is still running a filter started earlier ({} iterations done); wait for it or reset the board",
+            client.port_name(),
+            status.iterations
+        )));
+    }
+    let max_model = (identity.max_model as usize).min(MAX_POINTS);
+    let plan = plan(nn, scan, settings, board_points, max_model);
+    let start = Instant::now();
+    client.load_model(&plan.model, |done, total| progress(OnBoardStep::Upload(Upload::Model), done, total))?;
+    client.load_scan(&plan.scan, |done, total| progress(OnBoardStep::Upload(Upload::Scan), done, total))?;
+    client.set_sizes(plan.model.len(), plan.scan.len())?;
+    let modelled = client.modelled_run_time(&plan.config);
+    let limit = client.run_allowance(&plan.config);
+    let run_start = Instant::now();
+    client.run(&plan.config)?;
+    let cap = plan.config.iterations as usize;
+    progress(OnBoardStep::Filter, 0, cap);
+    let mut last = 0;
+    let (_, polls) = client.wait_for_run(limit.saturating_sub(run_start.elapsed()), modelled, poll, |s| {
+        if s.iterations as usize != last || s.state == RunState::Done {
+            last = s.iterations as usize;
+            progress(OnBoardStep::Filter, if s.state == RunState::Done { cap } else { last.min(cap) }, cap);
+        }
+    })?;
+    let result = client.result()?;
+    let run_time = run_start.elapsed();
+    let pf = finish(&plan, nn, scan, settings, &result, start.elapsed());
+    Ok(OnBoardResult {
+        board: OnBoardReport {
+            identity,
+            model_points: plan.model.len(),
+            model_subsampled: plan.model_subsampled,
+            scan_points: plan.scan.len(),
+            cost_msd: cost_msd(result.cost, plan.scan.len(), &plan.model_norm),
+            config: plan.config.clone(),
+            result,
+            polls,
+            modelled,
+            run_time,
+            stats: client.stats(),
+        },
+        pf,
     })
 }

@@ -9,9 +9,10 @@ use serde::Serialize;
 pub struct RegisterReport {
     /// Method name.
     pub method: String,
-    /// Where the particle weights were computed: `software` (the host) or `board`.
+    /// Where the particle filter ran: `software` (the host), `board` (the filter on the
+    /// board) or `board-host-driven` (the host's filter, the particles weighed on the board).
     pub engine: String,
-    /// The board's serial port when `engine` is `board`.
+    /// The board's serial port when `engine` is `board` or `board-host-driven`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub port: Option<String>,
     /// Scale factor.
@@ -52,10 +53,17 @@ impl RegisterReport {
         }
     }
 
-    /// The same report for a run whose particle weights came from the board on `port`.
+    /// The same report for a run whose particle filter ran on the board on `port`.
     pub fn on_board(mut self, port: &str) -> Self {
         self.engine = "board".to_string();
         self.port = Some(port.to_string());
+        self
+    }
+
+    /// The engine of a board run in host-driven mode (the host's filter, the board's
+    /// weights): `board-host-driven`.
+    pub fn host_driven(mut self) -> Self {
+        self.engine = "board-host-driven".to_string();
         self
     }
 
@@ -128,6 +136,9 @@ mod tests {
         assert!(v.get("port").is_none());
         let b = serde_json::to_value(RegisterReport::new("pf-icp", &r, 1.5).on_board("/dev/ttyUSB0")).unwrap();
         assert_eq!((b["engine"].as_str(), b["port"].as_str()), (Some("board"), Some("/dev/ttyUSB0")));
+        let h = RegisterReport::new("pf-icp", &r, 1.5).on_board("/dev/ttyUSB0").host_driven();
+        assert_eq!(h.engine, "board-host-driven");
+        assert!(h.text().contains("engine       board-host-driven (/dev/ttyUSB0)"));
         assert_eq!(v["translation"][2], 3.0);
         assert_eq!(v["matrix"][0][3], 1.0);
         assert!((v["euler_deg"][2].as_f64().unwrap() - 0.3f64.to_degrees()).abs() < 1e-9);

@@ -177,9 +177,17 @@ struct RegisterArgs {
     /// Write the scan, transformed into the model frame, to this file.
     #[arg(long)]
     out_aligned: Option<PathBuf>,
-    /// Weigh the particles on the board at this serial port (PF-ICP only).
+    /// Run PF-ICP's particle filter on the board at this serial port (PF-ICP only): the
+    /// start, covariance and polish on the host, the filter on the board.
     #[arg(long, value_name = "PORT")]
     board: Option<String>,
+    /// With --board: the host runs the filter and the board only weighs each iteration's
+    /// particles (the mode of protocol version 1 boards).
+    #[arg(long)]
+    host_driven: bool,
+    /// With --board: scan points the on-board filter weighs each particle over [default: 100].
+    #[arg(long, value_name = "N")]
+    board_points: Option<usize>,
     #[command(flatten)]
     link: LinkArgs,
 }
@@ -322,6 +330,16 @@ fn register(a: &RegisterArgs) -> Result<()> {
     if a.board.is_some() && method != Method::PfIcp {
         bail!("--board runs PF-ICP only (got --method {})", method.name());
     }
+    if a.board.is_none() && (a.host_driven || a.board_points.is_some()) {
+        bail!("--host-driven and --board-points need --board PORT");
+    }
+    if a.host_driven && a.board_points.is_some() {
+        bail!("--board-points sets the on-board filter's scan sample; --host-driven weighs the host's sample");
+    }
+    let board_points = a.board_points.unwrap_or(pficp::board_pf::DEFAULT_BOARD_POINTS);
+    if board_points == 0 {
+        bail!("--board-points must be at least 1");
+    }
     // Open the port before the work starts: a missing or silent board fails at once.
     let mut client = match &a.board {
         Some(port) => {
@@ -336,6 +354,38 @@ fn register(a: &RegisterArgs) -> Result<()> {
     let nn = NearestNeighbours::new(model.points());
     let (outcome, engine) = match client.as_mut() {
         None => (methods::run(method, &nn, scan.points(), &MethodSettings { pf: settings }), None),
+        Some(c) if !a.host_driven => {
+            let start = Instant::now();
+            let r = pficp::board_pf::register_on_board(
+                c,
+                &nn,
+                scan.points(),
+                &settings,
+                board_points,
+                pficp::board::DEFAULT_POLL,
+                &mut on_board_progress(),
+            )?;
+            let b = &r.board;
+            eprintln!(
+                "board: {} model points{}, {} scan points, {} iterations on the board (best cost {:.3e}), \
+                 {} Status polls, modelled board time {:.3} s, {} requests, {} resends",
+                b.model_points,
+                if b.model_subsampled { " (subsampled)" } else { "" },
+                b.scan_points,
+                b.result.iterations,
+                b.cost_msd,
+                b.polls,
+                b.modelled.as_secs_f64(),
+                b.stats.requests,
+                b.stats.resends + b.stats.restarts
+            );
+            let outcome = methods::Outcome {
+                registration: r.pf.registration.clone(),
+                elapsed: start.elapsed(),
+                pf: Some(Box::new(r.pf)),
+            };
+            (outcome, a.board.as_deref().map(|p| (p, false)))
+        }
         Some(c) => {
             let start = Instant::now();
             let r = pficp::board_pf::register(c, &nn, scan.points(), &settings, &mut upload_progress())?;
@@ -354,7 +404,7 @@ fn register(a: &RegisterArgs) -> Result<()> {
                 elapsed: start.elapsed(),
                 pf: Some(Box::new(r.pf)),
             };
-            (outcome, a.board.as_deref())
+            (outcome, a.board.as_deref().map(|p| (p, true)))
         }
     };
     if let Some(pf) = &outcome.pf {
@@ -368,8 +418,11 @@ fn register(a: &RegisterArgs) -> Result<()> {
         );
     }
     let mut report = RegisterReport::new(method.name(), &outcome.registration, outcome.elapsed.as_secs_f64());
-    if let Some(port) = engine {
+    if let Some((port, host_driven)) = engine {
         report = report.on_board(port);
+        if host_driven {
+            report = report.host_driven();
+        }
     }
     if a.json {
         println!("{}", serde_json::to_string(&report)?);
@@ -395,6 +448,29 @@ fn upload_progress() -> impl FnMut(pficp::board_pf::Upload, usize, usize) + Send
             }
         } else if done == total {
             eprintln!("uploaded the {}: {total} points", store.name());
+        }
+    }
+}
+
+/// The on-board registration's progress on stderr: the uploads as [`upload_progress`],
+/// then the filter's iterations (one updating line on a terminal, one line at the end
+/// otherwise).
+fn on_board_progress() -> impl FnMut(pficp::board_pf::OnBoardStep, usize, usize) + Send {
+    use pficp::board_pf::OnBoardStep;
+    let tty = std::io::stderr().is_terminal();
+    let mut uploads = upload_progress();
+    move |step, done, total| match step {
+        OnBoardStep::Upload(store) => uploads(store, done, total),
+        OnBoardStep::Filter if tty => {
+            eprint!("\rfilter on the board: iteration {done}/{total}");
+            if done == total {
+                eprintln!();
+            }
+        }
+        OnBoardStep::Filter => {
+            if done == total {
+                eprintln!("filter on the board: done");
+            }
         }
     }
 }

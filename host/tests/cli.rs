@@ -151,6 +151,16 @@ fn a_missing_board_port_is_a_clear_error() {
     let good = write(dir.path(), "good.xyz", cloud_text(300).as_bytes());
     assert_error(&register(&good, &good, &["--board", "/nonexistent/ttyUSB7"]), &["/nonexistent/ttyUSB7"]);
     assert_error(&register(&good, &good, &["--board", "/nonexistent", "--method", "icp"]), &["--board", "PF-ICP"]);
+    assert_error(&register(&good, &good, &["--host-driven"]), &["--host-driven", "--board"]);
+    assert_error(&register(&good, &good, &["--board-points", "50"]), &["--board-points", "--board"]);
+    let board = support::PtyBoard::reference();
+    let p = board.path.as_str();
+    assert_error(&register(&good, &good, &["--board", p, "--board-points", "0"]), &["--board-points"]);
+    assert_error(
+        &register(&good, &good, &["--board", p, "--host-driven", "--board-points", "50"]),
+        &["--board-points"],
+    );
+    assert_error(&register(&good, &good, &["--board", p, "--particles", "300"]), &["300 particles"]);
 }
 
 #[test]
@@ -193,6 +203,7 @@ fn register_on_the_board_prints_the_software_form() {
         String::from_utf8(o.stdout).unwrap()
     };
     let json: serde_json::Value = serde_json::from_str(&on_board(&["--json"])).unwrap();
+    let host_driven: serde_json::Value = serde_json::from_str(&on_board(&["--json", "--host-driven"])).unwrap();
     let soft = register(model, scan, &[&small[..], &["--json"]].concat());
     let soft: serde_json::Value = serde_json::from_slice(&soft.stdout).unwrap();
     let keys = |v: &serde_json::Value| {
@@ -201,13 +212,26 @@ fn register_on_the_board_prints_the_software_form() {
         k
     };
     assert_eq!(keys(&json), keys(&soft), "the same JSON keys");
+    assert_eq!(keys(&host_driven), keys(&soft), "the same JSON keys");
     assert_eq!((json["engine"].as_str(), soft["engine"].as_str()), (Some("board"), Some("software")));
+    assert_eq!(host_driven["engine"].as_str(), Some("board-host-driven"));
     assert_eq!(json["port"].as_str(), Some(board.path.as_str()));
+    assert_eq!(host_driven["port"].as_str(), Some(board.path.as_str()));
     let truth: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&files[2]).unwrap()).unwrap();
-    for i in 0..3 {
-        let (e, t) = (json["euler_deg"][i].as_f64().unwrap(), truth["euler_deg"][i].as_f64().unwrap());
-        assert!((e - t).abs() < 0.5, "angle {i}: {e} vs {t}");
+    for v in [&json, &host_driven] {
+        for i in 0..3 {
+            let (e, t) = (v["euler_deg"][i].as_f64().unwrap(), truth["euler_deg"][i].as_f64().unwrap());
+            assert!((e - t).abs() < 0.5, "{}: angle {i}: {e} vs {t}", v["engine"]);
+        }
     }
+    // The on-board filter's sample size is a flag; the run says what it did.
+    let mut args = vec!["--board", board.path.as_str(), "--board-points", "64"];
+    args.extend_from_slice(&small);
+    let o = register(model, scan, &args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(err.contains("64 scan points") && err.contains("Status polls"), "{err}");
+    assert!(err.contains("filter on the board: done"), "{err}");
     let text = on_board(&[]);
     let labels = |t: &str| t.lines().map(|l| l.split_whitespace().next().unwrap_or("").to_string()).collect::<Vec<_>>();
     let soft_text = String::from_utf8(register(model, scan, &small).stdout).unwrap();

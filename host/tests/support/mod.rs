@@ -82,3 +82,28 @@ pub fn reference_handler() -> Handler {
     let mut board = BoardModel::new(BoardConfig::default());
     Box::new(move |bytes| Some(board.receive_all(bytes)))
 }
+
+/// The reference, frame by frame, with a say of its own: `intercept(frame, board)` returns
+/// `Some(bytes)` to answer a valid frame with those bytes instead (empty: stay silent), or
+/// `None` to let the reference execute it. Frame errors are answered as the reference does.
+pub fn intercepting_handler(
+    mut intercept: impl FnMut(&pficp_fpga::protocol::Frame, &mut BoardModel) -> Option<Vec<u8>> + Send + 'static,
+) -> Handler {
+    use pficp_fpga::protocol::{Deframer, Frame};
+    let mut board = BoardModel::new(BoardConfig::default());
+    let mut deframer = Deframer::default();
+    Box::new(move |bytes| {
+        let mut out = Vec::new();
+        for &b in bytes {
+            match deframer.push(b) {
+                None => {}
+                Some(Ok(frame)) => match intercept(&frame, &mut board) {
+                    Some(bytes) => out.extend(bytes),
+                    None => out.extend(board.execute(&frame).encode()),
+                },
+                Some(Err(e)) => out.extend(Frame::error(0, e.code(), 0).encode()),
+            }
+        }
+        Some(out)
+    })
+}
