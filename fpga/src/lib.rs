@@ -18,7 +18,7 @@ pub mod particle_weights;
 pub mod pf;
 pub mod pipeline;
 pub mod protocol;
-pub mod sequencer;
 #[cfg(feature = "rtl")]
 pub mod rtl;
+pub mod sequencer;
 pub mod weights;
