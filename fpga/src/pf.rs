@@ -165,7 +165,9 @@ impl Xorshift32 {
     pub fn new(seed: u32) -> Self {
         Xorshift32(if seed == 0 { 1 } else { seed })
     }
-    /// The next state (also the output).
+    /// The next state (also the output). Not an `Iterator`: the stream never ends and every
+    /// draw's width is chosen by the caller ([`Self::signed16`], [`Self::unsigned16`]).
+    #[allow(clippy::should_implement_trait)]
     pub fn next(&mut self) -> u32 {
         let mut x = self.0;
         x ^= x << 13;
@@ -601,12 +603,12 @@ mod tests {
             ct * sf,
             ct * cf,
         ];
-        for k in 0..9 {
-            let want = s * r[k] * (1 << MATRIX_FRAC) as f64;
-            assert!((pose.m[k] as f64 - want).abs() <= 8.0, "m[{k}] {} vs {want}", pose.m[k]);
+        for (k, (&m, r)) in pose.m.iter().zip(r).enumerate() {
+            let want = s * r * (1 << MATRIX_FRAC) as f64;
+            assert!((m as f64 - want).abs() <= 8.0, "m[{k}] {m} vs {want}");
         }
         assert_eq!(pose.t, [1 << 13, -(1 << 12), translation(12345)]);
-        assert!(POSE_BITS == 18);
+        const { assert!(POSE_BITS == 18) };
     }
 
     #[test]

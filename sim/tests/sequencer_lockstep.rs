@@ -126,6 +126,7 @@ fn lockstep_realistic() {
 /// Random inputs on every port, random configuration words.
 #[test]
 fn lockstep_random_inputs() {
+    let mut all_states = std::collections::HashSet::new();
     for seed in 1..=10u32 {
         let mut rng = pf::Xorshift32::new(seed * 2654435761);
         let mut r = || rng.next() as u64;
@@ -135,31 +136,37 @@ fn lockstep_random_inputs() {
         let mut fins = 0u64;
         for c in 0..clocks {
             let x = r() | r() << 32;
-            let mut i = SeqInputs::default();
-            i.cfg_we = c < 30 || (b.m.state_name() == "Idle" && x % 16 == 0) || x % 7000 == 0;
-            i.cfg_addr = (r() % 32) as u8;
-            i.cfg_data = r() | r() << 32;
+            let cfg_we = c < 30 || (b.m.state_name() == "Idle" && x % 16 == 0) || x % 7000 == 0;
+            let mut cfg_addr = (r() % 32) as u8;
+            let mut cfg_data = r() | r() << 32;
             if c < 30 {
-                i.cfg_addr = (c % 25) as u8;
+                cfg_addr = (c % 25) as u8;
             }
-            if i.cfg_addr == 24 && x % 50 != 0 {
+            if cfg_addr == 24 && x % 50 != 0 {
                 // Mostly small particle counts and few iterations.
-                i.cfg_data = (r() % 12 + 1) | (r() % 4 + 1) << 16 | (r() % 64) << 32;
+                cfg_data = (r() % 12 + 1) | (r() % 4 + 1) << 16 | (r() % 64) << 32;
             }
-            i.go = (x >> 8) % 64 == 0;
-            i.nn_ready = (x >> 16) % 4 != 0;
-            i.cost_valid = (x >> 20) % 8 == 0;
-            i.cost = r() & if x % 5 == 0 { u64::MAX } else { 0xffff_ffff };
-            i.nn_valid = (x >> 24) % 2 == 0;
-            i.nn_dist = r();
-            i.reset = (x >> 32) % 20_000 == 0;
+            let i = SeqInputs {
+                cfg_we,
+                cfg_addr,
+                cfg_data,
+                go: (x >> 8) % 64 == 0,
+                nn_ready: (x >> 16) % 4 != 0,
+                cost_valid: (x >> 20) % 8 == 0,
+                cost: r() & if x % 5 == 0 { u64::MAX } else { 0xffff_ffff },
+                nn_valid: (x >> 24) % 2 == 0,
+                nn_dist: r(),
+                reset: (x >> 32) % 20_000 == 0,
+            };
             b.step(&i);
             *hist.entry(b.m.state_name()).or_insert(0u64) += 1;
+            all_states.insert(b.m.state_name());
             if b.m.outputs().finished {
                 fins += 1;
             }
         }
         println!("{} states visited, finished clocks {fins}", hist.len());
         println!("seed {seed}: state {} iterations {}", b.m.state_name(), b.m.outputs().iterations);
-    }
+    } // The random inputs reach (nearly) every state of the sequencer.
+    assert!(all_states.len() >= 55, "{} states visited: {all_states:?}", all_states.len());
 }

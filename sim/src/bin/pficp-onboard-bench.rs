@@ -104,7 +104,7 @@ fn main() -> Result<()> {
     let t0_clock = b.clocks();
     let wall = Instant::now();
     let mut seq = 1u8;
-    let mut next = |s: &mut u8| {
+    let next = |s: &mut u8| {
         *s = s.wrapping_add(1).max(1);
         *s
     };

@@ -759,10 +759,8 @@ impl Logic for PfSequencer {
         }
         self.exp_rom.address.next = self.t_entry.val();
         self.e_tmp.next = self.tq.q.val();
-        if self.p.q.val() > 2 {
-            if (self.p.q.val() - 2) > self.tq.q.val() {
-                self.e_tmp.next = self.p.q.val() - 2;
-            }
+        if (self.p.q.val() > 2) && ((self.p.q.val() - 2) > self.tq.q.val()) {
+            self.e_tmp.next = self.p.q.val() - 2;
         }
 
         // Memory defaults.
