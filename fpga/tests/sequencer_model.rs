@@ -9,37 +9,13 @@
 //! nearest-neighbour result per clock and the cost a clock after the last; `nn_ready` is
 //! high whenever no evaluation is in flight (optionally after a random gap).
 
-use pficp_fpga::format::{point, FxPoint, FxPose};
-use pficp_fpga::pf::{self, PfConfig, PfOutcome, PARAMS, SCALE_FRAC};
+use pficp_fpga::format::{FxPoint, FxPose};
+use pficp_fpga::pf::{self, example_cloud, example_config, PfConfig, PfOutcome, PARAMS, SCALE_FRAC};
 use pficp_fpga::sequencer::{
     clocks_per_iteration, config_writes, run_clocks, sum_clocks, temper_pass_clocks, unpack_pose, IterationShape,
     SeqInputs, SeqOutputs, SeqState, SequencerModel, POSE_CLOCKS, PROPAGATE_CLOCKS,
 };
 use std::collections::HashMap;
-
-fn cloud(n: usize, shift: [i16; 3], phase: f64) -> Vec<FxPoint> {
-    (0..n)
-        .map(|i| {
-            let t = i as f64 * 0.37 + phase;
-            let p = point([0.6 * t.sin(), 0.5 * (1.7 * t).cos(), 0.4 * (0.5 * t).sin()]);
-            [p[0] - shift[0], p[1] - shift[1], p[2] - shift[2]]
-        })
-        .collect()
-}
-
-fn config(particles: u16, iterations: u16, seed: u32) -> PfConfig {
-    PfConfig {
-        particles,
-        iterations,
-        temper_exp: 5,
-        centre: [0, 0, 0, 1 << SCALE_FRAC, 0, 0, 0],
-        sigma0: [1 << 17, 1 << 17, 1 << 17, 1 << 15, 1 << 16, 1 << 16, 1 << 16],
-        floor: [1 << 10, 1 << 10, 1 << 10, 1 << 10, 1 << 9, 1 << 9, 1 << 9],
-        seed,
-        thr_cost: 0,
-        thr_max: 0,
-    }
-}
 
 /// The emulated pipeline's timing: latency from `start` to the first result in
 /// `lat.0..=lat.1`, and `nn_ready` low for `0..=gap` clocks after each cost.
@@ -279,13 +255,13 @@ fn check_record(cfg: &PfConfig, r: &RunRecord, outcome: &PfOutcome, ref_poses: &
 }
 
 fn data() -> (Vec<FxPoint>, Vec<FxPoint>) {
-    (cloud(60, [0, 0, 0], 0.0), cloud(30, [400, -200, 100], 0.05))
+    (example_cloud(60, [0, 0, 0], 0.0), example_cloud(30, [400, -200, 100], 0.05))
 }
 
 #[test]
 fn the_model_matches_the_functional_reference() {
     let (model, scan) = data();
-    let r = check(&config(12, 5, 7), &model, &scan, FIXED);
+    let r = check(&example_config(12, 5, 7), &model, &scan, FIXED);
     assert_eq!(r.out.iterations, 5);
     println!("12 particles, 5 iterations, latency 20: {} clocks", r.clocks);
 }
@@ -293,18 +269,18 @@ fn the_model_matches_the_functional_reference() {
 #[test]
 fn one_particle_odd_counts_wrapping_angles_and_random_latencies() {
     let (model, scan) = data();
-    check(&config(1, 3, 9), &model, &scan, Timing { lat: (0, 7), gap: 3, seed: 5 });
-    let mut c = config(7, 4, 0);
+    check(&example_config(1, 3, 9), &model, &scan, Timing { lat: (0, 7), gap: 3, seed: 5 });
+    let mut c = example_config(7, 4, 0);
     c.centre = [1000, -2000, 300, (1 << SCALE_FRAC) + 5000, 8_000_000, -8_300_000, 4_190_000];
     c.temper_exp = 40;
     check(&c, &model, &scan, Timing { lat: (1, 40), gap: 5, seed: 11 });
     // A small scale that the propagation pushes to zero or below (clamped to 1).
-    let mut c = config(9, 3, 0xdead_beef);
+    let mut c = example_config(9, 3, 0xdead_beef);
     c.centre[3] = 3000;
     c.sigma0[3] = 1 << 14;
     check(&c, &model, &scan, Timing { lat: (30, 60), gap: 0, seed: 2 });
     for (seed, n) in [(1u32, 16u16), (2, 5), (3, 13)] {
-        check(&config(n, 4, seed * 7919), &model, &scan, Timing { lat: (2, 45), gap: 4, seed });
+        check(&example_config(n, 4, seed * 7919), &model, &scan, Timing { lat: (2, 45), gap: 4, seed });
     }
 }
 
@@ -312,7 +288,7 @@ fn one_particle_odd_counts_wrapping_angles_and_random_latencies() {
 fn stops_on_the_thresholds_before_the_cap() {
     let (model, scan) = data();
     // The best cost after the second iteration as the threshold: it stops there.
-    let free = config(10, 30, 21);
+    let free = example_config(10, 30, 21);
     let (probe, _) = reference(&free, &model, &scan);
     let mut c = free.clone();
     c.thr_cost = probe.history[1].best_cost;
@@ -322,7 +298,7 @@ fn stops_on_the_thresholds_before_the_cap() {
     let r = check(&c, &model, &scan, Timing { lat: (10, 30), gap: 2, seed: 8 });
     assert!(r.out.iterations < c.iterations);
     // The start is already good enough: one iteration.
-    let mut c = config(6, 50, 3);
+    let mut c = example_config(6, 50, 3);
     c.thr_cost = u64::MAX >> 16;
     c.thr_max = (1 << 34) - 1;
     assert_eq!(check(&c, &model, &scan, FIXED).out.iterations, 1);
@@ -331,7 +307,7 @@ fn stops_on_the_thresholds_before_the_cap() {
 #[test]
 fn runs_to_the_cap() {
     let (model, scan) = data();
-    let mut c = config(8, 6, 99);
+    let mut c = example_config(8, 6, 99);
     c.thr_cost = 1;
     c.thr_max = 1;
     assert_eq!(check(&c, &model, &scan, FIXED).out.iterations, 6);
@@ -340,7 +316,7 @@ fn runs_to_the_cap() {
 #[test]
 fn reset_in_the_middle_of_a_run() {
     let (model, scan) = data();
-    let cfg = config(8, 4, 17);
+    let cfg = example_config(8, 4, 17);
     let (outcome, ref_poses) = reference(&cfg, &model, &scan);
     let mut fresh = Bench::new(&model, &scan, FIXED);
     let want = run(&mut fresh, &cfg, &outcome);
@@ -406,7 +382,7 @@ fn power_up_is_idle_and_a_second_run_repeats_the_first() {
     let m = SequencerModel::new();
     assert_eq!(m.outputs(), SeqOutputs::default());
     assert_eq!(m.state_name(), "Idle");
-    let cfg = config(5, 3, 4);
+    let cfg = example_config(5, 3, 4);
     let (outcome, _) = reference(&cfg, &model, &scan);
     let mut b = Bench::new(&model, &scan, FIXED);
     let first = run(&mut b, &cfg, &outcome);
@@ -428,7 +404,7 @@ fn phase_clocks() {
     // the cost a clock after the last).
     let eval_each = 2 + lat + scan.len() as u64;
     for (n, iters, seed) in [(12u16, 5u16, 7u32), (1, 3, 9), (7, 4, 0)] {
-        let cfg = config(n, iters, seed);
+        let cfg = example_config(n, iters, seed);
         let (outcome, ref_poses) = reference(&cfg, &model, &scan);
         let mut b = Bench::new(&model, &scan, Timing { lat: (lat, lat), gap: 0, seed: 1 });
         b.load(&cfg);

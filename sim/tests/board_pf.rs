@@ -3,21 +3,10 @@
 //! after it, byte for byte equal to the reference (so the pose bytes are `pf::run`'s).
 
 use pficp_fpga::board::BoardConfig;
-use pficp_fpga::format::{point, FxPoint};
 use pficp_fpga::messages::{self, ResultReply, RunState, StatusReply};
-use pficp_fpga::pf::{self, PfConfig, SCALE_FRAC};
+use pficp_fpga::pf::{self, example_cloud, example_config};
 use pficp_fpga::protocol::{Command, Frame};
 use pficp_sim::serial::SerialBoard;
-
-fn cloud(n: usize, shift: [i16; 3]) -> Vec<FxPoint> {
-    (0..n)
-        .map(|i| {
-            let t = i as f64 * 0.37;
-            let p = point([0.6 * t.sin(), 0.5 * (1.7 * t).cos(), 0.4 * (0.5 * t).sin()]);
-            [p[0] - shift[0], p[1] - shift[1], p[2] - shift[2]]
-        })
-        .collect()
-}
 
 /// Send a request and run until its reply has arrived (not until idle: the filter may run
 /// on after the reply).
@@ -36,28 +25,14 @@ fn exchange(b: &mut SerialBoard, frame: &Frame) -> Frame {
     Frame::decode(&got[..got.len() - 1]).expect("a well-formed reply")
 }
 
-fn small_config() -> PfConfig {
-    PfConfig {
-        particles: 10,
-        iterations: 6,
-        temper_exp: 5,
-        centre: [0, 0, 0, 1 << SCALE_FRAC, 0, 0, 0],
-        sigma0: [1 << 17, 1 << 17, 1 << 17, 1 << 15, 1 << 16, 1 << 16, 1 << 16],
-        floor: [1 << 10, 1 << 10, 1 << 10, 1 << 10, 1 << 9, 1 << 9, 1 << 9],
-        seed: 11,
-        thr_cost: 0,
-        thr_max: 0,
-    }
-}
-
 fn req(cmd: Command, seq: u8, data: Vec<u8>) -> Frame {
     Frame { code: cmd as u8, seq, data }
 }
 
 #[test]
 fn the_board_runs_the_filter_and_returns_the_reference_pose() {
-    let model = cloud(80, [0, 0, 0]);
-    let scan = cloud(30, [300, -150, 80]);
+    let model = example_cloud(80, [0, 0, 0], 0.0);
+    let scan = example_cloud(30, [300, -150, 80], 0.0);
     let mut b = SerialBoard::new(BoardConfig::FAST_SIM).with_reference();
     b.run(100);
     exchange(&mut b, &req(Command::LoadModel, 1, messages::load_request(0, &model)));
@@ -66,7 +41,7 @@ fn the_board_runs_the_filter_and_returns_the_reference_pose() {
     let r = exchange(&mut b, &req(Command::Result, 3, vec![]));
     assert_eq!((r.code, r.data.first()), (0xff, Some(&7)), "{r:?}");
     // Run before SetSizes: OverCapacity.
-    let cfg = small_config();
+    let cfg = example_config(10, 6, 11);
     let r = exchange(&mut b, &req(Command::Run, 4, cfg.encode()));
     assert_eq!((r.code, r.data.first()), (0xff, Some(&4)), "{r:?}");
     exchange(&mut b, &req(Command::SetSizes, 5, messages::two_u16(80, 30)));
@@ -102,18 +77,18 @@ fn the_board_runs_the_filter_and_returns_the_reference_pose() {
 /// Busy at once (the timeless reference cannot model this: no byte comparison here).
 #[test]
 fn commands_get_busy_while_the_filter_runs() {
-    let model = cloud(80, [0, 0, 0]);
-    let scan = cloud(30, [300, -150, 80]);
+    let model = example_cloud(80, [0, 0, 0], 0.0);
+    let scan = example_cloud(30, [300, -150, 80], 0.0);
     let mut b = SerialBoard::new(BoardConfig::FAST_SIM);
     b.run(100);
     exchange(&mut b, &req(Command::LoadModel, 1, messages::load_request(0, &model)));
     exchange(&mut b, &req(Command::LoadScan, 2, messages::load_request(0, &scan)));
     exchange(&mut b, &req(Command::SetSizes, 3, messages::two_u16(80, 30)));
-    exchange(&mut b, &req(Command::Run, 4, small_config().encode()));
+    exchange(&mut b, &req(Command::Run, 4, example_config(10, 6, 11).encode()));
     let busy = [
         req(Command::LoadScan, 5, messages::load_request(0, &scan[..3])),
         req(Command::SetSizes, 6, messages::two_u16(80, 30)),
-        req(Command::Run, 7, small_config().encode()),
+        req(Command::Run, 7, example_config(10, 6, 11).encode()),
         req(Command::Result, 8, vec![]),
     ];
     for f in &busy {
@@ -127,6 +102,6 @@ fn commands_get_busy_while_the_filter_runs() {
     // The scan store was not touched: the result is the reference's.
     b.run_until_idle(100_000_000).expect("the filter finishes");
     let result = ResultReply::decode(&exchange(&mut b, &req(Command::Result, 11, vec![])).data).unwrap();
-    let outcome = pf::run(&small_config(), |pose| pf::evaluate(&model, &scan, pose));
+    let outcome = pf::run(&example_config(10, 6, 11), |pose| pf::evaluate(&model, &scan, pose));
     assert_eq!(result.pose, outcome.pose);
 }

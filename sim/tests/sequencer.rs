@@ -3,20 +3,10 @@
 //! particle set after every iteration (reconstructed from the particle RAM's write port),
 //! the same result. The pipeline is emulated by the functional reference with a latency.
 
-use pficp_fpga::format::{point, FxPoint, FxPose};
-use pficp_fpga::pf::{self, PfConfig, PARAMS, SCALE_FRAC};
+use pficp_fpga::format::{FxPoint, FxPose};
+use pficp_fpga::pf::{self, example_cloud, example_config, PfConfig, PARAMS, SCALE_FRAC};
 use pficp_fpga::sequencer::{config_writes, unpack_pose, SeqInputs, SeqOutputs};
 use pficp_sim::VerilatedSequencer;
-
-fn cloud(n: usize, shift: [i16; 3], phase: f64) -> Vec<FxPoint> {
-    (0..n)
-        .map(|i| {
-            let t = i as f64 * 0.37 + phase;
-            let p = point([0.6 * t.sin(), 0.5 * (1.7 * t).cos(), 0.4 * (0.5 * t).sin()]);
-            [p[0] - shift[0], p[1] - shift[1], p[2] - shift[2]]
-        })
-        .collect()
-}
 
 /// What one run of the Verilated sequencer did.
 struct RtlRun {
@@ -132,29 +122,15 @@ fn check(cfg: &PfConfig, model: &[FxPoint], scan: &[FxPoint], latency: u64) -> u
     r.clocks
 }
 
-fn config(particles: u16, iterations: u16, seed: u32) -> PfConfig {
-    PfConfig {
-        particles,
-        iterations,
-        temper_exp: 5,
-        centre: [0, 0, 0, 1 << SCALE_FRAC, 0, 0, 0],
-        sigma0: [1 << 17, 1 << 17, 1 << 17, 1 << 15, 1 << 16, 1 << 16, 1 << 16],
-        floor: [1 << 10, 1 << 10, 1 << 10, 1 << 10, 1 << 9, 1 << 9, 1 << 9],
-        seed,
-        thr_cost: 0,
-        thr_max: 0,
-    }
-}
-
 #[test]
 fn sequencer_matches_the_functional_reference() {
-    let model = cloud(48, [0, 0, 0], 0.0);
-    let scan = cloud(24, [400, -200, 100], 0.05);
-    let clocks = check(&config(12, 5, 7), &model, &scan, 20);
+    let model = example_cloud(48, [0, 0, 0], 0.0);
+    let scan = example_cloud(24, [400, -200, 100], 0.05);
+    let clocks = check(&example_config(12, 5, 7), &model, &scan, 20);
     println!("12 particles, 5 iterations: {clocks} clocks");
     // One particle, an odd count, angles near the half turn, another seed.
-    check(&config(1, 3, 9), &model, &scan, 3);
-    let mut c = config(7, 4, 0);
+    check(&example_config(1, 3, 9), &model, &scan, 3);
+    let mut c = example_config(7, 4, 0);
     c.centre = [1000, -2000, 300, (1 << SCALE_FRAC) + 5000, 8_000_000, -8_300_000, 4_190_000];
     c.temper_exp = 40;
     check(&c, &model, &scan, 11);
@@ -162,9 +138,9 @@ fn sequencer_matches_the_functional_reference() {
 
 #[test]
 fn sequencer_stops_on_the_thresholds() {
-    let model = cloud(40, [0, 0, 0], 0.0);
-    let scan = cloud(20, [0, 0, 0], 0.0);
-    let mut c = config(6, 50, 3);
+    let model = example_cloud(40, [0, 0, 0], 0.0);
+    let scan = example_cloud(20, [0, 0, 0], 0.0);
+    let mut c = example_config(6, 50, 3);
     c.thr_cost = u64::MAX >> 16;
     c.thr_max = (1 << 34) - 1;
     check(&c, &model, &scan, 5);

@@ -4,34 +4,10 @@
 //! Realistic runs with an emulated pipeline (random latencies, resets mid-run), and random
 //! inputs on every port.
 
-use pficp_fpga::format::{point, FxPoint};
-use pficp_fpga::pf::{self, PfConfig, SCALE_FRAC};
+use pficp_fpga::format::FxPoint;
+use pficp_fpga::pf::{self, example_cloud, example_config, PfConfig, SCALE_FRAC};
 use pficp_fpga::sequencer::{config_writes, unpack_pose, SeqInputs, SequencerModel};
 use pficp_sim::VerilatedSequencer;
-
-fn cloud(n: usize, shift: [i16; 3], phase: f64) -> Vec<FxPoint> {
-    (0..n)
-        .map(|i| {
-            let t = i as f64 * 0.37 + phase;
-            let p = point([0.6 * t.sin(), 0.5 * (1.7 * t).cos(), 0.4 * (0.5 * t).sin()]);
-            [p[0] - shift[0], p[1] - shift[1], p[2] - shift[2]]
-        })
-        .collect()
-}
-
-fn config(particles: u16, iterations: u16, seed: u32) -> PfConfig {
-    PfConfig {
-        particles,
-        iterations,
-        temper_exp: 5,
-        centre: [0, 0, 0, 1 << SCALE_FRAC, 0, 0, 0],
-        sigma0: [1 << 17, 1 << 17, 1 << 17, 1 << 15, 1 << 16, 1 << 16, 1 << 16],
-        floor: [1 << 10, 1 << 10, 1 << 10, 1 << 10, 1 << 9, 1 << 9, 1 << 9],
-        seed,
-        thr_cost: 0,
-        thr_max: 0,
-    }
-}
 
 struct Both {
     rtl: VerilatedSequencer,
@@ -102,22 +78,22 @@ fn realistic(cfg: &PfConfig, model: &[FxPoint], scan: &[FxPoint], seed: u32, res
 
 #[test]
 fn lockstep_realistic() {
-    let model = cloud(60, [0, 0, 0], 0.0);
-    let scan = cloud(30, [400, -200, 100], 0.05);
-    println!("{}", realistic(&config(12, 5, 7), &model, &scan, 3, None));
-    println!("{}", realistic(&config(1, 3, 9), &model, &scan, 4, None));
-    let mut c = config(7, 4, 0);
+    let model = example_cloud(60, [0, 0, 0], 0.0);
+    let scan = example_cloud(30, [400, -200, 100], 0.05);
+    println!("{}", realistic(&example_config(12, 5, 7), &model, &scan, 3, None));
+    println!("{}", realistic(&example_config(1, 3, 9), &model, &scan, 4, None));
+    let mut c = example_config(7, 4, 0);
     c.centre = [1000, -2000, 300, (1 << SCALE_FRAC) + 5000, 8_000_000, -8_300_000, 4_190_000];
     c.temper_exp = 40;
     println!("{}", realistic(&c, &model, &scan, 5, None));
-    let mut c = config(9, 3, 0xdead_beef);
+    let mut c = example_config(9, 3, 0xdead_beef);
     c.centre[3] = 3000;
     c.sigma0[3] = 1 << 14;
     println!("{}", realistic(&c, &model, &scan, 6, None));
     for at in [3u64, 400, 2000, 9000, 17000] {
-        realistic(&config(8, 4, 17), &model, &scan, 7, Some(at));
+        realistic(&example_config(8, 4, 17), &model, &scan, 7, Some(at));
     }
-    let mut c = config(10, 30, 21);
+    let mut c = example_config(10, 30, 21);
     c.thr_cost = 1 << 40;
     c.thr_max = (1 << 34) - 1;
     realistic(&c, &model, &scan, 8, None);
