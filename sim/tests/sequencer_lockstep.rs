@@ -104,7 +104,7 @@ fn lockstep_realistic() {
 fn lockstep_random_inputs() {
     let mut all_states = std::collections::HashSet::new();
     for seed in 1..=10u32 {
-        let mut rng = pf::Xorshift32::new(seed * 2654435761);
+        let mut rng = pf::Xorshift32::new(seed.wrapping_mul(2654435761));
         let mut r = || rng.next() as u64;
         let mut b = Both { rtl: VerilatedSequencer::new(), m: SequencerModel::new(), n: 0 };
         let clocks = 200_000;
