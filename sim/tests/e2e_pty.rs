@@ -100,13 +100,19 @@ fn reduced_models_1_and_2_through_the_simulated_board() {
 
 /// The default mode of `pficp register --board`: the whole particle filter on the
 /// simulated board (Run, Status polls, Result), the host's ICP polish after it.
+///
+/// The clouds are the bench's (2,000 model points, an independent 1,000-point scan, the
+/// default 100 clusters); the filter is reduced to 40 particles and 20 iterations to keep
+/// the simulation short. At 1,000 model points model 3 misses the success tolerance in
+/// the software mode too (its translation error is about 2.5% of the diagonal: too few
+/// points on its surface), so the clouds are not reduced further.
 fn register_on_board(id: ModelId, board: &SimBoard) -> bool {
     let truth = id.table1_truth();
-    let diag = bbox_diagonal(&id.model_points(1000));
-    let spec = ScanSpec { sampling: Sampling::Independent { points: 500 }, noise: 0.0, seed: 5 };
-    let ds = make(id, 1000, &truth, &spec);
+    let diag = bbox_diagonal(&id.model_points(2000));
+    let spec = ScanSpec { sampling: Sampling::Independent { points: 1000 }, noise: 0.0, seed: 5 };
+    let ds = make(id, 2000, &truth, &spec);
     let nn = NearestNeighbours::new(&ds.model);
-    let settings = PfIcpSettings { clusters: 50, particles: 40, iterations: 20, seed: 5, ..Default::default() };
+    let settings = PfIcpSettings { particles: 40, iterations: 20, seed: 5, ..Default::default() };
     let software = pf_icp::register(&nn, &ds.scan, &settings);
     // The simulated board runs ~30 times slower than a real one: a long timeout.
     let mut client = BoardClient::open(&board.path, 921_600, Duration::from_secs(120)).expect("open the pty");
@@ -153,8 +159,5 @@ fn reduced_models_1_to_3_with_the_filter_on_the_simulated_board() {
     assert_eq!(code, 0, "pficp-sim-board: {err}");
     // Every byte the board sent (the Result's pose bytes included) equals the reference's.
     assert!(err.contains("all equal"), "{err}");
-    // Models 1 and 2 within the success tolerance; model 3 at this reduced size misses it in
-    // the software mode too (about 3.5% of the diagonal in translation), so it is held to the
-    // software mode's result only (above).
-    assert_eq!(successes[..2], [true, true], "models 1 and 2 within the success tolerance of the truth");
+    assert_eq!(successes, [true, true, true], "models 1 to 3 within the success tolerance of the truth");
 }
