@@ -327,6 +327,14 @@ pub struct PfSequencer {
     mean26: Signal<Local, Bits<26>>,
     dev26: Signal<Local, Bits<26>>,
     abs26: Signal<Local, Bits<26>>,
+    // Sign extensions, as a mux on the sign bit (no carry chain).
+    u_hi_s18: Signal<Local, Bits<18>>,
+    cor_v_s26: Signal<Local, Bits<26>>,
+    ang_s25: Signal<Local, Bits<25>>,
+    ang_x_s25: Signal<Local, Bits<25>>,
+    scale_s26: Signal<Local, Bits<26>>,
+    tr_in_s25: Signal<Local, Bits<25>>,
+    mul_a_s44: Signal<Local, Bits<44>>,
     tr_in: Signal<Local, Bits<24>>,
     maxd_next: Signal<Local, Bits<34>>,
     t_entry: Signal<Local, Bits<8>>,
@@ -497,6 +505,13 @@ impl PfSequencer {
             mean26: Default::default(),
             dev26: Default::default(),
             abs26: Default::default(),
+            u_hi_s18: Default::default(),
+            cor_v_s26: Default::default(),
+            ang_s25: Default::default(),
+            ang_x_s25: Default::default(),
+            scale_s26: Default::default(),
+            tr_in_s25: Default::default(),
+            mul_a_s44: Default::default(),
             tr_in: Default::default(),
             maxd_next: Default::default(),
             t_entry: Default::default(),
@@ -647,7 +662,10 @@ impl Logic for PfSequencer {
             self.ref24.next = self.sel_est.val();
         }
         self.diff24.next = self.x_r.q.val() - self.ref24.val();
-        self.diff26.next = bit_cast::<26, 24>(self.diff24.val() ^ bits::<24>(0x80_0000)) - bits::<26>(0x80_0000);
+        self.diff26.next = bit_cast::<26, 24>(self.diff24.val());
+        if self.diff24.val().get_bit(23) {
+            self.diff26.next = bit_cast::<26, 24>(self.diff24.val()) | bits::<26>(0x300_0000);
+        }
         self.lim26.next = bit_cast::<26, 22>(self.sel_sigma.val()) << 1;
         // Negations go through a Local: in a Verilog compare, `0 - x` would be 32 bits wide.
         self.neg_lim26.next = bits::<26>(0) - self.lim26.val();
@@ -711,8 +729,11 @@ impl Logic for PfSequencer {
         if self.cj.q.val() == 2 {
             self.tr_in.next = self.cur[2].q.val();
         }
-        self.tr_y.next =
-            (bit_cast::<25, 24>(self.tr_in.val() ^ bits::<24>(0x80_0000)) - bits::<25>(0x80_0000)) + bits::<25>(32);
+        self.tr_in_s25.next = bit_cast::<25, 24>(self.tr_in.val());
+        if self.tr_in.val().get_bit(23) {
+            self.tr_in_s25.next = bit_cast::<25, 24>(self.tr_in.val()) | bits::<25>(0x100_0000);
+        }
+        self.tr_y.next = self.tr_in_s25.val() + bits::<25>(32);
         self.tr_t.next = bit_cast::<19, 25>(self.tr_y.val() >> 6);
         self.tr_sat.next = self.tr_t.val().get_bits::<18>(0);
         if (self.tr_t.val() ^ bits::<19>(0x4_0000)) > bits::<19>(0x5_ffff) {
@@ -763,6 +784,28 @@ impl Logic for PfSequencer {
             self.e_tmp.next = self.p.q.val() - 2;
         }
 
+        // Sign extensions (a mux on the sign bit, so no carry chain lengthens a path).
+        self.u_hi_s18.next = bit_cast::<18, 16>(self.u_hi.val());
+        if self.u_hi.val().get_bit(15) {
+            self.u_hi_s18.next = bit_cast::<18, 16>(self.u_hi.val()) | bits::<18>(0x3_0000);
+        }
+        self.cor_v_s26.next = bit_cast::<26, 20>(self.cor_v.val());
+        if self.cor_v.val().get_bit(19) {
+            self.cor_v_s26.next = bit_cast::<26, 20>(self.cor_v.val()) | bits::<26>(0x3f0_0000);
+        }
+        self.ang_s25.next = bit_cast::<25, 24>(self.ang.val());
+        if self.ang.val().get_bit(23) {
+            self.ang_s25.next = bit_cast::<25, 24>(self.ang.val()) | bits::<25>(0x100_0000);
+        }
+        self.ang_x_s25.next = bit_cast::<25, 24>(self.ang_x.val());
+        if self.ang_x.val().get_bit(23) {
+            self.ang_x_s25.next = bit_cast::<25, 24>(self.ang_x.val()) | bits::<25>(0x100_0000);
+        }
+        self.scale_s26.next = bit_cast::<26, 24>(self.cur[3].q.val());
+        if self.cur[3].q.val().get_bit(23) {
+            self.scale_s26.next = bit_cast::<26, 24>(self.cur[3].q.val()) | bits::<26>(0x300_0000);
+        }
+
         // Memory defaults.
         self.pram.read_address.next = self.pa.q.val();
         self.pram.write_enable.next = false;
@@ -780,11 +823,11 @@ impl Logic for PfSequencer {
         self.rf.read_address.next = self.op_b.q.val();
         self.rf.write_enable.next = false;
         self.rf.write_address.next = self.op_dst.q.val();
-        self.rf.write_data.next = bit_cast::<26, 20>(self.cor_v.val() ^ bits::<20>(0x8_0000)) - bits::<26>(0x8_0000);
+        self.rf.write_data.next = self.cor_v_s26.val();
         self.start_r.d.next = false;
         self.mul_go.next = false;
         self.mul_a_in.next = bit_cast::<26, 22>(self.sel_sigma.val());
-        self.mul_b_in.next = bit_cast::<18, 16>(self.u_hi.val() ^ bits::<16>(0x8000)) - bits::<18>(0x8000);
+        self.mul_b_in.next = self.u_hi_s18.val();
         self.div_go.next = false;
         self.div_n_in.next = self.acc_abs.val();
 
@@ -849,11 +892,10 @@ impl Logic for PfSequencer {
                 self.cy.d.next = 0.into();
                 self.ci.d.next = 0.into();
                 self.cflip.d.next = false;
-                self.cz.d.next = bit_cast::<25, 24>(self.ang.val() ^ bits::<24>(0x80_0000)) - bits::<25>(0x80_0000);
+                self.cz.d.next = self.ang_s25.val();
                 if (self.ang_x.val() > bits::<24>(0xc0_0000)) || (self.ang_x.val() < bits::<24>(0x40_0000)) {
                     self.cflip.d.next = true;
-                    self.cz.d.next =
-                        bit_cast::<25, 24>(self.ang_x.val() ^ bits::<24>(0x80_0000)) - bits::<25>(0x80_0000);
+                    self.cz.d.next = self.ang_x_s25.val();
                 }
                 self.state.d.next = SeqState::CorStep;
             }
@@ -890,8 +932,7 @@ impl Logic for PfSequencer {
             SeqState::PoseScale => {
                 self.rf.write_enable.next = true;
                 self.rf.write_address.next = bits::<5>(6);
-                self.rf.write_data.next =
-                    bit_cast::<26, 24>(self.cur[3].q.val() ^ bits::<24>(0x80_0000)) - bits::<26>(0x80_0000);
+                self.rf.write_data.next = self.scale_s26.val();
                 self.pc.d.next = 0.into();
                 self.cj.d.next = 0.into();
                 self.state.d.next = SeqState::OpFetch;
@@ -1353,11 +1394,16 @@ impl Logic for PfSequencer {
             }
         }
 
+        // The multiplicand, sign-extended (after the states have chosen it).
+        self.mul_a_s44.next = bit_cast::<44, 26>(self.mul_a_in.val());
+        if self.mul_a_in.val().get_bit(25) {
+            self.mul_a_s44.next = bit_cast::<44, 26>(self.mul_a_in.val()) | !bits::<44>(0x3ff_ffff);
+        }
         // The serial multiplier: 18 clocks, `m_acc = a * b` (b two's complement, its bit 17
         // weighs -2^17).
         self.m_neg.next = bits::<44>(0) - self.m_a.q.val();
         if self.mul_go.val() {
-            self.m_a.d.next = bit_cast::<44, 26>(self.mul_a_in.val() ^ bits::<26>(0x200_0000)) - bits::<44>(0x200_0000);
+            self.m_a.d.next = self.mul_a_s44.val();
             self.m_b.d.next = self.mul_b_in.val();
             self.m_acc.d.next = 0.into();
             self.m_cnt.d.next = bits::<5>(18);
