@@ -122,7 +122,7 @@ fn lockstep_p4_random_inputs() {
     let (mut results, mut costs) = (0, 0);
     for _ in 0..20_000 {
         let r = lcg(&mut seed) as u32;
-        let every = |n: u32| r % n == 0;
+        let every = |n: u32| r.is_multiple_of(n);
         let i = Inputs {
             model_we: every(17),
             model_waddr: (lcg(&mut seed) % 4096) as u16 | 16,

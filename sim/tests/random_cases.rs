@@ -82,8 +82,8 @@ fn random_cases_in_lockstep() {
             let gap_seed = rng.next();
             let gap = move |c: u64| match gap_kind {
                 0 => false,
-                1 => c % 2 == 0,
-                2 => (c.wrapping_mul(gap_seed) >> 7) % 3 == 0,
+                1 => c.is_multiple_of(2),
+                2 => (c.wrapping_mul(gap_seed) >> 7).is_multiple_of(3),
                 _ => c % 7 < 4,
             };
             let outcome = ls.run_particle(&model, &scan, &pose, gap);
@@ -112,7 +112,7 @@ fn full_model_memory_and_format_limits() {
     ls.load_model(&model).expect("load in lockstep");
     for (scan, pose) in [
         (vec![model[4095]], identity),
-        (vec![model[17], [i16::MAX, i16::MIN, 0], [0; 3]].repeat(6)[..17].to_vec(), identity),
+        ([model[17], [i16::MAX, i16::MIN, 0], [0; 3]].repeat(6)[..17].to_vec(), identity),
         ((0..17).map(|_| rng.point()).collect::<Vec<_>>(), saturating),
     ] {
         let (got, _) = ls.particle(model.len(), &scan, &pose, |c| c % 3 == 0).unwrap_or_else(|m| panic!("{m}"));
