@@ -65,6 +65,10 @@ struct Cli {
     /// Fail if the design uses more RAMB16BWER equivalents than this (RAMB8BWER = 0.5).
     #[arg(long, value_name = "N", default_value_t = 116.0)]
     max_bram: f64,
+    /// Fail if the longest register-to-register path has more logic levels than this (Yosys
+    /// `ltp` on the flattened netlist; a carry chain counts one level per CARRY4).
+    #[arg(long, value_name = "N", default_value_t = hdl_gen::report::DEFAULT_MAX_LEVELS)]
+    max_levels: usize,
 }
 
 /// The generated designs.
@@ -209,11 +213,17 @@ fn run(cli: &Cli) -> Result<()> {
     let opts = SynthOptions { io_pads: cli.io_pads || board, ..SynthOptions::default() };
     let mut res = synthesise(&verilog, &cli.out, &opts)?;
     res.source = source;
-    let limits = Limits { max_lut_percent: cli.max_lut_percent, max_dsp: cli.max_dsp, max_bram: cli.max_bram };
+    let limits = Limits {
+        max_lut_percent: cli.max_lut_percent,
+        max_dsp: cli.max_dsp,
+        max_bram: cli.max_bram,
+        max_levels: cli.max_levels,
+    };
     let md = res.render_markdown() + &limits.render_markdown(&res);
     let mut json = res.to_json();
     json["limits"] = serde_json::json!({
         "max_lut_percent": limits.max_lut_percent, "max_dsp": limits.max_dsp, "max_bram": limits.max_bram,
+        "max_levels": limits.max_levels,
         "violations": limits.violations(&res),
     });
     let (md_path, json_path) = (cli.out.join("resources.md"), cli.out.join("resources.json"));

@@ -304,6 +304,11 @@ fn fmt_count(x: f64) -> String {
     }
 }
 
+/// The default bound on logic levels: the board top's longest path is 18 (a 48-bit
+/// subtraction's carry chain and a zero test), the command engine's 16; more means a new
+/// long combinational path that wants a register (DESIGN: keep every path short).
+pub const DEFAULT_MAX_LEVELS: usize = 20;
+
 /// Limits the design must stay within.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Limits {
@@ -313,11 +318,18 @@ pub struct Limits {
     pub max_dsp: u64,
     /// Maximum RAMB16BWER equivalents.
     pub max_bram: f64,
+    /// Maximum logic levels on the longest register-to-register path ([`Resources::depth`]).
+    pub max_levels: usize,
 }
 
 impl Default for Limits {
     fn default() -> Self {
-        Limits { max_lut_percent: 60.0, max_dsp: device::DSP48A1, max_bram: device::RAMB16BWER as f64 }
+        Limits {
+            max_lut_percent: 60.0,
+            max_dsp: device::DSP48A1,
+            max_bram: device::RAMB16BWER as f64,
+            max_levels: DEFAULT_MAX_LEVELS,
+        }
     }
 }
 
@@ -340,6 +352,9 @@ impl Limits {
         if r.bram16 > self.max_bram {
             v.push(format!("RAMB16BWER {} > --max-bram {}", fmt_count(r.bram16), self.max_bram));
         }
+        if r.depth > self.max_levels {
+            v.push(format!("longest path {} logic levels > --max-levels {}", r.depth, self.max_levels));
+        }
         v
     }
 
@@ -347,8 +362,8 @@ impl Limits {
     pub fn render_markdown(&self, r: &Resources) -> String {
         let v = self.violations(r);
         let mut s = format!(
-            "\n## Limits\n\nLUT <= {} %, DSP48A1 <= {}, RAMB16BWER <= {}: ",
-            self.max_lut_percent, self.max_dsp, self.max_bram
+            "\n## Limits\n\nLUT <= {} %, DSP48A1 <= {}, RAMB16BWER <= {}, logic levels <= {}: ",
+            self.max_lut_percent, self.max_dsp, self.max_bram, self.max_levels
         );
         if v.is_empty() {
             s.push_str("**within limits**.\n");
@@ -408,13 +423,16 @@ mod tests {
     #[test]
     fn limits() {
         let mut r = Resources::from_cells(cells(&[("LUT6", 16_372), ("DSP48A1", 58), ("RAMB16BWER", 116)]));
+        r.depth = DEFAULT_MAX_LEVELS;
         assert!(Limits::default().violations(&r).is_empty(), "16372 LUT = 59.997 %");
         r.lut = 16_373;
         r.dsp = 59;
         r.bram16 = 116.5;
+        r.depth = DEFAULT_MAX_LEVELS + 1;
         let v = Limits::default().violations(&r);
-        assert_eq!(v.len(), 3, "{v:?}");
+        assert_eq!(v.len(), 4, "{v:?}");
         assert!(v[0].starts_with("LUT 16373 = 60.0 % of 27288 > --max-lut-percent 60"), "{}", v[0]);
+        assert_eq!(v[3], "longest path 21 logic levels > --max-levels 20");
         assert!(Limits::default().render_markdown(&r).contains("**exceeded**"));
     }
 }

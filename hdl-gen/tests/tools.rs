@@ -133,13 +133,16 @@ fn cli_fails_over_limits_but_writes_the_report() {
         "0",
         "--max-bram",
         "2.5",
+        "--max-levels",
+        "0",
     ]);
     assert!(!okay, "{stdout}\n{stderr}");
     assert!(stderr.contains("exceeds the limits: DSP48A1 1 > --max-dsp 0; RAMB16BWER 3 > --max-bram 2.5"), "{stderr}");
+    assert!(stderr.contains("logic levels > --max-levels 0"), "{stderr}");
     assert!(!stdout.contains("lint: clean"));
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("resources.json")).unwrap()).unwrap();
-    assert_eq!(json["limits"]["violations"].as_array().unwrap().len(), 2);
+    assert_eq!(json["limits"]["violations"].as_array().unwrap().len(), 3);
 }
 
 #[test]
