@@ -136,18 +136,22 @@ pub enum BoardError {
     /// The particle filter stopped for a reason of its own.
     #[error("the particle filter stopped: {0}")]
     Filter(String),
-    /// The on-board filter did not finish in time (the board answers Status, but keeps
-    /// running).
+    /// The on-board filter stalled: the board answers Status and says "running", but its
+    /// iteration count did not move for the whole allowance.
     #[error(
-        "the board on {port} did not finish the filter within {} ms ({} ms modelled board time); last Status: {state:?}, {iterations} iterations",
+        "the board on {port} did not finish the filter: no new iteration for {} ms, {} ms since Run \
+         ({} ms modelled board time for the whole run); last Status: {state:?}, {iterations} iterations",
         waited.as_millis(),
+        total.as_millis(),
         modelled.as_millis()
     )]
     RunTimeout {
         /// The port.
         port: String,
-        /// Time waited since Run.
+        /// Time waited since the iteration count last changed (or since the wait began).
         waited: Duration,
+        /// Time waited in all.
+        total: Duration,
         /// The modelled board time of the run.
         modelled: Duration,
         /// The last Status state.
@@ -589,10 +593,13 @@ impl BoardClient {
     }
 
     /// Poll Status every `every` until the filter is done (state 2); `progress` gets each
-    /// reply. Returns the last reply and the number of polls. A board still running after
-    /// `limit` (counted from the call) is a [`BoardError::RunTimeout`] naming `modelled`;
-    /// one that reports no run (state 0: reset?) a [`BoardError::Filter`]; one that stops
-    /// answering a [`BoardError::Timeout`] within the timeout per reply.
+    /// reply. Returns the last reply and the number of polls. A board still running whose
+    /// iteration count has not changed for `limit` (counted from the call, then from each
+    /// change) is a [`BoardError::RunTimeout`] naming `modelled`: a hung board is caught
+    /// after `limit`, while a slow one that keeps making progress (the simulated board runs
+    /// about 40 times slower than real time) is waited for. One that reports no run (state 0:
+    /// reset?) is a [`BoardError::Filter`]; one that stops answering a
+    /// [`BoardError::Timeout`] within the timeout per reply.
     pub fn wait_for_run(
         &mut self,
         limit: Duration,
@@ -601,11 +608,19 @@ impl BoardClient {
         mut progress: impl FnMut(&StatusReply),
     ) -> Result<(StatusReply, usize), BoardError> {
         let start = Instant::now();
+        let mut since = start;
+        let mut last_iterations = None;
         let mut polls = 0;
         loop {
             let s = self.status()?;
             polls += 1;
             progress(&s);
+            if last_iterations != Some(s.iterations) {
+                if last_iterations.is_some() {
+                    since = Instant::now();
+                }
+                last_iterations = Some(s.iterations);
+            }
             match s.state {
                 RunState::Done => return Ok((s, polls)),
                 RunState::Idle => {
@@ -616,11 +631,12 @@ impl BoardClient {
                 }
                 RunState::Running => {}
             }
-            let waited = start.elapsed();
+            let waited = since.elapsed();
             if waited >= limit {
                 return Err(BoardError::RunTimeout {
                     port: self.name.clone(),
                     waited,
+                    total: start.elapsed(),
                     modelled,
                     state: s.state,
                     iterations: s.iterations,

@@ -498,8 +498,9 @@ pub struct OnBoardResult {
 /// board behind `client` (protocol version 2: Run, Status, Result): the start and the
 /// covariance on the host ([`plan`]), the model and `board_points` scan points uploaded,
 /// Run, Status polled every `poll` (progress: [`OnBoardStep::Filter`] with the iterations
-/// done), Result, and the host's ICP polish on the whole scan ([`finish`]). A board that
-/// does not finish within [`BoardClient::run_allowance`] is a [`BoardError::RunTimeout`].
+/// done), Result, and the host's ICP polish on the whole scan ([`finish`]). A board whose
+/// iteration count stands still for [`BoardClient::run_allowance`] is a
+/// [`BoardError::RunTimeout`].
 pub fn register_on_board(
     client: &mut BoardClient,
     nn: &NearestNeighbours,
@@ -561,7 +562,7 @@ pub fn register_on_board(
     let cap = plan.config.iterations as usize;
     progress(OnBoardStep::Filter, 0, cap);
     let mut last = 0;
-    let (_, polls) = client.wait_for_run(limit.saturating_sub(run_start.elapsed()), modelled, poll, |s| {
+    let (_, polls) = client.wait_for_run(limit, modelled, poll, |s| {
         if s.iterations as usize != last || s.state == RunState::Done {
             last = s.iterations as usize;
             progress(OnBoardStep::Filter, if s.state == RunState::Done { cap } else { last.min(cap) }, cap);

@@ -578,8 +578,66 @@ fn a_board_that_never_finishes_is_a_run_timeout() {
     let e = client.wait_for_run(limit, client.modelled_run_time(&cfg), Duration::from_millis(20), |_| {}).unwrap_err();
     let took = start.elapsed();
     assert!(matches!(e, BoardError::RunTimeout { iterations: 2, state: RunState::Running, .. }), "{e:?}");
-    assert!(e.to_string().contains("did not finish the filter"), "{e}");
+    assert!(e.to_string().contains("did not finish the filter: no new iteration for"), "{e}");
     assert!(took >= limit && took < limit + Duration::from_secs(2), "{took:?} vs {limit:?}");
+}
+
+/// A board much slower than modelled (like the simulated one) that keeps finishing
+/// iterations is waited for, however long the whole run takes; one that stops making
+/// progress part-way is a RunTimeout one allowance after its last new iteration.
+#[test]
+fn a_slow_board_that_makes_progress_is_waited_for() {
+    let (model, scan) = (cloud(300, 61), cloud(100, 62));
+    // One iteration per `step` after Run, `stall_at` iterations at most (then it hangs
+    // unless the run is done).
+    let serve = |step: Duration, iterations: u16, stall_at: u16| {
+        let mut started: Option<Instant> = None;
+        PtyBoard::serve(support::intercepting_handler(move |f, b| {
+            if f.code != Command::Status as u8 || b.pf_outcome().is_none() {
+                return None;
+            }
+            let t0 = *started.get_or_insert_with(Instant::now);
+            let done = (t0.elapsed().as_millis() / step.as_millis()) as u16;
+            if done >= iterations && stall_at >= iterations {
+                return None; // the reference's own Status: done
+            }
+            let s = StatusReply { state: RunState::Running, iterations: done.min(stall_at), best_cost: 99 };
+            Some(Frame { code: 0x88, seq: f.seq, data: s.encode() }.encode())
+        }))
+    };
+    let limit = Duration::from_millis(400);
+    let cfg = run_config(8, 6, 4);
+    for (stall_at, finishes) in [(6, true), (3, false)] {
+        let mut board = serve(Duration::from_millis(150), 6, stall_at);
+        let mut client = board.client();
+        client.identify().unwrap();
+        client.load_model(&model, |_, _| {}).unwrap();
+        client.load_scan(&scan, |_, _| {}).unwrap();
+        client.set_sizes(model.len(), scan.len()).unwrap();
+        client.run(&cfg).unwrap();
+        let start = Instant::now();
+        let mut seen = Vec::new();
+        let r = client.wait_for_run(limit, Duration::ZERO, Duration::from_millis(20), |s| seen.push(s.iterations));
+        let took = start.elapsed();
+        if finishes {
+            // 6 iterations of 150 ms: more than twice the allowance in all.
+            let (last, _) = r.unwrap();
+            assert_eq!(last.state, RunState::Done);
+            assert!(took >= 2 * limit, "{took:?}");
+            // Every iteration was seen while running (the last reply is the reference's own).
+            assert_eq!(seen[..seen.len() - 1].iter().max(), Some(&5), "{seen:?}");
+            assert!(seen[..seen.len() - 1].windows(2).all(|w| w[0] <= w[1]), "{seen:?}");
+            client.result().unwrap();
+        } else {
+            let e = r.unwrap_err();
+            assert!(matches!(e, BoardError::RunTimeout { iterations: 3, .. }), "{e:?}");
+            // Iteration 3 arrives at 450 ms; the allowance runs from there.
+            assert!(took >= Duration::from_millis(450) + limit, "{took:?}");
+            assert!(took < Duration::from_millis(450) + limit + Duration::from_secs(1), "{took:?}");
+            let BoardError::RunTimeout { waited, total, .. } = e else { unreachable!() };
+            assert!(waited >= limit && total >= waited + Duration::from_millis(400), "{waited:?} {total:?}");
+        }
+    }
 }
 
 #[test]
