@@ -83,7 +83,8 @@ pub enum BoardError {
     },
     /// No reply within the time allowed.
     #[error(
-        "the board on {port} did not answer {command:?} within {} ms (is it connected, configured and set to {baud} baud?)",
+        "the board on {port} did not answer {command:?} within {} ms (is it connected, configured and set to {baud} baud? \
+         a board slower than its clock says, such as the simulated one, needs a larger --timeout-ms)",
         waited.as_millis()
     )]
     Timeout {
