@@ -310,6 +310,16 @@ fn a_model_too_big_for_the_board_is_subsampled_with_the_seed() {
 // ---------------------------------------------------------------------------------------
 
 /// A Run configuration over the unit-cube clouds of [`cloud`]: centre at the identity.
+/// `register_on_board` with 50 board points, Status polled every 20 ms, no progress output.
+fn on_board_50(
+    client: &mut BoardClient,
+    nn: &NearestNeighbours,
+    scan: &[nalgebra::Point3<f64>],
+    settings: &PfIcpSettings,
+) -> Result<board_pf::OnBoardResult, BoardError> {
+    board_pf::register_on_board(client, nn, scan, settings, 50, Duration::from_millis(20), &mut |_, _, _| {})
+}
+
 fn run_config(particles: u16, iterations: u16, seed: u32) -> PfConfig {
     PfConfig {
         particles,
@@ -516,16 +526,7 @@ fn a_board_that_stops_answering_mid_run_is_a_clear_error_within_the_timeout() {
     let mut client = board.client();
     client.set_timeout(Duration::from_millis(300));
     let start = Instant::now();
-    let e = board_pf::register_on_board(
-        &mut client,
-        &nn,
-        &ds.scan,
-        &settings,
-        50,
-        Duration::from_millis(20),
-        &mut |_, _, _| {},
-    )
-    .unwrap_err();
+    let e = on_board_50(&mut client, &nn, &ds.scan, &settings).unwrap_err();
     assert!(matches!(e, BoardError::Timeout { command: Command::Status, .. }), "{e:?}");
     assert!(e.to_string().contains(&board.path) && e.to_string().contains("did not answer"), "{e}");
     assert!(start.elapsed() < Duration::from_secs(30));
@@ -540,16 +541,7 @@ fn a_board_that_stops_answering_mid_run_is_a_clear_error_within_the_timeout() {
     let mut client = board.client();
     client.set_timeout(Duration::from_millis(300));
     let t = Instant::now();
-    let e = board_pf::register_on_board(
-        &mut client,
-        &nn,
-        &ds.scan,
-        &settings,
-        50,
-        Duration::from_millis(20),
-        &mut |_, _, _| {},
-    )
-    .unwrap_err();
+    let e = on_board_50(&mut client, &nn, &ds.scan, &settings).unwrap_err();
     // The first Status (before the run) already says "running": refused before any upload.
     assert!(matches!(&e, BoardError::Filter(m) if m.contains("still running")), "{e:?}");
     assert!(t.elapsed() < Duration::from_secs(5));
@@ -656,16 +648,7 @@ fn a_version_1_board_serves_the_host_driven_mode_only() {
     let (ds, diag) = reduced_model_1();
     let nn = NearestNeighbours::new(&ds.model);
     let settings = PfIcpSettings { clusters: 25, particles: 20, iterations: 8, seed: 5, ..Default::default() };
-    let e = board_pf::register_on_board(
-        &mut client,
-        &nn,
-        &ds.scan,
-        &settings,
-        50,
-        Duration::from_millis(20),
-        &mut |_, _, _| {},
-    )
-    .unwrap_err();
+    let e = on_board_50(&mut client, &nn, &ds.scan, &settings).unwrap_err();
     assert!(matches!(&e, BoardError::Limit(m) if m.contains("version 1") && m.contains("--host-driven")), "{e}");
     let r = board_pf::register(&mut client, &nn, &ds.scan, &settings, &mut |_, _, _| {}).unwrap();
     assert_eq!(r.board.identity.version, 1);
@@ -686,16 +669,7 @@ fn a_board_without_the_on_board_filter_is_told_to_use_host_driven() {
     let (ds, _) = reduced_model_1();
     let nn = NearestNeighbours::new(&ds.model);
     let settings = PfIcpSettings { clusters: 25, particles: 20, iterations: 8, seed: 5, ..Default::default() };
-    let e = board_pf::register_on_board(
-        &mut client,
-        &nn,
-        &ds.scan,
-        &settings,
-        50,
-        Duration::from_millis(20),
-        &mut |_, _, _| {},
-    )
-    .unwrap_err();
+    let e = on_board_50(&mut client, &nn, &ds.scan, &settings).unwrap_err();
     assert!(
         matches!(&e, BoardError::Limit(m) if m.contains("does not know Status") && m.contains("--host-driven")),
         "{e}"
