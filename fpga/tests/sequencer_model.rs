@@ -13,7 +13,7 @@ use pficp_fpga::format::{FxPoint, FxPose};
 use pficp_fpga::pf::{self, example_cloud, example_config, PfConfig, PfOutcome, PARAMS, SCALE_FRAC};
 use pficp_fpga::sequencer::{
     clocks_per_iteration, config_writes, run_clocks, sum_clocks, temper_pass_clocks, unpack_pose, IterationShape,
-    SeqInputs, SeqOutputs, SeqState, SequencerModel, POSE_CLOCKS, PROPAGATE_CLOCKS,
+    PipelineStandIn, SeqInputs, SeqOutputs, SeqState, SequencerModel, POSE_CLOCKS, PROPAGATE_CLOCKS,
 };
 use std::collections::HashMap;
 
@@ -36,8 +36,7 @@ struct Bench<'a> {
     timing: Timing,
     rng: pf::Xorshift32,
     clock: u64,
-    /// (clock the results begin, per-point distances, cost).
-    pending: Option<(u64, Vec<u64>, u64)>,
+    pipeline: PipelineStandIn,
     /// Clock from which `nn_ready` may be high again.
     ready_at: u64,
     poses: Vec<FxPose>,
@@ -55,7 +54,7 @@ impl<'a> Bench<'a> {
             timing,
             rng: pf::Xorshift32::new(timing.seed),
             clock: 0,
-            pending: None,
+            pipeline: PipelineStandIn::default(),
             ready_at: 0,
             poses: Vec::new(),
             writes: Vec::new(),
@@ -75,29 +74,14 @@ impl<'a> Bench<'a> {
         }
         let now = self.clock;
         let mut i = extra;
-        i.nn_ready = self.pending.is_none() && now >= self.ready_at && !o.start;
+        i.nn_ready = !self.pipeline.busy() && now >= self.ready_at && !o.start;
         if o.start {
-            assert!(self.pending.is_none(), "start while an evaluation is in flight");
             let pose = unpack_pose(&o.pose);
             self.poses.push(pose);
-            let e = pficp_fpga::pipeline::evaluate(self.model, self.scan, &pose);
             let lat = self.draw(self.timing.lat.0, self.timing.lat.1);
-            self.pending = Some((now + lat, e.nearest.iter().map(|n| n.1).collect(), e.cost));
+            self.pipeline.start(now, lat, self.model, self.scan, &pose);
         }
-        if let Some((t0, d, c)) = &self.pending {
-            if now >= *t0 {
-                let k = (now - t0) as usize;
-                if k < d.len() {
-                    i.nn_valid = true;
-                    i.nn_dist = d[k];
-                } else {
-                    i.cost_valid = true;
-                    i.cost = *c;
-                }
-            }
-        }
-        if i.cost_valid && self.pending.is_some() {
-            self.pending = None;
+        if self.pipeline.drive(now, &mut i) {
             self.ready_at = now + 1 + self.draw(0, self.timing.gap);
         }
         *self.per_state.entry(self.seq.state_name()).or_default() += 1;
@@ -114,7 +98,7 @@ impl<'a> Bench<'a> {
 
     /// Forget the emulated pipeline's evaluation in flight (it is reset with the sequencer).
     fn reset_pipeline(&mut self) {
-        self.pending = None;
+        self.pipeline.reset();
         self.ready_at = 0;
     }
 }

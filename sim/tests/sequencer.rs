@@ -5,7 +5,7 @@
 
 use pficp_fpga::format::{FxPoint, FxPose};
 use pficp_fpga::pf::{self, example_cloud, example_config, PfConfig, PARAMS, SCALE_FRAC};
-use pficp_fpga::sequencer::{config_writes, unpack_pose, SeqInputs, SeqOutputs};
+use pficp_fpga::sequencer::{config_writes, unpack_pose, PipelineStandIn, SeqInputs, SeqOutputs};
 use pficp_sim::VerilatedSequencer;
 
 /// What one run of the Verilated sequencer did.
@@ -26,8 +26,7 @@ fn run_rtl(rtl: &mut VerilatedSequencer, cfg: &PfConfig, model: &[FxPoint], scan
     rtl.step(&SeqInputs { go: true, ..Default::default() });
     let mut poses = Vec::new();
     let mut writes = Vec::new();
-    // The emulated pipeline: (clock the results begin, per-point distances, cost).
-    let mut pending: Option<(u64, Vec<u64>, u64)> = None;
+    let mut pipeline = PipelineStandIn::default();
     let start_clock = rtl.cycle();
     loop {
         let o = rtl.outputs();
@@ -35,29 +34,13 @@ fn run_rtl(rtl: &mut VerilatedSequencer, cfg: &PfConfig, model: &[FxPoint], scan
             writes.push((o.p_waddr, o.p_wdata));
         }
         let now = rtl.cycle();
-        let mut i = SeqInputs { nn_ready: pending.is_none() && !o.start, ..Default::default() };
+        let mut i = SeqInputs { nn_ready: !pipeline.busy() && !o.start, ..Default::default() };
         if o.start {
-            assert!(pending.is_none(), "start while an evaluation is in flight");
             let pose = unpack_pose(&o.pose);
             poses.push(pose);
-            let e = pficp_fpga::pipeline::evaluate(model, scan, &pose);
-            pending = Some((now + latency, e.nearest.iter().map(|n| n.1).collect(), e.cost));
+            pipeline.start(now, latency, model, scan, &pose);
         }
-        if let Some((t0, d, c)) = &pending {
-            if now >= *t0 {
-                let k = (now - t0) as usize;
-                if k < d.len() {
-                    i.nn_valid = true;
-                    i.nn_dist = d[k];
-                } else {
-                    i.cost_valid = true;
-                    i.cost = *c;
-                }
-            }
-        }
-        if i.cost_valid {
-            pending = None;
-        }
+        pipeline.drive(now, &mut i);
         rtl.step(&i);
         if rtl.outputs().finished {
             break;

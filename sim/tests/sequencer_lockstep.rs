@@ -6,7 +6,7 @@
 
 use pficp_fpga::format::FxPoint;
 use pficp_fpga::pf::{self, example_cloud, example_config, PfConfig, SCALE_FRAC};
-use pficp_fpga::sequencer::{config_writes, unpack_pose, SeqInputs, SequencerModel};
+use pficp_fpga::sequencer::{config_writes, unpack_pose, PipelineStandIn, SeqInputs, SequencerModel};
 use pficp_sim::VerilatedSequencer;
 
 struct Both {
@@ -33,36 +33,21 @@ fn realistic(cfg: &PfConfig, model: &[FxPoint], scan: &[FxPoint], seed: u32, res
         b.step(&SeqInputs { cfg_we: true, cfg_addr: a, cfg_data: w, ..Default::default() });
     }
     b.step(&SeqInputs { go: true, ..Default::default() });
-    let mut pending: Option<(u64, Vec<u64>, u64)> = None;
+    let mut pipeline = PipelineStandIn::default();
     let mut ready_at = 0;
     let mut now = 0u64;
     loop {
         let o = b.m.outputs();
-        let mut i = SeqInputs { nn_ready: pending.is_none() && now >= ready_at && !o.start, ..Default::default() };
+        let mut i = SeqInputs { nn_ready: !pipeline.busy() && now >= ready_at && !o.start, ..Default::default() };
         if o.start {
-            let pose = unpack_pose(&o.pose);
-            let e = pficp_fpga::pipeline::evaluate(model, scan, &pose);
-            pending = Some((now + (rng.next() % 40) as u64, e.nearest.iter().map(|n| n.1).collect(), e.cost));
+            pipeline.start(now, (rng.next() % 40) as u64, model, scan, &unpack_pose(&o.pose));
         }
-        if let Some((t0, d, c)) = &pending {
-            if now >= *t0 {
-                let k = (now - t0) as usize;
-                if k < d.len() {
-                    i.nn_valid = true;
-                    i.nn_dist = d[k];
-                } else {
-                    i.cost_valid = true;
-                    i.cost = *c;
-                }
-            }
-        }
-        if i.cost_valid {
-            pending = None;
+        if pipeline.drive(now, &mut i) {
             ready_at = now + 1 + (rng.next() % 4) as u64;
         }
         if Some(now) == reset_at {
             i.reset = true;
-            pending = None;
+            pipeline.reset();
         }
         b.step(&i);
         now += 1;
