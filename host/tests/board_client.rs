@@ -45,11 +45,16 @@ fn poses(n: usize, seed: u64) -> Vec<FxPose> {
 fn loaded(model: &[FxPoint], scan: &[FxPoint]) -> (PtyBoard, BoardClient) {
     let mut board = PtyBoard::reference();
     let mut client = board.client();
+    upload(&mut client, model, scan);
+    (board, client)
+}
+
+/// Identify, load the model and the scan, set the sizes.
+fn upload(client: &mut BoardClient, model: &[FxPoint], scan: &[FxPoint]) {
     client.identify().unwrap();
     client.load_model(model, |_, _| {}).unwrap();
     client.load_scan(scan, |_, _| {}).unwrap();
     client.set_sizes(model.len(), scan.len()).unwrap();
-    (board, client)
 }
 
 #[test]
@@ -192,10 +197,7 @@ fn a_lost_evaluate_reply_starts_the_iteration_over() {
     // (FIRST), 6 second batch (no FIRST: lost once, not repeatable), 7.. the batches again.
     let mut board = corrupt_replies(|k| k == 6);
     let mut client = board.client();
-    client.identify().unwrap();
-    client.load_model(&model, |_, _| {}).unwrap();
-    client.load_scan(&scan, |_, _| {}).unwrap();
-    client.set_sizes(model.len(), scan.len()).unwrap();
+    upload(&mut client, &model, &scan);
     let ps = poses(45, 9);
     let scale = WeightScale::for_two_q(1e6);
     let (costs, summary) = client.costs_and_weights(&ps, |_| scale).unwrap();
@@ -397,10 +399,7 @@ fn a_lost_run_reply_is_not_run_twice_blindly() {
         None
     }));
     let mut client = board.client();
-    client.identify().unwrap();
-    client.load_model(&model, |_, _| {}).unwrap();
-    client.load_scan(&scan, |_, _| {}).unwrap();
-    client.set_sizes(model.len(), scan.len()).unwrap();
+    upload(&mut client, &model, &scan);
     let cfg = run_config(8, 4, 5);
     client.run(&cfg).unwrap();
     assert_eq!(client.stats().resends, 1);
@@ -426,10 +425,7 @@ fn a_running_board_is_polled_and_busy_is_not_resent() {
         None
     }));
     let mut client = board.client();
-    client.identify().unwrap();
-    client.load_model(&model, |_, _| {}).unwrap();
-    client.load_scan(&scan, |_, _| {}).unwrap();
-    client.set_sizes(model.len(), scan.len()).unwrap();
+    upload(&mut client, &model, &scan);
     let cfg = run_config(6, 3, 8);
     client.run(&cfg).unwrap();
     let e = client.result().unwrap_err();
@@ -558,10 +554,7 @@ fn a_board_that_never_finishes_is_a_run_timeout() {
     }));
     let mut client = board.client();
     client.set_timeout(Duration::from_millis(200));
-    client.identify().unwrap();
-    client.load_model(&model, |_, _| {}).unwrap();
-    client.load_scan(&scan, |_, _| {}).unwrap();
-    client.set_sizes(model.len(), scan.len()).unwrap();
+    upload(&mut client, &model, &scan);
     let cfg = run_config(20, 10, 3);
     let limit = client.run_allowance(&cfg);
     assert_eq!(limit, Duration::from_millis(200) + client.modelled_run_time(&cfg) * pficp::board::RUN_SAFETY);
@@ -602,10 +595,7 @@ fn a_slow_board_that_makes_progress_is_waited_for() {
     for (stall_at, finishes) in [(6, true), (3, false)] {
         let mut board = serve(Duration::from_millis(150), 6, stall_at);
         let mut client = board.client();
-        client.identify().unwrap();
-        client.load_model(&model, |_, _| {}).unwrap();
-        client.load_scan(&scan, |_, _| {}).unwrap();
-        client.set_sizes(model.len(), scan.len()).unwrap();
+        upload(&mut client, &model, &scan);
         client.run(&cfg).unwrap();
         let start = Instant::now();
         let mut seen = Vec::new();
