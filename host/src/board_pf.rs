@@ -33,7 +33,7 @@
 use crate::board::{BoardClient, BoardError, ClientStats, MAX_PARTICLES, MAX_POINTS};
 use crate::fixed::{normalised_pose, original_pose, quantise_pose, Normalisation};
 use crate::geometry::Pose;
-use crate::icp::{icp, IcpSettings, Registration};
+use crate::icp::Registration;
 use crate::nn::NearestNeighbours;
 use crate::particle_filter::{tempered_q, WeighError, Weighed};
 use crate::pf_icp::{
@@ -434,8 +434,21 @@ pub fn finish(
 ) -> PfIcpResult {
     let filter_pose = params_pose(&result.params, &plan.model_norm, &plan.scan_norm);
     let t = Instant::now();
-    let polish = IcpSettings { max_iterations: settings.polish_iterations, ..Default::default() };
-    let polished = icp(nn, scan, &filter_pose, &polish);
+    let surface = crate::surface::Surface::new(nn);
+    let conclusion = crate::conclusion::conclude(
+        &surface,
+        scan,
+        &filter_pose,
+        &plan.prior.hypotheses,
+        None,
+        settings.polish_iterations,
+    );
+    let polished = Registration {
+        pose: conclusion.pose,
+        msd: crate::icp::msd(nn, scan, &conclusion.pose),
+        iterations: result.iterations as usize,
+        errors: Vec::new(),
+    };
     let polish_time = t.elapsed();
     let errors = vec![cost_msd(result.cost, plan.scan.len(), &plan.model_norm), polished.msd];
     PfIcpResult {
@@ -446,6 +459,8 @@ pub fn finish(
             errors,
         },
         initial: plan.prior.initial.clone(),
+        hypotheses: plan.prior.hypotheses.clone(),
+        conclusion,
         covariance: plan.prior.covariance.clone(),
         filter_pose,
         times: StageTimes {

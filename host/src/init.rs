@@ -45,6 +45,8 @@ pub struct InitialPose {
     pub model_clusters: Clustering,
     /// Mean squared closest-point distance of the cost sample at `pose`.
     pub cost: f64,
+    /// Every candidate ranked (the pairings' poses after their centroid ICP).
+    pub candidates: Vec<Pose>,
 }
 
 /// Ratio of principal spreads under which two axes count as interchangeable.
@@ -166,7 +168,8 @@ pub fn initial_pose(
         .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)))
         .unwrap_or((f64::INFINITY, 0));
     let (pose, pairing) = candidates.get(best).copied().unwrap_or((Pose::identity(), Pairing::Nearest));
-    InitialPose { pose, pairing, scan_clusters, model_clusters, cost: best_cost }
+    let candidates = candidates.into_iter().map(|(p, _)| p).collect();
+    InitialPose { pose, pairing, scan_clusters, model_clusters, cost: best_cost, candidates }
 }
 
 #[cfg(test)]

@@ -273,6 +273,52 @@ struct EvalArgs {
     /// Skip the success rates (the slow part).
     #[arg(long)]
     no_success: bool,
+    /// Which experiments: the paper's (Tables 2 to 7, success rates, figures) or the
+    /// realistic benchmark (real and synthetic near-symmetric shapes, partial views,
+    /// noise, outliers; writes realistic.json).
+    #[arg(long, value_enum, default_value_t = SuiteArg::Paper)]
+    suite: SuiteArg,
+    /// Realistic suite: cases per family [default: 100, or 8 with --quick].
+    #[arg(long)]
+    cases: Option<usize>,
+    /// Realistic suite: the quick size (8 cases per family).
+    #[arg(long)]
+    quick: bool,
+    /// Realistic suite: dev (development shapes and seeds, for tuning) or test (every shape,
+    /// held-out ones included, other seeds: what is reported).
+    #[arg(long, value_enum, default_value_t = SplitArg::Test)]
+    split: SplitArg,
+    /// Realistic suite: only these families (comma-separated) [default: all].
+    #[arg(long, value_enum, value_delimiter = ',')]
+    family: Vec<FamilyArg>,
+    /// Realistic suite: also run these methods (comma-separated), beside pf-icp.
+    #[arg(long, value_enum, value_delimiter = ',')]
+    with: Vec<MethodArg>,
+    /// Realistic suite: export every case (model, scan, truth, symmetries) to this folder
+    /// for the peers' script (tests/peers).
+    #[arg(long, value_name = "DIR")]
+    export: Option<PathBuf>,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum SuiteArg {
+    Paper,
+    Realistic,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum FamilyArg {
+    Real,
+    RealOutliers,
+    Parts,
+    #[value(name = "hard-180")]
+    Hard180,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum SplitArg {
+    Dev,
+    Test,
 }
 
 #[derive(clap::Args)]
@@ -539,6 +585,9 @@ fn demo() -> Result<()> {
 }
 
 fn eval(a: &EvalArgs) -> Result<()> {
+    if a.suite == SuiteArg::Realistic {
+        return eval_realistic(a);
+    }
     let opts = pficp::eval::EvalOptions {
         out_dir: a.out.clone(),
         trials: a.trials,
@@ -549,6 +598,42 @@ fn eval(a: &EvalArgs) -> Result<()> {
         ..Default::default()
     };
     pficp::eval::run(&opts)?;
+    Ok(())
+}
+
+fn eval_realistic(a: &EvalArgs) -> Result<()> {
+    use pficp::eval::realistic::{self, Family, RealisticOptions, Split};
+    let cases = a.cases.unwrap_or(if a.quick { 8 } else { 100 });
+    if cases == 0 {
+        bail!("--cases must be at least 1");
+    }
+    let mut methods = vec![Method::PfIcp];
+    methods.extend(a.with.iter().map(|&m| Method::from(m)).filter(|m| *m != Method::PfIcp));
+    let opts = RealisticOptions {
+        cases,
+        seed: a.seed,
+        split: if a.split == SplitArg::Dev { Split::Dev } else { Split::Test },
+        methods,
+        families: if a.family.is_empty() {
+            Family::ALL.to_vec()
+        } else {
+            a.family
+                .iter()
+                .map(|f| match f {
+                    FamilyArg::Real => Family::Real,
+                    FamilyArg::RealOutliers => Family::RealOutliers,
+                    FamilyArg::Parts => Family::Parts,
+                    FamilyArg::Hard180 => Family::Hard180,
+                })
+                .collect()
+        },
+        out_dir: Some(a.out.clone()),
+        export: a.export.clone(),
+        ..Default::default()
+    };
+    let report = realistic::run(&opts)?;
+    print!("{}", report.render());
+    eprintln!("wrote {}", a.out.join("realistic.json").display());
     Ok(())
 }
 

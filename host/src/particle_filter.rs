@@ -21,7 +21,9 @@
 //! 6. **Resample**: systematic resampling (one uniform draw, `N` evenly spaced pointers
 //!    along the CDF).
 //! 7. **Stop** when the estimate's average and maximum point distances are under the
-//!    thresholds, or at the iteration cap. The best estimate seen is returned.
+//!    thresholds, when the best cost has stalled (no fall of more than 0.1% for
+//!    [`FilterSettings::patience`] iterations), or at the iteration cap. The best estimate
+//!    seen is returned.
 //!
 //! The same seed gives the same result: the random draws are sequential from one
 //! ChaCha8 stream; costs are evaluated in parallel but each is deterministic.
@@ -126,6 +128,9 @@ pub struct FilterSettings {
     pub threshold_max: f64,
     /// Optional particle-count adaptation on the effective sample size.
     pub adaptive: Option<Adaptive>,
+    /// Stop when the best cost has not fallen by more than 0.1% for this many iterations
+    /// (`None`: only the thresholds and the cap stop the filter).
+    pub patience: Option<usize>,
     /// Seed.
     pub seed: u64,
 }
@@ -247,6 +252,7 @@ pub fn try_run(
     let mut best = (obj.cost(init), init.to_vec());
     let mut history = Vec::with_capacity(settings.iterations);
     let mut iterations = 0;
+    let (mut stalled, mut reference) = (0usize, best.0);
     for k in 0..settings.iterations {
         iterations = k + 1;
         if k > 0 {
@@ -309,6 +315,14 @@ pub fn try_run(
         if avg < settings.threshold_avg && max < settings.threshold_max {
             break;
         }
+        if best.0 < reference * (1.0 - 1e-3) {
+            (stalled, reference) = (0, best.0);
+        } else {
+            stalled += 1;
+        }
+        if settings.patience.is_some_and(|p| stalled >= p) {
+            break;
+        }
         // Resample (and adapt the count).
         if let Some(a) = settings.adaptive {
             n = if ess < 0.1 * n as f64 {
@@ -357,6 +371,7 @@ mod tests {
             q: 0.0,
             sigma_floor: vec![1e-4, 1e-4],
             threshold_avg: 1e-3,
+            patience: None,
             threshold_max: 1e-3,
             adaptive: None,
             seed,

@@ -16,13 +16,16 @@
 //! [`register_with`] takes the particles' costs and weights from a [`ParticleWeights`]
 //! source instead (the board: `crate::board_pf`); everything else is the same.
 
+use crate::conclusion::Conclusion;
 use crate::covariance::{approximate_icp_variance, IcpCovariance};
 use crate::geometry::{Centred, Params, Pose};
+use crate::hypotheses::{self, Hypothesis, SearchSettings};
 use crate::icp::{icp, IcpSettings, Registration};
 use crate::init::{initial_pose, InitMode, InitialPose};
 use crate::kmeans::Pairing;
 use crate::nn::NearestNeighbours;
 use crate::particle_filter::{self, Adaptive, FilterSettings, Objective, WeighError, Weighed};
+use crate::surface::Surface;
 use nalgebra::Point3;
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
@@ -59,6 +62,12 @@ pub struct PfIcpSettings {
     pub threshold_max: f64,
     /// Optional particle-count adaptation.
     pub adaptive: Option<Adaptive>,
+    /// Stop the filter when its best cost stalls this many iterations
+    /// ([`FilterSettings::patience`]; `None`: thresholds and cap only).
+    pub patience: Option<usize>,
+    /// The global search for the start ([`crate::hypotheses`]); `None`: the k-means start
+    /// alone, as in the paper.
+    pub search: Option<SearchSettings>,
 }
 
 impl Default for PfIcpSettings {
@@ -77,6 +86,8 @@ impl Default for PfIcpSettings {
             threshold_avg: 1e-4,
             threshold_max: 1e-3,
             adaptive: None,
+            patience: Some(8),
+            search: Some(SearchSettings::default()),
         }
     }
 }
@@ -99,10 +110,14 @@ pub struct StageTimes {
 pub struct PfIcpResult {
     /// Pose, MSD over the whole scan, filter iterations, cost per filter iteration.
     pub registration: Registration,
-    /// The start.
+    /// The k-means start.
     pub initial: InitialPose,
+    /// The distinct hypotheses of the global search, best first (empty without it).
+    pub hypotheses: Vec<Hypothesis>,
     /// The covariance estimate.
     pub covariance: IcpCovariance,
+    /// The polish, the choice among the hypotheses, alternatives, uncertainty and fit.
+    pub conclusion: Conclusion,
     /// The filter's own estimate, before the polish.
     pub filter_pose: Pose,
     /// Stage timings.
@@ -110,6 +125,9 @@ pub struct PfIcpResult {
     /// The filter's per-iteration records.
     pub filter_history: Vec<crate::particle_filter::IterationRecord>,
 }
+
+/// The filter's scale stays within these factors of its start's.
+const SCALE_BOUNDS: (f64, f64) = (0.5, 2.0);
 
 /// Smallest sigma per parameter: 0.05% of the diagonal, 0.05% of scale, 0.02 degree.
 fn sigma_floor(diag: f64, scale: f64) -> Vec<f64> {
@@ -151,14 +169,25 @@ pub trait ParticleWeights: Sync {
     fn weigh(&self, poses: &[Pose], q: f64) -> Result<Weighed, WeighError>;
 }
 
-/// The 7-state objective: MSD of a fixed scan subset, states in the centred frame.
+/// The 7-state objective over a fixed scan subset, states in the centred frame. In
+/// software the cost is the capped surface distance ([`Surface::cost`]: robust to
+/// outliers, not dominated by the model's sampling) and the refinement trimmed ICP; with
+/// the board's weights (`weights`) it is the board's MSD and plain ICP, so that every cost
+/// the filter compares is in the board's units.
 struct PoseObjective<'a> {
-    nn: &'a NearestNeighbours,
+    surface: &'a Surface<'a>,
     sample: &'a [Point3<f64>],
     frame: Centred,
     refine_iterations: usize,
     weights: Option<&'a dyn ParticleWeights>,
+    /// Distance cap of the software cost.
+    cap: f64,
+    /// Allowed scale range (a collapsed scan fits any surface).
+    scale_range: (f64, f64),
 }
+
+/// Fraction of pairs the filter's trimmed ICP refinement keeps.
+const REFINE_TRIM: f64 = 0.9;
 
 impl PoseObjective<'_> {
     fn pose(&self, x: &[f64]) -> Pose {
@@ -175,17 +204,17 @@ impl Objective for PoseObjective<'_> {
     }
     fn cost(&self, x: &[f64]) -> f64 {
         let pose = self.pose(x);
-        let mut sum = 0.0;
-        for p in self.sample {
-            sum += self.nn.closest(&pose.apply(p)).dist2;
+        if self.weights.is_some() {
+            crate::icp::msd(self.surface.nn(), self.sample, &pose)
+        } else {
+            self.surface.cost(self.sample, &pose, self.cap)
         }
-        sum / self.sample.len() as f64
     }
     fn distances(&self, x: &[f64]) -> (f64, f64) {
         let pose = self.pose(x);
         let (mut sum, mut max) = (0.0f64, 0.0f64);
         for p in self.sample {
-            let d = self.nn.closest(&pose.apply(p)).dist2.sqrt();
+            let d = self.surface.nn().closest(&pose.apply(p)).dist2.sqrt();
             sum += d;
             max = max.max(d);
         }
@@ -196,12 +225,26 @@ impl Objective for PoseObjective<'_> {
             return None;
         }
         let start = self.pose(x);
-        let s = IcpSettings { max_iterations: self.refine_iterations, ..Default::default() };
-        let r = icp(self.nn, self.sample, &start, &s);
-        Some((self.frame.params(&r.pose).to_vec(), r.msd))
+        let pose = if self.weights.is_some() {
+            let s = IcpSettings { max_iterations: self.refine_iterations, ..Default::default() };
+            icp(self.surface.nn(), self.sample, &start, &s).pose
+        } else {
+            hypotheses::trimmed_icp(
+                self.surface.nn(),
+                self.sample,
+                &start,
+                self.refine_iterations,
+                REFINE_TRIM,
+                crate::svd_match::ScaleRule::LeastSquares,
+            )
+        };
+        let mut refined = self.frame.params(&pose).to_vec();
+        self.constrain(&mut refined);
+        let c = self.cost(&refined);
+        Some((refined, c))
     }
     fn constrain(&self, x: &mut [f64]) {
-        x[3] = x[3].max(1e-6);
+        x[3] = x[3].clamp(self.scale_range.0, self.scale_range.1);
     }
     fn weigh(&self, particles: &[Vec<f64>], q: f64) -> Result<Weighed, WeighError> {
         match self.weights {
@@ -237,8 +280,12 @@ pub fn weight_sample(scan: &[Point3<f64>], settings: &PfIcpSettings) -> Vec<Poin
 pub struct Prior {
     /// The scan points the particle costs are taken over ([`weight_sample`]).
     pub sample: Vec<Point3<f64>>,
-    /// The start.
+    /// The k-means start.
     pub initial: InitialPose,
+    /// The distinct hypotheses of the global search, best first (empty without it).
+    pub hypotheses: Vec<Hypothesis>,
+    /// The filter's start: the best hypothesis, or the k-means start without the search.
+    pub start: Pose,
     /// The covariance estimate.
     pub covariance: IcpCovariance,
     /// The centred frame the filter's states live in (the clouds' centroids).
@@ -272,13 +319,24 @@ pub fn prior(nn: &NearestNeighbours, scan: &[Point3<f64>], settings: &PfIcpSetti
 
     let t0 = Instant::now();
     let initial = initial_pose(nn, scan, &sample, k, settings.seed, settings.init);
+    let hypotheses = match &settings.search {
+        Some(search) => {
+            let mut starts = initial.candidates.clone();
+            starts.extend(hypotheses::grid_starts(scan, model, search.grid));
+            hypotheses::search(&Surface::new(nn), &sample, &[initial.pose], &starts, search)
+        }
+        None => Vec::new(),
+    };
+    let start = hypotheses.first().map_or(initial.pose, |h| h.pose);
+    // A start other than the k-means one is as good as the geometric pairing's.
+    let pairing = if start == initial.pose { initial.pairing } else { Pairing::Nearest };
     let t1 = Instant::now();
     let cov_settings = IcpSettings { max_iterations: 30, ..Default::default() };
     let covariance = approximate_icp_variance(
         nn,
         scan,
         &initial.scan_clusters,
-        &initial.pose,
+        &start,
         settings.covariance_subsets,
         settings.seed,
         &cov_settings,
@@ -286,17 +344,19 @@ pub fn prior(nn: &NearestNeighbours, scan: &[Point3<f64>], settings: &PfIcpSetti
     let t2 = Instant::now();
 
     let frame = Centred { scan: crate::cloud::centroid(scan), model: crate::cloud::centroid(model) };
-    let init_params = frame.params(&initial.pose);
-    let (_, variance) = covariance.stats_in(&frame, &initial.pose);
-    let cap = sigma_cap(diag, initial.pose.scale);
-    let floor = sigma_floor(diag, initial.pose.scale);
-    let start = start_prior(initial.pairing, diag, initial.pose.scale);
+    let init_params = frame.params(&start);
+    let (_, variance) = covariance.stats_in(&frame, &start);
+    let cap = sigma_cap(diag, start.scale);
+    let floor = sigma_floor(diag, start.scale);
+    let least = start_prior(pairing, diag, start.scale);
     let sigma0: Vec<f64> =
-        variance.iter().enumerate().map(|(d, v)| v.sqrt().max(start[d]).max(floor[d]).min(cap[d])).collect();
+        variance.iter().enumerate().map(|(d, v)| v.sqrt().max(least[d]).max(floor[d]).min(cap[d])).collect();
     let q = covariance.msd_variance;
     Prior {
         sample,
         initial,
+        hypotheses,
+        start,
         covariance,
         frame,
         init_params,
@@ -322,6 +382,7 @@ pub fn register_with(
     let Prior {
         sample,
         initial,
+        hypotheses,
         covariance,
         frame,
         init_params,
@@ -330,6 +391,7 @@ pub fn register_with(
         q,
         threshold_avg,
         threshold_max,
+        diag,
         clustering_time,
         covariance_time,
         ..
@@ -338,8 +400,17 @@ pub fn register_with(
     if let Some(source) = weights {
         source.prepare(&sample)?;
     }
-    let objective =
-        PoseObjective { nn, sample: &sample, frame, refine_iterations: settings.icp_per_iteration, weights };
+    let surface = Surface::new(nn);
+    let start_scale = frame.pose(&init_params).scale;
+    let objective = PoseObjective {
+        surface: &surface,
+        sample: &sample,
+        frame,
+        refine_iterations: settings.icp_per_iteration,
+        weights,
+        cap: crate::surface::COST_CAP * diag,
+        scale_range: (start_scale * SCALE_BOUNDS.0, start_scale * SCALE_BOUNDS.1),
+    };
     let filter_settings = FilterSettings {
         particles: settings.particles,
         iterations: settings.iterations,
@@ -349,20 +420,35 @@ pub fn register_with(
         threshold_avg,
         threshold_max,
         adaptive: settings.adaptive,
+        patience: settings.patience,
         seed: settings.seed.wrapping_add(1),
     };
     let filtered = particle_filter::try_run(&objective, &init_params, &sigma0, &filter_settings)?;
     let filter_pose = frame.pose(filtered.estimate.as_slice().try_into().expect("7 states"));
     let t3 = Instant::now();
 
-    let polish = IcpSettings { max_iterations: settings.polish_iterations, ..Default::default() };
-    let polished = icp(nn, scan, &filter_pose, &polish);
+    let conclusion = crate::conclusion::conclude(
+        &surface,
+        scan,
+        &filter_pose,
+        &hypotheses,
+        Some((&frame, &filtered.particles)),
+        settings.polish_iterations,
+    );
+    let polished = Registration {
+        pose: conclusion.pose,
+        msd: crate::icp::msd(nn, scan, &conclusion.pose),
+        iterations: filtered.iterations,
+        errors: Vec::new(),
+    };
     let t4 = Instant::now();
     let mut errors: Vec<f64> = filtered.history.iter().map(|h| h.cost).collect();
     errors.push(polished.msd);
     Ok(PfIcpResult {
         registration: Registration { pose: polished.pose, msd: polished.msd, iterations: filtered.iterations, errors },
         initial,
+        hypotheses,
+        conclusion,
         covariance,
         filter_pose,
         filter_history: filtered.history.clone(),

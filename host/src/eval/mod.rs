@@ -14,6 +14,7 @@
 pub mod comparison;
 pub mod covariance_tables;
 pub mod plots;
+pub mod realistic;
 pub mod success;
 mod text_table;
 

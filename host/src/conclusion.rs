@@ -1,0 +1,250 @@
+//! The last stage of PF-ICP: the polish, the choice among the hypotheses, and what the
+//! result says about itself (alternatives, uncertainty, fit).
+//!
+//! 1. **Polish and choice**: the filter's estimate and the best hypotheses of the global
+//!    search ([`crate::hypotheses`]: the first [`ARBITRATED`] + 1, and any other within
+//!    [`CANDIDATE_COST_FACTOR`] of the best's cost, [`MAX_CANDIDATES`] poses in all) are
+//!    each polished on the whole scan ([`Surface::polish`]); the lowest capped surface cost
+//!    wins. A filter that settled in a wrong basin loses to a hypothesis in the right one.
+//! 2. **Alternatives** (ambiguity): every other polished hypothesis that differs from the
+//!    answer by more than 5 deg, 2% of the diagonal at the scan's centroid or 2% in scale
+//!    and fits as well within the noise: the mean of its per-point cost excess over the
+//!    answer is below [`ALTERNATIVE_SIGMAS`] standard errors of that mean (a paired test
+//!    over the same scan points). An exactly symmetric shape lists its symmetric poses; a
+//!    near-symmetric one whose breaking feature is clearly seen lists none.
+//! 3. **Uncertainty**: the covariance of the local parameters
+//!    [`crate::surface::LOCAL_NAMES`] (translation of the scan centroid's image, scale,
+//!    rotation vector in the model frame) is `k^2 sigma^2 (J^T J)^-1` from the surface
+//!    residuals' curvature ([`Surface::curvature`]), `k` = [`COVARIANCE_INFLATION`] for the
+//!    correlation of neighbouring residuals (calibrated on the realistic benchmark's dev
+//!    split, docs/decisions.md), plus the spread of the filter's final particle set when
+//!    there is one. Parameters the scan cannot determine are named, and their rows and
+//!    columns are left out (`None`) instead of printed as a confident number.
+//! 4. **Fit** (Open3D's `fitness` and `inlier_rmse`): the fraction of scan points within
+//!    [`INLIER_DISTANCE`] of the diagonal of a model point, and the RMS of those distances.
+
+use crate::cloud::{bbox_diagonal, centroid};
+use crate::geometry::{Centred, Pose};
+use crate::hypotheses::{same_pose, Hypothesis};
+use crate::surface::{Surface, COST_CAP, LOCAL_NAMES};
+use nalgebra::Point3;
+use nalgebra::{Rotation3, SMatrix};
+use rayon::prelude::*;
+
+/// Hypotheses besides the filter's estimate polished and compared at the end.
+pub const ARBITRATED: usize = 6;
+/// A pose is an alternative when its mean cost excess is below this many standard errors.
+pub const ALTERNATIVE_SIGMAS: f64 = 3.0;
+/// Inflation of the curvature covariance (see the module doc).
+pub const COVARIANCE_INFLATION: f64 = 3.0;
+/// Inlier distance of `fitness` and `inlier_rmse`, as a fraction of the model's diagonal.
+pub const INLIER_DISTANCE: f64 = 0.02;
+/// Hypotheses polished besides the best [`ARBITRATED`] for alternatives: those whose cost in
+/// the search is within this factor of the best's (at most [`MAX_CANDIDATES`] in all).
+pub const CANDIDATE_COST_FACTOR: f64 = 2.0;
+/// The polish may change a candidate's scale by these factors at most.
+pub const SCALE_DRIFT: (f64, f64) = (0.8, 1.25);
+/// Most poses polished at the end.
+pub const MAX_CANDIDATES: usize = 16;
+
+/// Another pose that fits as well.
+#[derive(Clone, Copy, Debug)]
+pub struct Alternative {
+    /// Scan to model.
+    pub pose: Pose,
+    /// Its capped surface cost over the whole scan.
+    pub cost: f64,
+    /// Its mean cost excess over the answer, in standard errors.
+    pub excess_sigmas: f64,
+}
+
+/// The pose's uncertainty.
+#[derive(Clone, Debug)]
+pub struct Uncertainty {
+    /// Covariance of [`LOCAL_NAMES`] (model units, scale, rad); `None` in the rows and
+    /// columns of undetermined parameters.
+    pub covariance: [[Option<f64>; 7]; 7],
+    /// One-sigma values (`None`: undetermined).
+    pub sigma: [Option<f64>; 7],
+    /// Parameters the scan does not determine.
+    pub undetermined: Vec<&'static str>,
+}
+
+/// How well the scan fits.
+#[derive(Clone, Copy, Debug)]
+pub struct Fit {
+    /// Fraction of scan points within `inlier_distance` of a model point.
+    pub fitness: f64,
+    /// RMS distance of those points.
+    pub inlier_rmse: f64,
+    /// The inlier distance used (model units).
+    pub inlier_distance: f64,
+    /// Capped surface cost of the answer over the whole scan.
+    pub cost: f64,
+}
+
+/// The answer and what it says about itself.
+#[derive(Clone, Debug)]
+pub struct Conclusion {
+    /// The chosen pose (scan to model).
+    pub pose: Pose,
+    /// Whether it came from a hypothesis rather than the filter's estimate.
+    pub from_hypothesis: bool,
+    /// Other poses that fit as well, best first.
+    pub alternatives: Vec<Alternative>,
+    /// Its uncertainty.
+    pub uncertainty: Uncertainty,
+    /// Its fit.
+    pub fit: Fit,
+}
+
+fn paired_excess(best: &[f64], other: &[f64]) -> f64 {
+    let n = best.len().max(2) as f64;
+    let d: Vec<f64> = other.iter().zip(best).map(|(a, b)| a - b).collect();
+    let mean = d.iter().sum::<f64>() / n;
+    let var = d.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0);
+    let se = (var / n).sqrt().max(1e-300);
+    mean / se
+}
+
+/// The local parameter error of `pose` against `reference` ([`LOCAL_NAMES`], about the
+/// image of `at`).
+pub fn local_error(pose: &Pose, reference: &Pose, at: &Point3<f64>) -> [f64; 7] {
+    let t = pose.apply(at) - reference.apply(at);
+    let r = Rotation3::from_matrix_unchecked(pose.rotation * reference.rotation.transpose()).scaled_axis();
+    [t.x, t.y, t.z, pose.scale - reference.scale, r.x, r.y, r.z]
+}
+
+/// Conclude a registration: `filter_pose` from the filter, `hypotheses` of the search
+/// (best first), `particles` the filter's final set in `frame`'s parameters (if any).
+pub fn conclude(
+    surface: &Surface,
+    scan: &[Point3<f64>],
+    filter_pose: &Pose,
+    hypotheses: &[Hypothesis],
+    particles: Option<(&Centred, &[Vec<f64>])>,
+    polish_iterations: usize,
+) -> Conclusion {
+    let nn = surface.nn();
+    let diag = bbox_diagonal(nn.points());
+    let cap = COST_CAP * diag;
+    let at = centroid(scan);
+    let mut starts = vec![*filter_pose];
+    let top = hypotheses.first().map_or(0.0, |h| h.cost);
+    starts.extend(
+        hypotheses
+            .iter()
+            .enumerate()
+            .filter(|(i, h)| *i <= ARBITRATED || h.cost <= CANDIDATE_COST_FACTOR * top)
+            .take(MAX_CANDIDATES - 1)
+            .map(|(_, h)| h.pose),
+    );
+    // A polish whose scale runs away from its start is a collapse onto part of the model
+    // (every one-sided cost rewards it): that candidate is dropped (the filter's estimate
+    // stays, unpolished).
+    let polished: Vec<(Pose, Vec<f64>)> = starts
+        .par_iter()
+        .enumerate()
+        .filter_map(|(i, p)| {
+            let q = surface.polish(scan, p, polish_iterations);
+            let ratio = q.scale / p.scale;
+            let q = if (SCALE_DRIFT.0..=SCALE_DRIFT.1).contains(&ratio) {
+                q
+            } else if i == 0 {
+                *p
+            } else {
+                return None;
+            };
+            let c = surface.costs(scan, &q, cap);
+            Some((q, c))
+        })
+        .collect();
+    let mean = |c: &[f64]| c.iter().sum::<f64>() / c.len().max(1) as f64;
+    let best = (0..polished.len())
+        .min_by(|&a, &b| mean(&polished[a].1).total_cmp(&mean(&polished[b].1)).then(a.cmp(&b)))
+        .unwrap_or(0);
+    let (pose, costs) = (polished[best].0, polished[best].1.clone());
+    let mut alternatives: Vec<Alternative> = Vec::new();
+    for (i, (p, c)) in polished.iter().enumerate() {
+        if i == best || same_pose(p, &pose, &at, diag) || alternatives.iter().any(|a| same_pose(&a.pose, p, &at, diag))
+        {
+            continue;
+        }
+        let z = paired_excess(&costs, c);
+        if z < ALTERNATIVE_SIGMAS {
+            alternatives.push(Alternative { pose: *p, cost: mean(c), excess_sigmas: z });
+        }
+    }
+    alternatives.sort_by(|a, b| a.cost.total_cmp(&b.cost));
+
+    // Uncertainty: curvature, inflated, plus the particles' spread.
+    let image = pose.apply(&at);
+    let curv = surface.curvature(scan, &pose, &image);
+    let mut cov = SMatrix::<f64, 7, 7>::zeros();
+    let determined: Vec<usize> = (0..7).filter(|&k| !curv.undetermined.contains(&LOCAL_NAMES[k])).collect();
+    if !determined.is_empty() {
+        let n = determined.len();
+        let sub = SMatrix::<f64, 7, 7>::from_fn(|a, b| {
+            if a < n && b < n {
+                curv.jtj[(determined[a], determined[b])]
+            } else if a == b {
+                1.0
+            } else {
+                0.0
+            }
+        });
+        if let Some(inv) = sub.try_inverse() {
+            let k2 = COVARIANCE_INFLATION * COVARIANCE_INFLATION * curv.residual_variance;
+            for a in 0..n {
+                for b in 0..n {
+                    cov[(determined[a], determined[b])] = k2 * inv[(a, b)];
+                }
+            }
+        }
+    }
+    if let Some((frame, set)) = particles {
+        let poses: Vec<Pose> = set.iter().filter_map(|x| x.as_slice().try_into().ok()).map(|x| frame.pose(x)).collect();
+        if poses.len() > 1 {
+            let errs: Vec<[f64; 7]> = poses.iter().map(|p| local_error(p, &pose, &at)).collect();
+            let m: Vec<f64> = (0..7).map(|k| errs.iter().map(|e| e[k]).sum::<f64>() / errs.len() as f64).collect();
+            for a in 0..7 {
+                for b in 0..7 {
+                    cov[(a, b)] += errs.iter().map(|e| (e[a] - m[a]) * (e[b] - m[b])).sum::<f64>() / errs.len() as f64;
+                }
+            }
+        }
+    }
+    let known = |k: usize| !curv.undetermined.contains(&LOCAL_NAMES[k]);
+    let mut covariance = [[None; 7]; 7];
+    let mut sigma = [None; 7];
+    for a in 0..7 {
+        if known(a) {
+            sigma[a] = Some(cov[(a, a)].max(0.0).sqrt());
+            for b in 0..7 {
+                if known(b) {
+                    covariance[a][b] = Some(cov[(a, b)]);
+                }
+            }
+        }
+    }
+    let inlier_distance = INLIER_DISTANCE * diag;
+    let d: Vec<f64> = scan.par_iter().map(|p| nn.closest(&pose.apply(p)).dist2.sqrt()).collect();
+    let inliers: Vec<f64> = d.into_iter().filter(|&x| x <= inlier_distance).collect();
+    let fit = Fit {
+        fitness: inliers.len() as f64 / scan.len().max(1) as f64,
+        inlier_rmse: if inliers.is_empty() {
+            0.0
+        } else {
+            (inliers.iter().map(|x| x * x).sum::<f64>() / inliers.len() as f64).sqrt()
+        },
+        inlier_distance,
+        cost: mean(&costs),
+    };
+    Conclusion {
+        pose,
+        from_hypothesis: best != 0,
+        alternatives,
+        uncertainty: Uncertainty { covariance, sigma, undetermined: curv.undetermined },
+        fit,
+    }
+}

@@ -1,0 +1,217 @@
+//! The global search behind PF-ICP's start: many start poses, each refined by a short
+//! trimmed ICP with scale, ranked by a robust cost, distinct ones kept.
+//!
+//! The k-means start (Algorithm 4, [`crate::init`]) is one pose; on partial views and
+//! near-symmetric parts it often sits in a wrong basin (a flip, a turn about a
+//! near-symmetry axis) that a filter spread around it never leaves. So the start is the
+//! best of many hypotheses:
+//! - the k-means start itself, unrefined (exact in the paper's setting), and every
+//!   candidate the k-means stage refined (principal-frame flips and sweeps);
+//! - a uniform set of rotations ([`rotation_grid`], super-Fibonacci samples of SO(3)),
+//!   each with the centroids' translation and the ratio of RMS radii as scale.
+//!
+//! Each start runs [`SearchSettings::coarse_iterations`] of trimmed ICP on a small sample
+//! (ratio scale, which cannot collapse); the best distinct ones run
+//! [`SearchSettings::fine_iterations`] more on a larger sample (least-squares scale) and
+//! are ranked by their capped surface distance ([`Surface::cost`]) over the whole cost
+//! sample. Poses count as distinct when
+//! they differ by more than 5 deg, 2% of the diagonal at the scan's centroid or 2% in
+//! scale.
+
+use crate::cloud::centroid;
+use crate::geometry::Pose;
+use crate::nn::NearestNeighbours;
+use crate::surface::Surface;
+use crate::svd_match::{match_pairs, ScaleRule};
+use nalgebra::{Matrix3, Point3, UnitQuaternion};
+use rayon::prelude::*;
+
+/// Search settings.
+#[derive(Clone, Debug)]
+pub struct SearchSettings {
+    /// Rotations of the uniform set.
+    pub grid: usize,
+    /// Scan points of the coarse stage.
+    pub coarse_points: usize,
+    /// Trimmed ICP iterations per start.
+    pub coarse_iterations: usize,
+    /// Distinct hypotheses refined further.
+    pub keep: usize,
+    /// Scan points of the fine stage.
+    pub fine_points: usize,
+    /// Trimmed ICP iterations per kept hypothesis.
+    pub fine_iterations: usize,
+    /// Fraction of pairs kept by each trimmed ICP iteration (the closest ones).
+    pub trim: f64,
+}
+
+impl Default for SearchSettings {
+    fn default() -> Self {
+        Self {
+            grid: 72,
+            coarse_points: 160,
+            coarse_iterations: 20,
+            keep: 16,
+            fine_points: 300,
+            fine_iterations: 20,
+            trim: 0.85,
+        }
+    }
+}
+
+/// One hypothesis.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hypothesis {
+    /// Scan to model.
+    pub pose: Pose,
+    /// Its [`Surface::cost`] over the cost sample.
+    pub cost: f64,
+}
+
+/// `n` rotations spread uniformly over SO(3) (Alexa's super-Fibonacci spiral,
+/// CVPR 2022): deterministic, no seed.
+pub fn rotation_grid(n: usize) -> Vec<Matrix3<f64>> {
+    const PHI: f64 = std::f64::consts::SQRT_2;
+    const PSI: f64 = 1.533_751_168_755_204_3;
+    (0..n)
+        .map(|i| {
+            let s = i as f64 + 0.5;
+            let (r, big_r) = ((s / n as f64).sqrt(), (1.0 - s / n as f64).sqrt());
+            let (a, b) = (std::f64::consts::TAU * s / PHI, std::f64::consts::TAU * s / PSI);
+            let q = nalgebra::Quaternion::new(big_r * b.cos(), r * a.sin(), r * a.cos(), big_r * b.sin());
+            UnitQuaternion::from_quaternion(q).to_rotation_matrix().into_inner()
+        })
+        .collect()
+}
+
+/// Trimmed ICP: each iteration pairs every point with its closest model point and solves
+/// the similarity over the `trim` fraction of closest pairs.
+pub fn trimmed_icp(
+    nn: &NearestNeighbours,
+    points: &[Point3<f64>],
+    start: &Pose,
+    iterations: usize,
+    trim: f64,
+    rule: ScaleRule,
+) -> Pose {
+    let model = nn.points();
+    let mut pose = *start;
+    let keep = ((points.len() as f64 * trim).ceil() as usize).clamp(3.min(points.len()), points.len());
+    let mut d2: Vec<f64> = Vec::with_capacity(points.len());
+    for _ in 0..iterations {
+        let closest: Vec<_> = points.iter().map(|p| nn.closest(&pose.apply(p))).collect();
+        d2.clear();
+        d2.extend(closest.iter().map(|c| c.dist2));
+        let threshold = if keep < d2.len() {
+            let (_, t, _) = d2.select_nth_unstable_by(keep - 1, f64::total_cmp);
+            *t
+        } else {
+            f64::INFINITY
+        };
+        let weights: Vec<f64> = closest.iter().map(|c| if c.dist2 <= threshold { 1.0 } else { 0.0 }).collect();
+        let targets: Vec<Point3<f64>> = closest.iter().map(|c| model[c.index]).collect();
+        match match_pairs(points, &targets, Some(&weights), rule) {
+            Some(next) if next.scale.is_finite() && next.scale > 0.0 => pose = next,
+            _ => break,
+        }
+    }
+    pose
+}
+
+/// Whether two poses count as the same hypothesis: within 5 deg, 2% of `diag` at `at`
+/// (the scan's centroid) and 2% in scale.
+pub fn same_pose(a: &Pose, b: &Pose, at: &Point3<f64>, diag: f64) -> bool {
+    a.rotation_angle_to(b).to_degrees() <= 5.0
+        && (a.apply(at) - b.apply(at)).norm() <= 0.02 * diag
+        && (a.scale / b.scale - 1.0).abs() <= 0.02
+}
+
+/// The distinct poses of `ranked` (sorted by cost), best first.
+fn distinct(ranked: Vec<Hypothesis>, at: &Point3<f64>, diag: f64) -> Vec<Hypothesis> {
+    let mut out: Vec<Hypothesis> = Vec::new();
+    for h in ranked {
+        if !out.iter().any(|k| same_pose(&k.pose, &h.pose, at, diag)) {
+            out.push(h);
+        }
+    }
+    out
+}
+
+/// The start poses of the uniform set: each rotation with the centroids' translation and
+/// the ratio of RMS radii as scale.
+pub fn grid_starts(scan: &[Point3<f64>], model: &[Point3<f64>], n: usize) -> Vec<Pose> {
+    let (mu_m, mu_d) = (centroid(scan), centroid(model));
+    let rms = |pts: &[Point3<f64>], c: &Point3<f64>| {
+        (pts.iter().map(|p| (p - c).norm_squared()).sum::<f64>() / pts.len().max(1) as f64).sqrt()
+    };
+    let s = rms(model, &mu_d) / rms(scan, &mu_m).max(1e-300);
+    rotation_grid(n)
+        .into_iter()
+        .map(|r| Pose { scale: s, rotation: r, translation: mu_d.coords - s * (r * mu_m.coords) })
+        .collect()
+}
+
+/// Refine `starts` and return the distinct hypotheses, best first (at least one when
+/// `starts` is not empty). `exact` poses are ranked as they are, without refinement.
+/// `sample` is the cost sample (a random subset of the scan, in random order).
+pub fn search(
+    surface: &Surface,
+    sample: &[Point3<f64>],
+    exact: &[Pose],
+    starts: &[Pose],
+    settings: &SearchSettings,
+) -> Vec<Hypothesis> {
+    let nn = surface.nn();
+    let diag = crate::cloud::bbox_diagonal(nn.points());
+    let cap = crate::surface::COST_CAP * diag;
+    let at = centroid(sample);
+    let coarse_pts = &sample[..settings.coarse_points.min(sample.len())];
+    let fine_pts = &sample[..settings.fine_points.min(sample.len())];
+    let mut coarse: Vec<Hypothesis> = starts
+        .par_iter()
+        .map(|s| {
+            let pose = trimmed_icp(nn, coarse_pts, s, settings.coarse_iterations, settings.trim, ScaleRule::Ratio);
+            Hypothesis { pose, cost: surface.cost(coarse_pts, &pose, cap) }
+        })
+        .collect();
+    let s0 = starts.iter().map(|p| p.scale).fold(0.0, f64::max);
+    // A scale far from the radii's ratio is a scan collapsed onto part of the model.
+    let plausible =
+        |h: &Hypothesis| h.cost.is_finite() && (s0 == 0.0 || (h.pose.scale > 0.5 * s0 && h.pose.scale < 2.0 * s0));
+    coarse.retain(plausible);
+    coarse.sort_by(|a, b| a.cost.total_cmp(&b.cost));
+    let kept: Vec<Hypothesis> = distinct(coarse, &at, diag).into_iter().take(settings.keep).collect();
+    let mut fine: Vec<Hypothesis> = kept
+        .par_iter()
+        .map(|h| {
+            let pose =
+                trimmed_icp(nn, fine_pts, &h.pose, settings.fine_iterations, settings.trim, ScaleRule::LeastSquares);
+            Hypothesis { pose, cost: surface.cost(sample, &pose, cap) }
+        })
+        .chain(exact.par_iter().map(|p| Hypothesis { pose: *p, cost: surface.cost(sample, p, cap) }))
+        .collect();
+    fine.retain(plausible);
+    fine.sort_by(|a, b| a.cost.total_cmp(&b.cost));
+    distinct(fine, &at, diag)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_grid_covers_the_rotations() {
+        let grid = rotation_grid(72);
+        // Other rotations are all within 45 degrees of a grid rotation (trimmed ICP with scale
+        // converges from about that far on the benchmark's shapes).
+        for r in rotation_grid(500).iter().skip(1).step_by(7) {
+            let best = grid
+                .iter()
+                .map(|g| ((g.transpose() * r).trace() - 1.0).clamp(-2.0, 2.0) / 2.0)
+                .fold(-1.0f64, f64::max)
+                .acos()
+                .to_degrees();
+            assert!(best < 45.0, "{best}");
+        }
+    }
+}
