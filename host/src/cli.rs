@@ -31,6 +31,99 @@ pub struct RegisterReport {
     pub iterations: usize,
     /// Wall time [s].
     pub seconds: f64,
+    /// PF-ICP only: what the result says about itself.
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub assessment: Option<Assessment>,
+}
+
+/// Another pose that fits as well (JSON).
+#[derive(Clone, Debug, Serialize)]
+pub struct AlternativeRecord {
+    /// The pose.
+    #[serde(flatten)]
+    pub pose: PoseRecord,
+    /// Its capped surface cost over the whole scan.
+    pub cost: f64,
+    /// Its mean cost excess over the answer, in standard errors.
+    pub excess_sigmas: f64,
+}
+
+/// PF-ICP's alternatives, uncertainty and fit (docs in `crate::conclusion`).
+#[derive(Clone, Debug, Serialize)]
+pub struct Assessment {
+    /// Other poses that fit as well within the noise (empty: the pose is unambiguous).
+    pub alternatives: Vec<AlternativeRecord>,
+    /// Names and order of the covariance's parameters ([`crate::surface::LOCAL_NAMES`]).
+    pub covariance_order: [&'static str; 7],
+    /// Covariance (model units, scale, rad); `null` for undetermined parameters.
+    pub covariance: [[Option<f64>; 7]; 7],
+    /// One-sigma values in that order (`null`: undetermined).
+    pub sigma: [Option<f64>; 7],
+    /// Parameters the scan cannot determine (a collinear or planar scan).
+    pub undetermined: Vec<&'static str>,
+    /// Fraction of scan points within `inlier_distance` of the model's surface (as Open3D's
+    /// fitness, on the surface distance).
+    pub fitness: f64,
+    /// RMS distance of those points.
+    pub inlier_rmse: f64,
+    /// The inlier distance (2% of the model's diagonal).
+    pub inlier_distance: f64,
+    /// Capped surface cost of the pose over the whole scan.
+    pub cost: f64,
+}
+
+impl Assessment {
+    /// From PF-ICP's conclusion.
+    pub fn new(c: &crate::conclusion::Conclusion) -> Self {
+        Assessment {
+            alternatives: c
+                .alternatives
+                .iter()
+                .map(|a| AlternativeRecord { pose: a.pose.record(), cost: a.cost, excess_sigmas: a.excess_sigmas })
+                .collect(),
+            covariance_order: crate::surface::LOCAL_NAMES,
+            covariance: c.uncertainty.covariance,
+            sigma: c.uncertainty.sigma,
+            undetermined: c.uncertainty.undetermined.clone(),
+            fitness: c.fit.fitness,
+            inlier_rmse: c.fit.inlier_rmse,
+            inlier_distance: c.fit.inlier_distance,
+            cost: c.fit.cost,
+        }
+    }
+
+    /// The text lines: one-sigma values, fit, ambiguity, undetermined parameters.
+    pub fn text(&self) -> String {
+        let mut s = String::new();
+        let show = |k: usize| {
+            let name = crate::surface::LOCAL_NAMES[k];
+            match self.sigma[k] {
+                Some(v) if k >= 4 => format!("{name} {:.3} deg", v.to_degrees()),
+                Some(v) => format!("{name} {v:.3e}"),
+                None => format!("{name} undetermined"),
+            }
+        };
+        s += "one sigma    ";
+        s += &(0..7).map(show).collect::<Vec<_>>().join(", ");
+        s += "\n";
+        s += &format!(
+            "fit          fitness {:.3} (within {:.4}), inlier_rmse {:.4e}\n",
+            self.fitness, self.inlier_distance, self.inlier_rmse
+        );
+        if !self.alternatives.is_empty() {
+            s += &format!(
+                "warning: the shape looks symmetric: {} poses fit as well as this one within the noise (see alternatives in --json)\n",
+                self.alternatives.len() + 1
+            );
+        }
+        if !self.undetermined.is_empty() {
+            s += &format!(
+                "warning: the scan cannot determine {} (collinear or planar geometry); those values are arbitrary\n",
+                self.undetermined.join(", ")
+            );
+        }
+        s
+    }
 }
 
 impl RegisterReport {
@@ -50,7 +143,14 @@ impl RegisterReport {
             msd: r.msd,
             iterations: r.iterations,
             seconds,
+            assessment: None,
         }
+    }
+
+    /// With PF-ICP's alternatives, uncertainty and fit.
+    pub fn assessed(mut self, c: &crate::conclusion::Conclusion) -> Self {
+        self.assessment = Some(Assessment::new(c));
+        self
     }
 
     /// The same report for a run whose particle filter ran on the board on `port`.
@@ -89,6 +189,9 @@ impl RegisterReport {
         s += &format!("msd          {:.6e}\n", self.msd);
         s += &format!("iterations   {}\n", self.iterations);
         s += &format!("seconds      {:.3}\n", self.seconds);
+        if let Some(a) = &self.assessment {
+            s += &a.text();
+        }
         s
     }
 }

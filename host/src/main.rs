@@ -464,6 +464,9 @@ fn register(a: &RegisterArgs) -> Result<()> {
         );
     }
     let mut report = RegisterReport::new(method.name(), &outcome.registration, outcome.elapsed.as_secs_f64());
+    if let Some(pf) = &outcome.pf {
+        report = report.assessed(&pf.conclusion);
+    }
     if let Some((port, host_driven)) = engine {
         report = report.on_board(port);
         if host_driven {

@@ -211,7 +211,7 @@ impl<'a> Surface<'a> {
         pose
     }
 
-    /// `J^T J` of the inliers' residuals at `pose` in the local parameters
+    /// `J^T J` of the inliers' point-to-plane residuals at `pose` in the local parameters
     /// [`LOCAL_NAMES`] about the image `at` of the scan's centroid, the residual variance and
     /// the undetermined parameters.
     pub fn curvature(&self, points: &[Point3<f64>], pose: &Pose, at: &Point3<f64>) -> Curvature {
@@ -219,18 +219,16 @@ impl<'a> Surface<'a> {
         let mut jtj = SMatrix::<f64, 7, 7>::zeros();
         let (mut sum2, mut count) = (0.0, 0usize);
         let scale = pose.scale.abs().max(1e-12);
+        // Only the point-to-plane residual: the tangential excess is a penalty for leaving a
+        // model point's footprint, not information about where the surface is.
         for i in (0..q.len()).filter(|&i| mask[i]) {
             let x = q[i] - at;
-            for (r, n) in self.residuals(&q[i], &contacts[i]) {
-                if n == Vector3::zeros() {
-                    continue;
-                }
-                let w = x.cross(&n);
-                let j = SVector::<f64, 7>::from_column_slice(&[n.x, n.y, n.z, n.dot(&x) / scale, w.x, w.y, w.z]);
-                jtj += j * j.transpose();
-                sum2 += r * r;
-                count += 1;
-            }
+            let [(r, n), _] = self.residuals(&q[i], &contacts[i]);
+            let w = x.cross(&n);
+            let j = SVector::<f64, 7>::from_column_slice(&[n.x, n.y, n.z, n.dot(&x) / scale, w.x, w.y, w.z]);
+            jtj += j * j.transpose();
+            sum2 += r * r;
+            count += 1;
         }
         let residual_variance = sum2 / (count as f64 - 7.0).max(1.0);
         let extent = crate::cloud::bbox_diagonal(self.nn.points()).max(1e-12);

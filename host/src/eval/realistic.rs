@@ -276,7 +276,7 @@ pub fn make_case(family: Family, shape: Shape, index: usize, seed: u64) -> Case 
         view.shuffle(&mut rng);
     }
     let truth = if family == Family::Hard180 {
-        let t = crate::datasets::random_truth(&mut rng, 0.0, SCALE_RANGE, diag / 2.0);
+        let t = crate::datasets::random_truth(&mut rng, 1.0, SCALE_RANGE, diag / 2.0);
         Pose { rotation: uniform_rotation(&mut rng), ..t }
     } else {
         crate::datasets::random_truth(&mut rng, MAX_ANGLE_DEG, SCALE_RANGE, diag / 2.0)
@@ -346,6 +346,21 @@ pub fn score(estimate: &Pose, case: &Case) -> Score {
     best.expect("the identity is always a symmetry")
 }
 
+/// 95% quantile of the chi-square distribution with 7 degrees of freedom.
+pub const CHI2_7_95: f64 = 14.067;
+
+/// Squared Mahalanobis distance of `truth` from the conclusion's pose under its covariance,
+/// over the determined parameters (`None` if the covariance is not positive definite).
+pub fn mahalanobis2(c: &crate::conclusion::Conclusion, truth: &Pose, at: &Point3<f64>) -> Option<f64> {
+    let e = crate::conclusion::local_error(&c.pose, truth, at);
+    let k: Vec<usize> = (0..7).filter(|&i| c.uncertainty.sigma[i].is_some()).collect();
+    let n = k.len();
+    let m = nalgebra::DMatrix::from_fn(n, n, |a, b| c.uncertainty.covariance[k[a]][k[b]].unwrap_or(0.0));
+    let v = nalgebra::DVector::from_fn(n, |a, _| e[k[a]]);
+    let inv = m.cholesky()?.inverse();
+    Some((v.transpose() * inv * v)[(0, 0)])
+}
+
 /// What to run.
 #[derive(Clone, Debug)]
 pub struct RealisticOptions {
@@ -394,6 +409,13 @@ pub struct CaseResult {
     pub score: Score,
     /// Wall time of the registration [s].
     pub seconds: f64,
+    /// PF-ICP only: alternatives it reported.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub alternatives: Option<usize>,
+    /// PF-ICP only: squared Mahalanobis distance of the error (against the nearest
+    /// symmetric truth) under the reported covariance, over the determined parameters.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mahalanobis2: Option<f64>,
     /// Capped surface cost of the estimate on the whole scan ([`crate::surface::Surface::cost`],
     /// cap 5% of the diagonal), to compare with the truth's.
     pub cost: f64,
@@ -442,6 +464,12 @@ pub struct FamilyCell {
     pub held_out_cases: usize,
     /// Median wall time [s].
     pub median_seconds: f64,
+    /// Successful cases whose truth lies inside the reported 95% region (PF-ICP only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub inside_95: Option<usize>,
+    /// Cases that reported alternatives (PF-ICP only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub with_alternatives: Option<usize>,
 }
 
 /// One family.
@@ -505,9 +533,16 @@ pub fn run(opts: &RealisticOptions) -> anyhow::Result<RealisticReport> {
                 .iter()
                 .map(|&m| {
                     let o = run_method(m, &nn, &c.scan, &settings);
+                    let sc = score(&o.registration.pose, &c);
                     CaseResult {
                         method: m.name().to_string(),
-                        score: score(&o.registration.pose, &c),
+                        alternatives: o.pf.as_ref().map(|pf| pf.conclusion.alternatives.len()),
+                        mahalanobis2: o.pf.as_ref().and_then(|pf| {
+                            let g = c.shape.symmetries()[sc.symmetry];
+                            let truth = symmetric_truth(&c.truth, &g, &c.shape.centre());
+                            mahalanobis2(&pf.conclusion, &truth, &centroid(&c.scan))
+                        }),
+                        score: sc,
                         seconds: o.elapsed.as_secs_f64(),
                         cost: surface.cost(&c.scan, &o.registration.pose, 0.05 * c.diag),
                     }
@@ -556,6 +591,15 @@ pub fn run(opts: &RealisticOptions) -> anyhow::Result<RealisticReport> {
                     held_out_successes: held.iter().filter(|c| c.results[j].score.success).count(),
                     held_out_cases: held.len(),
                     median_seconds: median(&cases.iter().map(|c| c.results[j].seconds).collect::<Vec<_>>()),
+                    inside_95: (*m == Method::PfIcp).then(|| {
+                        cases
+                            .iter()
+                            .filter(|c| c.results[j].score.success)
+                            .filter(|c| c.results[j].mahalanobis2.is_some_and(|d| d <= CHI2_7_95))
+                            .count()
+                    }),
+                    with_alternatives: (*m == Method::PfIcp)
+                        .then(|| cases.iter().filter(|c| c.results[j].alternatives.is_some_and(|a| a > 0)).count()),
                 }
             })
             .collect();
@@ -621,6 +665,10 @@ impl RealisticReport {
             header.push(format!("{m} success"));
             header.push(format!("{m} held-out"));
             header.push(format!("{m} median s"));
+            if m == Method::PfIcp.name() {
+                header.push("truth in 95% region".to_string());
+                header.push("ambiguous".to_string());
+            }
         }
         let mut t = TextTable::new(
             format!(
@@ -642,6 +690,10 @@ impl RealisticReport {
                 ));
                 row.push(format!("{}/{}", c.held_out_successes, c.held_out_cases));
                 row.push(format!("{:.3}", c.median_seconds));
+                if let (Some(inside), Some(alt)) = (c.inside_95, c.with_alternatives) {
+                    row.push(format!("{inside}/{}", c.successes));
+                    row.push(format!("{alt}/{}", c.cases));
+                }
             }
             t.row(row);
         }
@@ -699,45 +751,3 @@ mod tests {
     }
 }
 
-#[cfg(test)]
-mod diag {
-    use super::*;
-    #[test]
-    #[ignore]
-    fn diag_case() {
-        let fam = match std::env::var("FAM").as_deref() {
-            Ok("real") => Family::Real,
-            Ok("out") => Family::RealOutliers,
-            Ok("hard") => Family::Hard180,
-            _ => Family::Parts,
-        };
-        let idx: usize = std::env::var("IDX").unwrap().parse().unwrap();
-        let c = case(fam, idx, Split::Dev, 1);
-        let nn = NearestNeighbours::new(&c.model);
-        let cap = 0.05 * c.diag;
-        let surface = crate::surface::Surface::new(&nn);
-        let r = crate::pf_icp::register(&nn, &c.scan, &PfIcpSettings { seed: c.seed, ..Default::default() });
-        let est = r.registration.pose;
-        eprintln!("case {} est score {:?}", c.id, score(&est, &c));
-        let rel = c.truth.rotation.transpose() * est.rotation;
-        let aa = nalgebra::Rotation3::from_matrix_unchecked(est.rotation * c.truth.rotation.transpose());
-        eprintln!(
-            "model-frame rotation axis {:?} angle {}",
-            aa.axis().map(|a| a.into_inner()),
-            aa.angle().to_degrees()
-        );
-        let _ = rel;
-        for (name, p) in [("truth", c.truth), ("est", est), ("filter", r.filter_pose), ("start", r.initial.pose)] {
-            let refined = surface.polish(&c.scan, &p, 30);
-            eprintln!(
-                "{name:8} cost {:.4e} refined {:.4e} refined score {:?}",
-                surface.cost(&c.scan, &p, cap),
-                surface.cost(&c.scan, &refined, cap),
-                score(&refined, &c)
-            );
-        }
-        for (i, h) in r.hypotheses.iter().enumerate() {
-            eprintln!("hyp {i} cost {:.4e} score {:?}", h.cost, score(&h.pose, &c));
-        }
-    }
-}
