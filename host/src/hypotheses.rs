@@ -137,14 +137,21 @@ fn distinct(ranked: Vec<Hypothesis>, at: &Point3<f64>, diag: f64) -> Vec<Hypothe
     out
 }
 
+/// The ratio of the clouds' RMS radii about their centroids: a scale guess (scan to
+/// model), too large by up to about a third on a partial view.
+pub fn radius_ratio(scan: &[Point3<f64>], model: &[Point3<f64>]) -> f64 {
+    let rms = |pts: &[Point3<f64>]| {
+        let c = centroid(pts);
+        (pts.iter().map(|p| (p - c).norm_squared()).sum::<f64>() / pts.len().max(1) as f64).sqrt()
+    };
+    rms(model) / rms(scan).max(1e-300)
+}
+
 /// The start poses of the uniform set: each rotation with the centroids' translation and
 /// the ratio of RMS radii as scale.
 pub fn grid_starts(scan: &[Point3<f64>], model: &[Point3<f64>], n: usize) -> Vec<Pose> {
     let (mu_m, mu_d) = (centroid(scan), centroid(model));
-    let rms = |pts: &[Point3<f64>], c: &Point3<f64>| {
-        (pts.iter().map(|p| (p - c).norm_squared()).sum::<f64>() / pts.len().max(1) as f64).sqrt()
-    };
-    let s = rms(model, &mu_d) / rms(scan, &mu_m).max(1e-300);
+    let s = radius_ratio(scan, model);
     rotation_grid(n)
         .into_iter()
         .map(|r| Pose { scale: s, rotation: r, translation: mu_d.coords - s * (r * mu_m.coords) })

@@ -17,6 +17,7 @@ pub mod covariance;
 pub mod datasets;
 pub mod em_icp;
 pub mod eval;
+pub mod features;
 pub mod fixed;
 pub mod geometry;
 pub mod hessian;

@@ -294,6 +294,10 @@ struct EvalArgs {
     /// Realistic suite: also run these methods (comma-separated), beside pf-icp.
     #[arg(long, value_enum, value_delimiter = ',')]
     with: Vec<MethodArg>,
+    /// Realistic suite: also run PF-ICP with the filter on the board, the board's part by
+    /// its bit-exact reference (what the simulated board computes), column pf-icp-board.
+    #[arg(long)]
+    board_reference: bool,
     /// Realistic suite: export every case (model, scan, truth, symmetries) to this folder
     /// for the peers' script (tests/peers).
     #[arg(long, value_name = "DIR")]
@@ -632,6 +636,7 @@ fn eval_realistic(a: &EvalArgs) -> Result<()> {
         },
         out_dir: Some(a.out.clone()),
         export: a.export.clone(),
+        board: a.board_reference,
         ..Default::default()
     };
     let report = realistic::run(&opts)?;

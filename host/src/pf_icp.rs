@@ -323,6 +323,12 @@ pub fn prior(nn: &NearestNeighbours, scan: &[Point3<f64>], settings: &PfIcpSetti
         Some(search) => {
             let mut starts = initial.candidates.clone();
             starts.extend(hypotheses::grid_starts(scan, model, search.grid));
+            starts.extend(crate::features::proposals(
+                nn,
+                &sample,
+                hypotheses::radius_ratio(scan, model),
+                settings.seed,
+            ));
             hypotheses::search(&Surface::new(nn), &sample, &[initial.pose], &starts, search)
         }
         None => Vec::new(),

@@ -13,10 +13,12 @@
 //! distance, so sliding off an edge is not free. [`Surface::cost`] caps each term
 //! (outliers, unmatched points).
 //!
-//! **Polish** ([`Surface::polish`]): ICP with scale on that distance, Gauss-Newton on the
-//! linearised residuals (`n . (q - p)` and the tangential excess) of the inliers (within 3
-//! robust standard deviations), which neither outliers nor the noise pull the way a
-//! point-to-point least-squares scale is pulled.
+//! **Polish** ([`Surface::polish`]): point-to-plane ICP with scale, Gauss-Newton on the
+//! linearised residuals `n . (q - p)` of the inliers (surface distance within 3 robust
+//! standard deviations), which neither outliers nor the noise pull the way a
+//! point-to-point least-squares scale is pulled. (With the tangential excess as a second
+//! residual the scale of the benchmark's lidar scene came out 1.1 to 1.5% off; without it
+//! 0.1 to 1.1%.)
 //!
 //! **Curvature** ([`Surface::curvature`]): the Gauss-Newton Hessian `J^T J` of those
 //! residuals in local parameters about the estimate ([`LOCAL_NAMES`]), the residual variance, and
@@ -166,8 +168,8 @@ impl<'a> Surface<'a> {
         [(along, c.normal), excess]
     }
 
-    /// ICP with scale on the surface distance from `start`: Gauss-Newton on the linearised
-    /// residuals of the inliers, at most `iterations` steps.
+    /// Point-to-plane ICP with scale from `start`: Gauss-Newton on the linearised
+    /// point-to-plane residuals of the inliers, at most `iterations` steps.
     pub fn polish(&self, points: &[Point3<f64>], start: &Pose, iterations: usize) -> Pose {
         let mut pose = *start;
         for _ in 0..iterations {
@@ -181,15 +183,11 @@ impl<'a> Surface<'a> {
             let mut b = SVector::<f64, 7>::zeros();
             for &i in &kept {
                 let x = q[i].coords - c;
-                for (r, n) in self.residuals(&q[i], &contacts[i]) {
-                    if r == 0.0 && n == Vector3::zeros() {
-                        continue;
-                    }
-                    let w = x.cross(&n);
-                    let j = SVector::<f64, 7>::from_column_slice(&[w.x, w.y, w.z, n.x, n.y, n.z, n.dot(&x)]);
-                    a += j * j.transpose();
-                    b += j * r;
-                }
+                let [(r, n), _] = self.residuals(&q[i], &contacts[i]);
+                let w = x.cross(&n);
+                let j = SVector::<f64, 7>::from_column_slice(&[w.x, w.y, w.z, n.x, n.y, n.z, n.dot(&x)]);
+                a += j * j.transpose();
+                b += j * r;
             }
             // A little damping keeps undetermined directions (planar, collinear scans) still.
             let damp = 1e-9 * a.trace().max(1e-300);

@@ -376,6 +376,12 @@ pub struct RealisticOptions {
     pub methods: Vec<Method>,
     /// PF-ICP's settings (the seed is replaced by each case's).
     pub pf: PfIcpSettings,
+    /// Also run PF-ICP with the filter on the board (column `pf-icp-board`): the host's
+    /// prior and conclusion around `fpga::pf::run`, the bit-exact reference of the board's
+    /// filter (what the Verilated board computes, byte for byte), with the default board
+    /// sample ([`crate::board_pf::DEFAULT_BOARD_POINTS`]) and at most
+    /// [`crate::board::MAX_POINTS`] model points.
+    pub board: bool,
     /// Write `realistic.json` here (created if missing).
     pub out_dir: Option<PathBuf>,
     /// Export the cases (clouds and `cases.json`) for the peers' script here.
@@ -393,6 +399,7 @@ impl Default for RealisticOptions {
             families: Family::ALL.to_vec(),
             methods: vec![Method::PfIcp],
             pf: PfIcpSettings::default(),
+            board: false,
             out_dir: None,
             export: None,
             progress: true,
@@ -500,6 +507,31 @@ pub struct RealisticReport {
     pub families: Vec<FamilyReport>,
 }
 
+/// Name of the on-board column.
+pub const BOARD_COLUMN: &str = "pf-icp-board";
+
+fn method_columns(opts: &RealisticOptions) -> Vec<String> {
+    let mut v: Vec<String> = opts.methods.iter().map(|m| m.name().to_string()).collect();
+    if opts.board {
+        v.push(BOARD_COLUMN.to_string());
+    }
+    v
+}
+
+/// PF-ICP with the filter on the board, the board's part by its bit-exact reference.
+fn on_board_reference(
+    nn: &NearestNeighbours,
+    scan: &[Point3<f64>],
+    settings: &PfIcpSettings,
+) -> crate::pf_icp::PfIcpResult {
+    use crate::board_pf::{finish, plan, DEFAULT_BOARD_POINTS};
+    use pficp_fpga::pf;
+    let plan = plan(nn, scan, settings, DEFAULT_BOARD_POINTS, crate::board::MAX_POINTS);
+    let out = pf::run(&plan.config, |p| pf::evaluate(&plan.model, &plan.scan, p));
+    let reply = pficp_fpga::messages::ResultReply::of(&out);
+    finish(&plan, nn, scan, settings, &reply, std::time::Duration::ZERO)
+}
+
 /// Case `index` of `family` in the options' split.
 pub fn case(family: Family, index: usize, split: Split, seed: u64) -> Case {
     let shapes = shapes(family, split);
@@ -528,7 +560,7 @@ pub fn run(opts: &RealisticOptions) -> anyhow::Result<RealisticReport> {
             let nn = NearestNeighbours::new(&c.model);
             let surface = crate::surface::Surface::new(&nn);
             let settings = MethodSettings { pf: PfIcpSettings { seed: c.seed, ..opts.pf.clone() } };
-            let results = opts
+            let mut results: Vec<CaseResult> = opts
                 .methods
                 .iter()
                 .map(|&m| {
@@ -548,6 +580,22 @@ pub fn run(opts: &RealisticOptions) -> anyhow::Result<RealisticReport> {
                     }
                 })
                 .collect();
+            if opts.board {
+                let t = Instant::now();
+                let pf = on_board_reference(&nn, &c.scan, &settings.pf);
+                let seconds = t.elapsed().as_secs_f64();
+                let sc = score(&pf.registration.pose, &c);
+                let g = c.shape.symmetries()[sc.symmetry];
+                let truth = symmetric_truth(&c.truth, &g, &c.shape.centre());
+                results.push(CaseResult {
+                    method: BOARD_COLUMN.to_string(),
+                    alternatives: Some(pf.conclusion.alternatives.len()),
+                    mahalanobis2: mahalanobis2(&pf.conclusion, &truth, &centroid(&c.scan)),
+                    score: sc,
+                    seconds,
+                    cost: surface.cost(&c.scan, &pf.registration.pose, 0.05 * c.diag),
+                });
+            }
             let mut truth = c.truth.to_params();
             for a in &mut truth[4..] {
                 *a = a.to_degrees();
@@ -578,27 +626,28 @@ pub fn run(opts: &RealisticOptions) -> anyhow::Result<RealisticReport> {
                 );
             }
         }
-        let cells = opts
-            .methods
+        let columns = method_columns(opts);
+        let cells = columns
             .iter()
             .enumerate()
             .map(|(j, m)| {
                 let held: Vec<&CaseRecord> = cases.iter().filter(|c| c.held_out).collect();
+                let pf = m.starts_with(Method::PfIcp.name());
                 FamilyCell {
-                    method: m.name().to_string(),
+                    method: m.clone(),
                     successes: cases.iter().filter(|c| c.results[j].score.success).count(),
                     cases: cases.len(),
                     held_out_successes: held.iter().filter(|c| c.results[j].score.success).count(),
                     held_out_cases: held.len(),
                     median_seconds: median(&cases.iter().map(|c| c.results[j].seconds).collect::<Vec<_>>()),
-                    inside_95: (*m == Method::PfIcp).then(|| {
+                    inside_95: pf.then(|| {
                         cases
                             .iter()
                             .filter(|c| c.results[j].score.success)
                             .filter(|c| c.results[j].mahalanobis2.is_some_and(|d| d <= CHI2_7_95))
                             .count()
                     }),
-                    with_alternatives: (*m == Method::PfIcp)
+                    with_alternatives: pf
                         .then(|| cases.iter().filter(|c| c.results[j].alternatives.is_some_and(|a| a > 0)).count()),
                 }
             })
@@ -610,7 +659,7 @@ pub fn run(opts: &RealisticOptions) -> anyhow::Result<RealisticReport> {
         split: opts.split,
         cases_per_family: opts.cases,
         tolerance: TOLERANCE,
-        methods: opts.methods.iter().map(|m| m.name().to_string()).collect(),
+        methods: method_columns(opts),
         families,
     };
     if let Some(dir) = &opts.export {
@@ -665,7 +714,7 @@ impl RealisticReport {
             header.push(format!("{m} success"));
             header.push(format!("{m} held-out"));
             header.push(format!("{m} median s"));
-            if m == Method::PfIcp.name() {
+            if m.starts_with(Method::PfIcp.name()) {
                 header.push("truth in 95% region".to_string());
                 header.push("ambiguous".to_string());
             }
@@ -750,4 +799,3 @@ mod tests {
         }
     }
 }
-
