@@ -39,7 +39,7 @@ pub const ARBITRATED: usize = 6;
 /// A pose is an alternative when its mean cost excess is below this many standard errors.
 pub const ALTERNATIVE_SIGMAS: f64 = 2.0;
 /// Inflation of the curvature covariance (see the module doc).
-pub const COVARIANCE_INFLATION: f64 = 2.0;
+pub const COVARIANCE_INFLATION: f64 = 1.5;
 /// Inlier distance of `fitness` and `inlier_rmse`, as a fraction of the model's diagonal.
 pub const INLIER_DISTANCE: f64 = 0.02;
 /// Hypotheses polished besides the best [`ARBITRATED`] for alternatives: those whose cost in

@@ -238,3 +238,70 @@ fn register_on_the_board_prints_the_software_form() {
     assert_eq!(labels(&text), labels(&soft_text), "the same text form:\n{text}\n{soft_text}");
     assert!(text.contains(&format!("engine       board ({})", board.path)), "{text}");
 }
+
+/// A collinear model and scan: a pose with a warning naming what the line cannot fix
+/// (translation along it, scale, rotation about it), the same in the JSON, and no NaN.
+#[test]
+fn collinear_clouds_name_their_undetermined_parameters() {
+    let dir = tempfile::tempdir().unwrap();
+    let line = |n: usize, a: f64, b: f64, off: f64| -> String {
+        (0..n)
+            .map(|i| {
+                let t = a + (b - a) * i as f64 / (n - 1) as f64;
+                format!("{} {} {}\n", t + off, 2.0 * t, 3.0 * t - off)
+            })
+            .collect()
+    };
+    let model = write(dir.path(), "line-model.xyz", line(500, -1.0, 1.0, 0.0).as_bytes());
+    let scan = write(dir.path(), "line-scan.xyz", line(400, -0.8, 0.8, 0.1).as_bytes());
+    let text = register(&model, &scan, &["--clusters", "20"]);
+    assert_eq!(text.status.code(), Some(0), "{}", stderr(&text));
+    let out = String::from_utf8_lossy(&text.stdout);
+    let warning = out.lines().find(|l| l.contains("cannot determine")).unwrap_or_else(|| panic!("no warning in {out}"));
+    assert!(warning.contains("scale"), "{warning}");
+    assert!(!out.contains("NaN"), "{out}");
+    let json = register(&model, &scan, &["--clusters", "20", "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&json.stdout).expect("one JSON object");
+    let undetermined: Vec<&str> = v["undetermined"].as_array().unwrap().iter().map(|x| x.as_str().unwrap()).collect();
+    assert_eq!(undetermined.len(), 3, "{undetermined:?}");
+    assert!(undetermined.contains(&"scale"));
+    let text = String::from_utf8_lossy(&json.stdout);
+    assert!(!text.contains("NaN") && !text.contains("inf"), "{text}");
+    // Covariance entries of undetermined parameters are null, the others numbers.
+    for (k, name) in v["covariance_order"].as_array().unwrap().iter().enumerate() {
+        let null = v["sigma"][k].is_null();
+        assert_eq!(null, undetermined.contains(&name.as_str().unwrap()), "{name}");
+    }
+}
+
+/// A scan of the exactly symmetric block (D2) says it looks symmetric and lists its other
+/// poses in the JSON; the paper's asymmetric model-1 lists none.
+#[test]
+fn symmetric_shapes_report_their_alternatives() {
+    use pficp::parts::Part;
+    use rand::SeedableRng;
+    let dir = tempfile::tempdir().unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    let to_text = |pts: &[nalgebra::Point3<f64>]| -> String {
+        pts.iter().map(|p| format!("{} {} {}\n", p.x, p.y, p.z)).collect()
+    };
+    let model = write(dir.path(), "block.xyz", to_text(&Part::Block.sample_surface(2000, &mut rng)).as_bytes());
+    let scan = write(dir.path(), "block-scan.xyz", to_text(&Part::Block.sample_surface(800, &mut rng)).as_bytes());
+    let out = register(&model, &scan, &[]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(
+        String::from_utf8_lossy(&out.stdout).contains("looks symmetric: 4 poses"),
+        "{}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+    let json = register(&model, &scan, &["--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&json.stdout).unwrap();
+    assert_eq!(v["alternatives"].as_array().unwrap().len(), 3);
+    let d = tempfile::tempdir().unwrap();
+    let g = pficp(&["gen", "--model", "model-1", "--out-dir", d.path().to_str().unwrap(), "--sampling", "independent"]);
+    assert_eq!(g.status.code(), Some(0));
+    let json = register(&d.path().join("model-1.ply"), &d.path().join("model-1-scan.ply"), &["--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&json.stdout).unwrap();
+    assert_eq!(v["alternatives"].as_array().unwrap().len(), 0, "{}", v["alternatives"]);
+    assert!(v["fitness"].as_f64().unwrap() > 0.9);
+}
