@@ -72,14 +72,14 @@ pub enum BoardError {
         reason: String,
     },
     /// Reading or writing the port failed (e.g. the adapter was unplugged).
-    #[error("serial port {port}: {source} while {during} (was the board unplugged?)")]
+    #[error("serial port {port}: {error} while {during} (was the board unplugged?)")]
     Io {
         /// The port.
         port: String,
         /// What the client was doing.
         during: String,
-        /// The error.
-        source: std::io::Error,
+        /// The error (in the message only, so it is printed once).
+        error: std::io::Error,
     },
     /// No reply within the time allowed.
     #[error(
@@ -124,12 +124,12 @@ pub enum BoardError {
         reason: String,
     },
     /// A reply with a valid CRC whose contents do not fit the request.
-    #[error("malformed reply to {command:?}: {source}")]
+    #[error("malformed reply to {command:?}: {problem}")]
     Reply {
         /// The request.
         command: Command,
-        /// What does not fit.
-        source: MessageError,
+        /// What does not fit (in the message only).
+        problem: MessageError,
     },
     /// The request does not fit the board's limits (checked on the host).
     #[error("{0}")]
@@ -290,8 +290,8 @@ impl BoardClient {
     /// Version, limits, clock, baud and the current sizes.
     pub fn identify(&mut self) -> Result<Identity, BoardError> {
         let reply = self.transact(Command::Identify, Vec::new(), IDENTITY_BYTES, 0, true)?;
-        let id =
-            Identity::decode(&reply.data).map_err(|source| BoardError::Reply { command: Command::Identify, source })?;
+        let id = Identity::decode(&reply.data)
+            .map_err(|problem| BoardError::Reply { command: Command::Identify, problem })?;
         self.identity = Some(id);
         self.sizes = (id.model_count, id.scan_count);
         self.stored = id.stored as usize;
@@ -327,11 +327,11 @@ impl BoardClient {
         let mut offset = 0;
         for chunk in points.chunks(MAX_LOAD_POINTS) {
             let reply = self.transact(command, load_request(offset as u16, chunk), 4, 0, true)?;
-            let ack = parse_two_u16(&reply.data).map_err(|source| BoardError::Reply { command, source })?;
+            let ack = parse_two_u16(&reply.data).map_err(|problem| BoardError::Reply { command, problem })?;
             if ack != (offset as u16, chunk.len() as u16) {
                 return Err(BoardError::Reply {
                     command,
-                    source: MessageError::Field {
+                    problem: MessageError::Field {
                         field: "offset, count",
                         got: ((ack.0 as u64) << 16) | ack.1 as u64,
                         expected: ((offset as u64) << 16) | chunk.len() as u64,
@@ -367,10 +367,10 @@ impl BoardClient {
         let reply = self.transact(Command::SetSizes, data.clone(), 4, 0, true)?;
         if reply.data != data {
             let got = parse_two_u16(&reply.data)
-                .map_err(|source| BoardError::Reply { command: Command::SetSizes, source })?;
+                .map_err(|problem| BoardError::Reply { command: Command::SetSizes, problem })?;
             return Err(BoardError::Reply {
                 command: Command::SetSizes,
-                source: MessageError::Field {
+                problem: MessageError::Field {
                     field: "sizes",
                     got: ((got.0 as u64) << 16) | got.1 as u64,
                     expected: ((model as u64) << 16) | scan as u64,
@@ -412,13 +412,13 @@ impl BoardClient {
         let repeatable = first || n == 0;
         let reply = self.transact(Command::Evaluate, request.encode(), reply_bytes, clocks, repeatable)?;
         let r = EvaluateReply::decode(&reply.data, n, last)
-            .map_err(|source| BoardError::Reply { command: Command::Evaluate, source })?;
+            .map_err(|problem| BoardError::Reply { command: Command::Evaluate, problem })?;
         self.stored = after;
         if let Some(s) = &r.summary {
             if s.weights.len() != after {
                 return Err(BoardError::Reply {
                     command: Command::Evaluate,
-                    source: MessageError::Field {
+                    problem: MessageError::Field {
                         field: "stored",
                         got: s.weights.len() as u64,
                         expected: after as u64,
@@ -479,7 +479,7 @@ impl BoardClient {
         if sum != summary.w_sum as u64 {
             return Err(BoardError::Reply {
                 command: Command::Evaluate,
-                source: MessageError::Field { field: "w_sum", got: summary.w_sum as u64, expected: sum },
+                problem: MessageError::Field { field: "w_sum", got: summary.w_sum as u64, expected: sum },
             });
         }
         Ok((costs, summary))
@@ -502,7 +502,7 @@ impl BoardClient {
             let clocks = clocks_per_particle(n, self.sizes.0 as usize, self.lanes());
             let reply = self.transact(Command::Nearest, request.encode(), 10 + 7 * n, clocks, true)?;
             let r = NearestReply::decode(&reply.data, &request)
-                .map_err(|source| BoardError::Reply { command: Command::Nearest, source })?;
+                .map_err(|problem| BoardError::Reply { command: Command::Nearest, problem })?;
             out.cost += r.cost;
             out.results.extend(r.results);
             at += n;
@@ -550,10 +550,10 @@ impl BoardClient {
                 Ok(reply) => {
                     if reply.data != data[..RUN_REPLY_BYTES] {
                         let (p, i) = parse_two_u16(&reply.data)
-                            .map_err(|source| BoardError::Reply { command: Command::Run, source })?;
+                            .map_err(|problem| BoardError::Reply { command: Command::Run, problem })?;
                         return Err(BoardError::Reply {
                             command: Command::Run,
-                            source: MessageError::Field {
+                            problem: MessageError::Field {
                                 field: "particles, iterations",
                                 got: ((p as u64) << 16) | i as u64,
                                 expected: ((cfg.particles as u64) << 16) | cfg.iterations as u64,
@@ -582,7 +582,7 @@ impl BoardClient {
     /// The on-board filter's state, iterations done and best cost so far (Status).
     pub fn status(&mut self) -> Result<StatusReply, BoardError> {
         let reply = self.transact(Command::Status, Vec::new(), STATUS_BYTES, 0, true)?;
-        StatusReply::decode(&reply.data).map_err(|source| BoardError::Reply { command: Command::Status, source })
+        StatusReply::decode(&reply.data).map_err(|problem| BoardError::Reply { command: Command::Status, problem })
     }
 
     /// The finished filter's best particle, cost and pose (Result). A board still running
@@ -590,7 +590,7 @@ impl BoardClient {
     /// [`BoardError::Board`].
     pub fn result(&mut self) -> Result<ResultReply, BoardError> {
         let reply = self.transact(Command::Result, Vec::new(), RESULT_BYTES, 0, true)?;
-        ResultReply::decode(&reply.data).map_err(|source| BoardError::Reply { command: Command::Result, source })
+        ResultReply::decode(&reply.data).map_err(|problem| BoardError::Reply { command: Command::Result, problem })
     }
 
     /// Poll Status every `every` until the filter is done (state 2); `progress` gets each
@@ -721,7 +721,7 @@ impl BoardClient {
     }
 
     fn io_error(&self, during: String, source: std::io::Error) -> BoardError {
-        BoardError::Io { port: self.name.clone(), during, source }
+        BoardError::Io { port: self.name.clone(), during, error: source }
     }
 
     fn send(&mut self, wire: &[u8], command: Command, allowed: Duration) -> Result<(), BoardError> {
@@ -809,7 +809,7 @@ impl BoardClient {
                 Some(code) => Err(BoardError::Board { command, code }),
                 None => Err(BoardError::Reply {
                     command,
-                    source: MessageError::Field {
+                    problem: MessageError::Field {
                         field: "error code",
                         got: frame.data[0] as u64,
                         expected: ErrorCode::BadCrc as u64,

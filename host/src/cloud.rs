@@ -29,6 +29,35 @@ pub enum CloudError {
         /// The limit.
         limit: usize,
     },
+    /// A coordinate beyond [`MAX_COORDINATE`] in magnitude.
+    #[error("{name} cloud has a coordinate of {value:e} at point {index}, beyond the limit of {limit:e} in magnitude")]
+    OutOfRange {
+        /// Which cloud.
+        name: String,
+        /// Index of the offending point.
+        index: usize,
+        /// The offending value.
+        value: f64,
+        /// The limit.
+        limit: f64,
+    },
+    /// A point far beyond the rest (a sensor's sentinel value, a unit error).
+    #[error(
+        "{name} cloud has point {index} at {distance:e} from the cloud's median point, more than {limit:e} times the \
+         median distance ({spread:e}) of its points (a sensor's sentinel value?)"
+    )]
+    FarPoint {
+        /// Which cloud.
+        name: String,
+        /// Index of the offending point.
+        index: usize,
+        /// Its distance from the median point.
+        distance: f64,
+        /// The median distance of the points from the median point.
+        spread: f64,
+        /// The allowed ratio.
+        limit: f64,
+    },
     /// All points coincide: no extent to register against.
     #[error("{0} cloud has no extent (all points coincide)")]
     Degenerate(String),
@@ -42,9 +71,17 @@ pub struct Cloud {
 
 /// Largest cloud the tool accepts (memory and run-time guard).
 pub const MAX_POINTS: usize = 10_000_000;
+/// Largest coordinate magnitude accepted (squared distances of such clouds stay far from
+/// overflow).
+pub const MAX_COORDINATE: f64 = 1e12;
+/// A point may lie at most this many times the median distance of the points from the
+/// median point away from it.
+pub const MAX_SPREAD_RATIO: f64 = 1e6;
 
 impl Cloud {
-    /// Validate `points` (named `name` in errors): non-empty, finite, not all coincident.
+    /// Validate `points` (named `name` in errors): non-empty, at most [`MAX_POINTS`], finite,
+    /// within [`MAX_COORDINATE`], no point beyond [`MAX_SPREAD_RATIO`] times the median
+    /// distance from the median point, not all coincident.
     pub fn new(name: &str, points: Vec<Point3<f64>>) -> Result<Self, CloudError> {
         if points.is_empty() {
             return Err(CloudError::Empty(name.to_string()));
@@ -58,6 +95,14 @@ impl Cloud {
                     return Err(CloudError::NonFinite { name: name.into(), index, value });
                 }
             }
+        }
+        for (index, p) in points.iter().enumerate() {
+            if let Some(&value) = p.coords.iter().find(|v| v.abs() > MAX_COORDINATE) {
+                return Err(CloudError::OutOfRange { name: name.into(), index, value, limit: MAX_COORDINATE });
+            }
+        }
+        if let Some((index, distance, spread)) = farthest_beyond(&points, MAX_SPREAD_RATIO) {
+            return Err(CloudError::FarPoint { name: name.into(), index, distance, spread, limit: MAX_SPREAD_RATIO });
         }
         let c = Cloud { points };
         if c.diagonal() == 0.0 && c.len() > 1 {
@@ -95,6 +140,27 @@ impl Cloud {
     pub fn diagonal(&self) -> f64 {
         bbox_diagonal(&self.points)
     }
+}
+
+/// The first point farther from the per-axis median point than `ratio` times the median
+/// of those distances: `(index, distance, median distance)` (`None` when the median
+/// distance is 0, i.e. most points coincide).
+fn farthest_beyond(points: &[Point3<f64>], ratio: f64) -> Option<(usize, f64, f64)> {
+    let median = |mut v: Vec<f64>| {
+        let mid = v.len() / 2;
+        *v.select_nth_unstable_by(mid, f64::total_cmp).1
+    };
+    let m = Point3::new(
+        median(points.iter().map(|p| p.x).collect()),
+        median(points.iter().map(|p| p.y).collect()),
+        median(points.iter().map(|p| p.z).collect()),
+    );
+    let d: Vec<f64> = points.iter().map(|p| (p - m).norm()).collect();
+    let spread = median(d.clone());
+    if !(spread > 0.0) {
+        return None;
+    }
+    d.iter().position(|&x| x > ratio * spread).map(|i| (i, d[i], spread))
 }
 
 /// Mean of a non-empty slice of points.

@@ -143,6 +143,16 @@ impl PfArgs {
         if self.clusters == 0 {
             bail!("--clusters must be at least 1");
         }
+        use pficp::pf_icp::{MAX_CLUSTERS, MAX_ITERATIONS, MAX_PARTICLES};
+        for (flag, value, limit) in [
+            ("--particles", self.particles, MAX_PARTICLES),
+            ("--iterations", self.iterations, MAX_ITERATIONS),
+            ("--clusters", self.clusters, MAX_CLUSTERS),
+        ] {
+            if value > limit {
+                bail!("{flag} must be at most {limit} (got {value})");
+            }
+        }
         Ok(PfIcpSettings {
             clusters: self.clusters,
             particles: self.particles,
@@ -539,6 +549,10 @@ fn gen(a: &GenArgs) -> Result<()> {
     let id: ModelId = a.model.into();
     if a.points < 3 || a.scan_points < 3 {
         bail!("--points and --scan-points must be at least 3");
+    }
+    let limit = pficp::cloud::MAX_POINTS;
+    if a.points > limit || a.scan_points > limit {
+        bail!("--points and --scan-points must be at most {limit} (got {} and {})", a.points, a.scan_points);
     }
     if !(a.noise >= 0.0 && a.noise.is_finite()) {
         bail!("--noise must be a finite number >= 0 (got {})", a.noise);

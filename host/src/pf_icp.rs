@@ -32,6 +32,13 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use std::time::{Duration, Instant};
 
+/// Most particles the software filter takes (memory: a particle is 7 numbers and a cost).
+pub const MAX_PARTICLES: usize = 100_000;
+/// Most filter iterations.
+pub const MAX_ITERATIONS: usize = 100_000;
+/// Most clusters per cloud.
+pub const MAX_CLUSTERS: usize = 100_000;
+
 /// PF-ICP settings.
 #[derive(Clone, Debug)]
 pub struct PfIcpSettings {

@@ -305,3 +305,37 @@ fn symmetric_shapes_report_their_alternatives() {
     assert_eq!(v["alternatives"].as_array().unwrap().len(), 0, "{}", v["alternatives"]);
     assert!(v["fitness"].as_f64().unwrap() > 0.9);
 }
+
+/// Huge coordinates, a sensor's sentinel point, absurd counts: one clear line each, exit 1,
+/// checked before anything is allocated; and no error says the same thing twice.
+#[test]
+fn numeric_extremes_and_absurd_options_give_one_line_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = write(dir.path(), "good.xyz", cloud_text(300).as_bytes());
+    let huge: String =
+        (0..300).map(|i| format!("{:e} {:e} 1e200\n", (i as f64).cos() * 1e200, (i as f64).sin() * 1e200)).collect();
+    let huge = write(dir.path(), "huge.xyz", huge.as_bytes());
+    assert_error(&register(&good, &huge, &[]), &["huge.xyz", "point 0", "limit"]);
+    let mut lines: Vec<String> = cloud_text(300).lines().map(String::from).collect();
+    lines[17] = "1.7976931348623157e308 0 0".to_string();
+    let sentinel = write(dir.path(), "sentinel.xyz", lines.join("\n").as_bytes());
+    assert_error(&register(&good, &sentinel, &[]), &["sentinel.xyz", "point 17"]);
+    lines[17] = "1e9 0 0".to_string();
+    let far = write(dir.path(), "far.xyz", lines.join("\n").as_bytes());
+    assert_error(&register(&good, &far, &[]), &["far.xyz", "point 17", "median"]);
+    for (flag, value) in [("--particles", "4000000000"), ("--iterations", "4000000000"), ("--clusters", "4000000000")] {
+        assert_error(&register(&good, &good, &[flag, value]), &[flag, "at most"]);
+    }
+    let out = dir.path().to_str().unwrap();
+    assert_error(
+        &pficp(&["gen", "--model", "model-1", "--points", "100000000000", "--out-dir", out]),
+        &["--points", "at most"],
+    );
+    let empty = write(dir.path(), "empty.xyz", b"");
+    let o = register(&good, &empty, &[]);
+    assert_error(&o, &["empty.xyz", "empty"]);
+    let line = stderr(&o);
+    assert_eq!(line.matches("is empty").count(), 1, "{line}");
+    let o = register(&dir.path().join("missing.xyz"), &good, &[]);
+    assert_eq!(stderr(&o).matches("No such file").count(), 1, "{}", stderr(&o));
+}

@@ -112,20 +112,20 @@ pub enum ParseError {
 #[derive(Debug, Error)]
 pub enum IoError {
     /// The file could not be opened or read.
-    #[error("cannot read {file}: {source}")]
+    #[error("cannot read {file}: {error}")]
     Read {
         /// The file.
         file: String,
-        /// The OS error.
-        source: std::io::Error,
+        /// The OS error (in the message, not a separate cause, so it is printed once).
+        error: std::io::Error,
     },
     /// The file could not be created or written.
-    #[error("cannot write {file}: {source}")]
+    #[error("cannot write {file}: {error}")]
     Write {
         /// The file.
         file: String,
-        /// The OS error.
-        source: std::io::Error,
+        /// The OS error (in the message only).
+        error: std::io::Error,
     },
     /// The extension does not name a known format.
     #[error("{file}: unknown point-cloud format {ext} (expected .ply, .xyz, .txt, .pts or .csv)")]
@@ -144,12 +144,12 @@ pub enum IoError {
         problem: ParseError,
     },
     /// The points were read but do not form a valid cloud (empty, NaN, ...).
-    #[error("{file}: {source}")]
+    #[error("{file}: {problem}")]
     Cloud {
         /// The file.
         file: String,
-        /// The validation error.
-        source: CloudError,
+        /// The validation error (in the message only).
+        problem: CloudError,
     },
 }
 
@@ -174,17 +174,17 @@ pub fn format_from_path(path: &Path) -> Result<Format, IoError> {
 pub fn read_cloud(path: &Path, name: &str) -> Result<Cloud, IoError> {
     let file = path.display().to_string();
     let format = format_from_path(path)?;
-    let bytes = std::fs::read(path).map_err(|source| IoError::Read { file: file.clone(), source })?;
+    let bytes = std::fs::read(path).map_err(|error| IoError::Read { file: file.clone(), error })?;
     let points =
         read_points_from_bytes(&bytes, format).map_err(|problem| IoError::Parse { file: file.clone(), problem })?;
-    Cloud::new(name, points).map_err(|source| IoError::Cloud { file, source })
+    Cloud::new(name, points).map_err(|problem| IoError::Cloud { file, problem })
 }
 
 /// Write `points` to `path` in `format`, replacing any existing file. Points
 /// are written as given (no validation).
 pub fn write_cloud(path: &Path, points: &[Point3<f64>], format: Format) -> Result<(), IoError> {
     std::fs::write(path, write_points_to_bytes(points, format))
-        .map_err(|source| IoError::Write { file: path.display().to_string(), source })
+        .map_err(|error| IoError::Write { file: path.display().to_string(), error })
 }
 
 /// Parse the points in `bytes`. Both PLY formats detect ascii or binary from
