@@ -200,6 +200,8 @@ pub struct BoardClient {
     sizes: (u16, u16),
     stored: usize,
     stats: ClientStats,
+    /// The iteration cap of the last Run sent (a Status beyond it is a broken board).
+    run_iterations: Option<u16>,
 }
 
 impl std::fmt::Debug for BoardClient {
@@ -259,6 +261,7 @@ impl BoardClient {
             sizes: (0, 0),
             stored: 0,
             stats: ClientStats::default(),
+            run_iterations: None,
         }
     }
 
@@ -476,6 +479,14 @@ impl BoardClient {
         let costs = self.costs(poses)?;
         let summary = self.weigh(scale_fn(&costs))?;
         let sum: u64 = summary.weights.iter().map(|&w| w as u64).sum();
+        if sum == 0 {
+            // Normalising would divide by zero: every weight NaN.
+            return Err(BoardError::Filter(format!(
+                "the board on {} returned {} weights that are all 0 (the best particle always weighs 1)",
+                self.name,
+                summary.weights.len()
+            )));
+        }
         if sum != summary.w_sum as u64 {
             return Err(BoardError::Reply {
                 command: Command::Evaluate,
@@ -541,6 +552,7 @@ impl BoardClient {
                 self.max_particles()
             )));
         }
+        self.run_iterations = Some(cfg.iterations);
         let data = cfg.encode();
         // A board that computes before it answers (the timeless reference) needs the run's time.
         let extra = self.run_allowance(cfg).saturating_sub(self.timeout);
@@ -616,6 +628,25 @@ impl BoardClient {
             let s = self.status()?;
             polls += 1;
             progress(&s);
+            // The count only rises and stays within the Run's cap; otherwise the time limit,
+            // restarted at every new count, would never end for a board whose counter
+            // oscillates or wraps.
+            if let Some(last) = last_iterations {
+                if s.iterations < last {
+                    return Err(BoardError::Filter(format!(
+                        "the board on {} reports {} iterations after {last}: its iteration count went back",
+                        self.name, s.iterations
+                    )));
+                }
+            }
+            if let Some(cap) = self.run_iterations {
+                if s.iterations > cap {
+                    return Err(BoardError::Filter(format!(
+                        "the board on {} reports {} iterations, more than the {cap} it was asked for",
+                        self.name, s.iterations
+                    )));
+                }
+            }
             if last_iterations != Some(s.iterations) {
                 if last_iterations.is_some() {
                     since = Instant::now();

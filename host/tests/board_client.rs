@@ -666,3 +666,51 @@ fn a_board_without_the_on_board_filter_is_told_to_use_host_driven() {
     );
     assert_eq!(client.stats().requests, 1, "only Identify was answered: nothing uploaded");
 }
+
+/// A board whose weights are all 0 (their sum 0, so the sum check alone passes) is an error,
+/// not NaN weights later.
+#[test]
+fn all_zero_weights_are_an_error() {
+    use pficp_fpga::messages::{EvaluateReply, FLAG_LAST};
+    let (model, scan) = (cloud(300, 71), cloud(100, 72));
+    let mut board = PtyBoard::serve(support::intercepting_handler(|f, b| {
+        if f.code != Command::Evaluate as u8 || f.data.first().is_none_or(|&x| x & FLAG_LAST == 0) {
+            return None;
+        }
+        let reply = b.execute(f);
+        let mut r = EvaluateReply::decode(&reply.data, f.data[5] as usize, true).ok()?;
+        let s = r.summary.as_mut()?;
+        s.weights.iter_mut().for_each(|w| *w = 0);
+        s.w_sum = 0;
+        Some(Frame { code: reply.code, seq: f.seq, data: r.encode() }.encode())
+    }));
+    let mut client = board.client();
+    upload(&mut client, &model, &scan);
+    let e = client.costs_and_weights(&poses(10, 73), |_| WeightScale::for_two_q(1e6)).unwrap_err();
+    assert!(matches!(&e, BoardError::Filter(m) if m.contains("all 0")), "{e:?}");
+}
+
+/// A board whose iteration count goes back, or passes the Run's cap, would restart the
+/// run's time limit forever: both are errors at once.
+#[test]
+fn an_iteration_count_that_goes_back_or_past_the_cap_is_an_error() {
+    let (model, scan) = (cloud(300, 81), cloud(100, 82));
+    for (counts, words) in [(vec![1u16, 2, 3, 1, 2, 3], "went back"), (vec![1, 2, 9], "more than")] {
+        let mut polls = 0usize;
+        let mut board = PtyBoard::serve(support::intercepting_handler(move |f, b| {
+            if f.code != Command::Status as u8 || b.pf_outcome().is_none() {
+                return None;
+            }
+            let iterations = counts[polls.min(counts.len() - 1)];
+            polls += 1;
+            let s = StatusReply { state: RunState::Running, iterations, best_cost: 99 };
+            Some(Frame { code: 0x88, seq: f.seq, data: s.encode() }.encode())
+        }));
+        let mut client = board.client();
+        upload(&mut client, &model, &scan);
+        client.run(&run_config(8, 6, 4)).unwrap();
+        let e =
+            client.wait_for_run(Duration::from_secs(5), Duration::ZERO, Duration::from_millis(5), |_| {}).unwrap_err();
+        assert!(matches!(&e, BoardError::Filter(m) if m.contains(words)), "{e:?}");
+    }
+}
