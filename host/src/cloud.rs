@@ -157,7 +157,7 @@ fn farthest_beyond(points: &[Point3<f64>], ratio: f64) -> Option<(usize, f64, f6
     );
     let d: Vec<f64> = points.iter().map(|p| (p - m).norm()).collect();
     let spread = median(d.clone());
-    if !(spread > 0.0) {
+    if spread.is_nan() || spread <= 0.0 {
         return None;
     }
     d.iter().position(|&x| x > ratio * spread).map(|i| (i, d[i], spread))

@@ -164,7 +164,7 @@ fn nearest_descriptor(d: &[f64; 3 * BINS], set: &[[f64; 3 * BINS]]) -> usize {
 /// best first (at most [`PROPOSALS`]); `scale_guess` is a rough scale (scan to model).
 pub fn proposals(nn: &NearestNeighbours, scan: &[Point3<f64>], scale_guess: f64, seed: u64) -> Vec<Pose> {
     let diag = bbox_diagonal(nn.points());
-    if !(diag > 0.0) || !(scale_guess > 0.0) || scan.len() < 10 {
+    if diag.is_nan() || diag <= 0.0 || scale_guess.is_nan() || scale_guess <= 0.0 || scan.len() < 10 {
         return Vec::new();
     }
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x6670_6668);
@@ -218,7 +218,7 @@ pub fn proposals(nn: &NearestNeighbours, scan: &[Point3<f64>], scale_guess: f64,
             Some((inliers, pose))
         })
         .collect();
-    scored.sort_by(|x, y| y.0.cmp(&x.0));
+    scored.sort_by_key(|x| std::cmp::Reverse(x.0));
     let at = centroid(scan);
     let mut out: Vec<Pose> = Vec::new();
     for (_, p) in scored {
