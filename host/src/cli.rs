@@ -59,8 +59,9 @@ pub struct Assessment {
     pub covariance: [[Option<f64>; 7]; 7],
     /// One-sigma values in that order (`null`: undetermined).
     pub sigma: [Option<f64>; 7],
-    /// Parameters the scan cannot determine (a collinear or planar scan).
-    pub undetermined: Vec<&'static str>,
+    /// Motions the scan cannot determine (a collinear or planar scan): parameter names, or
+    /// `translation along (x, y, z)` and the like for oblique ones.
+    pub undetermined: Vec<String>,
     /// Fraction of scan points within `inlier_distance` of the model's surface (as Open3D's
     /// fitness, on the surface distance).
     pub fitness: f64,

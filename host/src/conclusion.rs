@@ -29,9 +29,9 @@
 use crate::cloud::{bbox_diagonal, centroid};
 use crate::geometry::{Centred, Pose};
 use crate::hypotheses::{same_pose, Hypothesis};
-use crate::surface::{Surface, COST_CAP, LOCAL_NAMES};
+use crate::surface::{Surface, COST_CAP};
 use nalgebra::Point3;
-use nalgebra::{Rotation3, SMatrix};
+use nalgebra::Rotation3;
 use rayon::prelude::*;
 
 /// Hypotheses besides the filter's estimate polished and compared at the end.
@@ -69,8 +69,9 @@ pub struct Uncertainty {
     pub covariance: [[Option<f64>; 7]; 7],
     /// One-sigma values (`None`: undetermined).
     pub sigma: [Option<f64>; 7],
-    /// Parameters the scan does not determine.
-    pub undetermined: Vec<&'static str>,
+    /// The motions the scan does not determine, in words
+    /// ([`crate::surface::Degeneracy::motions`]).
+    pub undetermined: Vec<String>,
 }
 
 /// How well the scan fits.
@@ -183,28 +184,8 @@ pub fn conclude(
     // Uncertainty: curvature, inflated, plus the particles' spread.
     let image = pose.apply(&at);
     let curv = surface.curvature(scan, &pose, &image);
-    let mut cov = SMatrix::<f64, 7, 7>::zeros();
-    let determined: Vec<usize> = (0..7).filter(|&k| !curv.undetermined.contains(&LOCAL_NAMES[k])).collect();
-    if !determined.is_empty() {
-        let n = determined.len();
-        let sub = SMatrix::<f64, 7, 7>::from_fn(|a, b| {
-            if a < n && b < n {
-                curv.jtj[(determined[a], determined[b])]
-            } else if a == b {
-                1.0
-            } else {
-                0.0
-            }
-        });
-        if let Some(inv) = sub.try_inverse() {
-            let k2 = COVARIANCE_INFLATION * COVARIANCE_INFLATION * curv.residual_variance;
-            for a in 0..n {
-                for b in 0..n {
-                    cov[(determined[a], determined[b])] = k2 * inv[(a, b)];
-                }
-            }
-        }
-    }
+    let k2 = COVARIANCE_INFLATION * COVARIANCE_INFLATION * curv.residual_variance;
+    let mut cov = curv.degeneracy.inverse * k2;
     if let Some((frame, set)) = particles {
         let poses: Vec<Pose> = set.iter().filter_map(|x| x.as_slice().try_into().ok()).map(|x| frame.pose(x)).collect();
         if poses.len() > 1 {
@@ -217,7 +198,7 @@ pub fn conclude(
             }
         }
     }
-    let known = |k: usize| !curv.undetermined.contains(&LOCAL_NAMES[k]);
+    let known = |k: usize| !curv.degeneracy.free[k];
     let mut covariance = [[None; 7]; 7];
     let mut sigma = [None; 7];
     for a in 0..7 {
@@ -247,7 +228,7 @@ pub fn conclude(
         pose,
         from_hypothesis: best != 0,
         alternatives,
-        uncertainty: Uncertainty { covariance, sigma, undetermined: curv.undetermined },
+        uncertainty: Uncertainty { covariance, sigma, undetermined: curv.degeneracy.motions },
         fit,
     }
 }

@@ -1,5 +1,5 @@
 //! The global search behind PF-ICP's start: many start poses, each refined by a short
-//! trimmed ICP with scale, ranked by a robust cost, distinct ones kept.
+//! trimmed ICP with scale, ranked by the capped surface cost, distinct ones kept.
 //!
 //! The k-means start (Algorithm 4, [`crate::init`]) is one pose; on partial views and
 //! near-symmetric parts it often sits in a wrong basin (a flip, a turn about a
@@ -8,15 +8,20 @@
 //! - the k-means start itself, unrefined (exact in the paper's setting), and every
 //!   candidate the k-means stage refined (principal-frame flips and sweeps);
 //! - a uniform set of rotations ([`rotation_grid`], super-Fibonacci samples of SO(3)),
-//!   each with the centroids' translation and the ratio of RMS radii as scale.
+//!   each with the centroids' translation and the ratio of RMS radii as scale;
+//! - feature-based proposals ([`crate::features`]: FPFH correspondences, RANSAC), which
+//!   the caller adds to the starts.
 //!
-//! Each start runs [`SearchSettings::coarse_iterations`] of trimmed ICP on a small sample
-//! (ratio scale, which cannot collapse); the best distinct ones run
-//! [`SearchSettings::fine_iterations`] more on a larger sample (least-squares scale) and
-//! are ranked by their capped surface distance ([`Surface::cost`]) over the whole cost
-//! sample. Poses count as distinct when
-//! they differ by more than 5 deg, 2% of the diagonal at the scan's centroid or 2% in
-//! scale.
+//! Three passes of trimmed ICP, each on the best distinct survivors of the one before:
+//! every start [`SearchSettings::screen_iterations`] on [`SearchSettings::screen_points`]
+//! scan points (ratio scale, which cannot collapse), the best
+//! [`SearchSettings::screen_keep`] [`SearchSettings::coarse_iterations`] more on
+//! [`SearchSettings::coarse_points`], the best [`SearchSettings::keep`]
+//! [`SearchSettings::fine_iterations`] more on [`SearchSettings::fine_points`]
+//! (least-squares scale); ranked by [`Surface::cost`] over the whole cost sample. Poses
+//! count as distinct when they differ by more than 5 deg, 2% of the diagonal at the scan's
+//! centroid or 2% in scale; a scale outside half to twice the radius ratio is a collapse
+//! and dropped.
 
 use crate::cloud::centroid;
 use crate::geometry::Pose;
@@ -31,6 +36,12 @@ use rayon::prelude::*;
 pub struct SearchSettings {
     /// Rotations of the uniform set.
     pub grid: usize,
+    /// Scan points of the first coarse pass (every start).
+    pub screen_points: usize,
+    /// Trimmed ICP iterations of the first pass.
+    pub screen_iterations: usize,
+    /// Distinct starts the first pass keeps.
+    pub screen_keep: usize,
     /// Scan points of the coarse stage.
     pub coarse_points: usize,
     /// Trimmed ICP iterations per start.
@@ -49,8 +60,11 @@ impl Default for SearchSettings {
     fn default() -> Self {
         Self {
             grid: 72,
+            screen_points: 96,
+            screen_iterations: 8,
+            screen_keep: 48,
             coarse_points: 160,
-            coarse_iterations: 20,
+            coarse_iterations: 12,
             keep: 16,
             fine_points: 300,
             fine_iterations: 20,
@@ -111,7 +125,16 @@ pub fn trimmed_icp(
         let weights: Vec<f64> = closest.iter().map(|c| if c.dist2 <= threshold { 1.0 } else { 0.0 }).collect();
         let targets: Vec<Point3<f64>> = closest.iter().map(|c| model[c.index]).collect();
         match match_pairs(points, &targets, Some(&weights), rule) {
-            Some(next) if next.scale.is_finite() && next.scale > 0.0 => pose = next,
+            Some(next) if next.scale.is_finite() && next.scale > 0.0 => {
+                // Converged: the pairs no longer move the pose (a fixed point of ICP).
+                let still = next.rotation_angle_to(&pose) < 1e-6
+                    && (next.scale / pose.scale - 1.0).abs() < 1e-9
+                    && (next.translation - pose.translation).norm() <= 1e-9 * (1.0 + pose.translation.norm());
+                pose = next;
+                if still {
+                    break;
+                }
+            }
             _ => break,
         }
     }
@@ -174,17 +197,34 @@ pub fn search(
     let at = centroid(sample);
     let coarse_pts = &sample[..settings.coarse_points.min(sample.len())];
     let fine_pts = &sample[..settings.fine_points.min(sample.len())];
-    let mut coarse: Vec<Hypothesis> = starts
-        .par_iter()
-        .map(|s| {
-            let pose = trimmed_icp(nn, coarse_pts, s, settings.coarse_iterations, settings.trim, ScaleRule::Ratio);
-            Hypothesis { pose, cost: surface.cost(coarse_pts, &pose, cap) }
-        })
-        .collect();
-    let s0 = starts.iter().map(|p| p.scale).fold(0.0, f64::max);
+    let screen_pts = &sample[..settings.screen_points.min(sample.len())];
+    // The scale guess: the median start's (the grid's starts all carry the radius ratio).
+    let s0 = {
+        let mut v: Vec<f64> = starts.iter().map(|p| p.scale).filter(|s| s.is_finite()).collect();
+        v.sort_by(f64::total_cmp);
+        v.get(v.len() / 2).copied().unwrap_or(0.0)
+    };
     // A scale far from the radii's ratio is a scan collapsed onto part of the model.
     let plausible =
         |h: &Hypothesis| h.cost.is_finite() && (s0 == 0.0 || (h.pose.scale > 0.5 * s0 && h.pose.scale < 2.0 * s0));
+    let mut screened: Vec<Hypothesis> = starts
+        .par_iter()
+        .map(|s| {
+            let pose = trimmed_icp(nn, screen_pts, s, settings.screen_iterations, settings.trim, ScaleRule::Ratio);
+            Hypothesis { pose, cost: surface.cost(screen_pts, &pose, cap) }
+        })
+        .collect();
+    screened.retain(plausible);
+    screened.sort_by(|a, b| a.cost.total_cmp(&b.cost));
+    let screened: Vec<Hypothesis> = distinct(screened, &at, diag).into_iter().take(settings.screen_keep).collect();
+    let mut coarse: Vec<Hypothesis> = screened
+        .par_iter()
+        .map(|h| {
+            let pose =
+                trimmed_icp(nn, coarse_pts, &h.pose, settings.coarse_iterations, settings.trim, ScaleRule::Ratio);
+            Hypothesis { pose, cost: surface.cost(coarse_pts, &pose, cap) }
+        })
+        .collect();
     coarse.retain(plausible);
     coarse.sort_by(|a, b| a.cost.total_cmp(&b.cost));
     let kept: Vec<Hypothesis> = distinct(coarse, &at, diag).into_iter().take(settings.keep).collect();

@@ -66,8 +66,22 @@ pub struct Curvature {
     pub residual_variance: f64,
     /// Pairs used.
     pub pairs: usize,
-    /// Parameters the scan does not determine (names of [`LOCAL_NAMES`]).
-    pub undetermined: Vec<&'static str>,
+    /// What the scan does not determine.
+    pub degeneracy: Degeneracy,
+}
+
+/// The directions `J^T J` has (almost) no curvature along.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Degeneracy {
+    /// The undetermined motions in words: a parameter name when the motion is along an
+    /// axis (`tz`, `scale`, `rz`), else `translation along (x, y, z)`, `rotation about
+    /// (x, y, z)`, or the plane a two-dimensional one lies in. Empty: all determined.
+    pub motions: Vec<String>,
+    /// Per parameter of [`LOCAL_NAMES`]: its variance is unbounded (it has a part along an
+    /// undetermined motion).
+    pub free: [bool; 7],
+    /// The pseudo-inverse of `J^T J` over the determined directions.
+    pub inverse: SMatrix<f64, 7, 7>,
 }
 
 /// Principal axis of least spread of `points` (unit; `z` if degenerate).
@@ -230,8 +244,8 @@ impl<'a> Surface<'a> {
         }
         let residual_variance = sum2 / (count as f64 - 7.0).max(1.0);
         let extent = crate::cloud::bbox_diagonal(self.nn.points()).max(1e-12);
-        let undetermined = undetermined(&jtj, extent, scale);
-        Curvature { jtj, residual_variance, pairs: count, undetermined }
+        let degeneracy = degeneracy(&jtj, extent, scale);
+        Curvature { jtj, residual_variance, pairs: count, degeneracy }
     }
 }
 
@@ -242,26 +256,66 @@ impl<'a> Surface<'a> {
 /// centroid), `scale = s - s0`, `r = log(R R0^T)`.
 pub const LOCAL_NAMES: [&str; 7] = ["tx", "ty", "tz", "scale", "rx", "ry", "rz"];
 
-/// Parameters along which `J^T J` (in units made comparable: lengths over the extent,
-/// scale relative) has less than `1e-6` of its largest curvature.
-fn undetermined(jtj: &SMatrix<f64, 7, 7>, extent: f64, scale: f64) -> Vec<&'static str> {
+/// A direction counts as undetermined below this fraction of the largest curvature (in
+/// units made comparable: lengths over the model's extent, scale relative, radians).
+const FLAT: f64 = 1e-6;
+
+/// Describe the null directions of a 3 x 3 block (`kind`: "translation" or "rotation",
+/// `names` the axis parameters).
+fn describe_block(m: &nalgebra::Matrix3<f64>, top: f64, kind: &str, names: [&str; 3], out: &mut Vec<String>) {
+    let e = m.symmetric_eigen();
+    let null: Vec<Vector3<f64>> =
+        (0..3).filter(|&k| e.eigenvalues[k] < FLAT * top).map(|k| e.eigenvectors.column(k).into_owned()).collect();
+    let axis = |v: &Vector3<f64>| (0..3).find(|&i| v[i].abs() > (1f64).to_radians().cos());
+    let show = |v: &Vector3<f64>| {
+        let v = if v[v.iamax()] < 0.0 { -v } else { *v };
+        format!("({:.2}, {:.2}, {:.2})", v.x, v.y, v.z)
+    };
+    match null.len() {
+        0 => {}
+        1 => out.push(match axis(&null[0]) {
+            Some(i) => names[i].to_string(),
+            None => format!("{kind} {} {}", if kind == "rotation" { "about" } else { "along" }, show(&null[0])),
+        }),
+        2 => {
+            let normal = null[0].cross(&null[1]);
+            match axis(&normal) {
+                Some(i) => out.extend((0..3).filter(|&j| j != i).map(|j| names[j].to_string())),
+                None => out.push(format!("{kind} perpendicular to {}", show(&normal))),
+            }
+        }
+        _ => out.extend(names.iter().map(|n| n.to_string())),
+    }
+}
+
+/// What `J^T J` leaves undetermined, and its pseudo-inverse over the rest.
+fn degeneracy(jtj: &SMatrix<f64, 7, 7>, extent: f64, scale: f64) -> Degeneracy {
     let unit = [extent, extent, extent, scale, 1.0, 1.0, 1.0];
     let d = SMatrix::<f64, 7, 7>::from_diagonal(&SVector::<f64, 7>::from_column_slice(&unit));
     let m = d * jtj * d;
     let e = m.symmetric_eigen();
     let top = e.eigenvalues.max().max(1e-300);
-    let mut out: Vec<&'static str> = Vec::new();
+    let mut inverse = SMatrix::<f64, 7, 7>::zeros();
+    let mut null = SMatrix::<f64, 7, 7>::zeros();
     for k in 0..7 {
-        if e.eigenvalues[k] < 1e-6 * top {
-            let v = e.eigenvectors.column(k);
-            let i = v.iamax();
-            if !out.contains(&LOCAL_NAMES[i]) {
-                out.push(LOCAL_NAMES[i]);
-            }
+        let v = e.eigenvectors.column(k);
+        if e.eigenvalues[k] < FLAT * top {
+            null += v * v.transpose();
+        } else {
+            inverse += v * v.transpose() / e.eigenvalues[k];
         }
     }
-    out.sort_by_key(|n| LOCAL_NAMES.iter().position(|m| m == n));
-    out
+    let free = std::array::from_fn(|k| null.column(k).norm() > 0.1);
+    let mut motions = Vec::new();
+    describe_block(&m.fixed_view::<3, 3>(0, 0).into_owned(), top, "translation", ["tx", "ty", "tz"], &mut motions);
+    if m[(3, 3)] < FLAT * top {
+        motions.push("scale".to_string());
+    }
+    describe_block(&m.fixed_view::<3, 3>(4, 4).into_owned(), top, "rotation", ["rx", "ry", "rz"], &mut motions);
+    if motions.is_empty() && free.iter().any(|&f| f) {
+        motions.push("a combined motion".to_string());
+    }
+    Degeneracy { motions, free, inverse: d * inverse * d }
 }
 
 #[cfg(test)]
@@ -314,17 +368,13 @@ mod tests {
         let nn = NearestNeighbours::new(&model);
         let s = Surface::new(&nn);
         let c = s.curvature(&scan, &Pose::identity(), &crate::cloud::centroid(&scan));
-        for name in ["tx", "ty", "scale", "rz"] {
-            assert!(c.undetermined.contains(&name), "{:?}", c.undetermined);
-        }
-        assert!(!c.undetermined.contains(&"tz"));
+        assert_eq!(c.degeneracy.motions, ["tx", "ty", "scale", "rz"]);
+        assert_eq!(c.degeneracy.free, [true, true, false, true, false, false, true]);
         // A box is determined.
         let model = Part::NearCubeNotch.sample_surface(3000, &mut rng);
         let nn = NearestNeighbours::new(&model);
         let s = Surface::new(&nn);
-        assert!(s
-            .curvature(&model[..800], &Pose::identity(), &crate::cloud::centroid(&model[..800]))
-            .undetermined
-            .is_empty());
+        let c = s.curvature(&model[..800], &Pose::identity(), &crate::cloud::centroid(&model[..800]));
+        assert!(c.degeneracy.motions.is_empty() && c.degeneracy.free.iter().all(|f| !f));
     }
 }

@@ -253,9 +253,10 @@ mod tests {
         {
             let path = dir.path().join(file);
             write_cloud(&path, &sample(), format).unwrap();
-            let cloud = read_cloud(&path, "scan").unwrap();
-            assert_eq!(cloud.points(), sample().as_slice(), "{format:?}");
-            for (a, b) in cloud.points().iter().zip(sample()) {
+            // The parser alone: the extremes here are beyond what `Cloud` accepts.
+            let points = read_points_from_bytes(&std::fs::read(&path).unwrap(), format).unwrap();
+            assert_eq!(points, sample(), "{format:?}");
+            for (a, b) in points.iter().zip(sample()) {
                 for (x, y) in a.coords.iter().zip(b.coords.iter()) {
                     assert_eq!(x.to_bits(), y.to_bits(), "{format:?}");
                 }
