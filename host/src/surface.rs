@@ -171,17 +171,6 @@ impl<'a> Surface<'a> {
         (q, contacts, mask)
     }
 
-    /// The residuals of one contact (the point-to-plane one, and the tangential excess
-    /// beyond the spacing when there is one) with their directions.
-    fn residuals(&self, q: &Point3<f64>, c: &Contact) -> [(f64, Vector3<f64>); 2] {
-        let d = q - c.point;
-        let along = c.normal.dot(&d);
-        let t = d - c.normal * along;
-        let tn = t.norm();
-        let excess = if tn > self.spacing { (tn - self.spacing, t / tn) } else { (0.0, Vector3::zeros()) };
-        [(along, c.normal), excess]
-    }
-
     /// Point-to-plane ICP with scale from `start`: Gauss-Newton on the linearised
     /// point-to-plane residuals of the inliers, at most `iterations` steps.
     pub fn polish(&self, points: &[Point3<f64>], start: &Pose, iterations: usize) -> Pose {
@@ -197,7 +186,8 @@ impl<'a> Surface<'a> {
             let mut b = SVector::<f64, 7>::zeros();
             for &i in &kept {
                 let x = q[i].coords - c;
-                let [(r, n), _] = self.residuals(&q[i], &contacts[i]);
+                let n = contacts[i].normal;
+                let r = n.dot(&(q[i] - contacts[i].point));
                 let w = x.cross(&n);
                 let j = SVector::<f64, 7>::from_column_slice(&[w.x, w.y, w.z, n.x, n.y, n.z, n.dot(&x)]);
                 a += j * j.transpose();
@@ -235,7 +225,8 @@ impl<'a> Surface<'a> {
         // model point's footprint, not information about where the surface is.
         for i in (0..q.len()).filter(|&i| mask[i]) {
             let x = q[i] - at;
-            let [(r, n), _] = self.residuals(&q[i], &contacts[i]);
+            let n = contacts[i].normal;
+            let r = n.dot(&(q[i] - contacts[i].point));
             let w = x.cross(&n);
             let j = SVector::<f64, 7>::from_column_slice(&[n.x, n.y, n.z, n.dot(&x) / scale, w.x, w.y, w.z]);
             jtj += j * j.transpose();
