@@ -104,7 +104,7 @@ impl Assessment {
                 None => format!("{name} undetermined"),
             }
         };
-        s += "one sigma    ";
+        s += "one sigma    (translation of the scan centroid's image, rotation vector) ";
         s += &(0..7).map(show).collect::<Vec<_>>().join(", ");
         s += "\n";
         s += &format!(

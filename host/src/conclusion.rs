@@ -10,15 +10,17 @@
 //!    answer by more than 5 deg, 2% of the diagonal at the scan's centroid or 2% in scale
 //!    and fits as well within the noise: the mean of its per-point cost excess over the
 //!    answer is below [`ALTERNATIVE_SIGMAS`] standard errors of that mean (a paired test
-//!    over the same scan points). An exactly symmetric shape lists its symmetric poses; a
-//!    near-symmetric one whose breaking feature is clearly seen lists none.
+//!    over the same scan points; neighbouring points' costs are correlated, so the test is
+//!    liberal and a weakly resolved feature may hide an alternative). An exactly symmetric
+//!    shape lists its symmetric poses; a near-symmetric one whose breaking feature is
+//!    clearly seen lists none.
 //! 3. **Uncertainty**: the covariance of the local parameters
 //!    [`crate::surface::LOCAL_NAMES`] (translation of the scan centroid's image, scale,
 //!    rotation vector in the model frame) is `k^2 sigma^2 (J^T J)^-1` from the surface
 //!    residuals' curvature ([`Surface::curvature`]), `k` = [`COVARIANCE_INFLATION`] for the
 //!    correlation of neighbouring residuals (calibrated on the realistic benchmark's dev
-//!    split, docs/decisions.md), plus the spread of the filter's final particle set when
-//!    there is one. Parameters the scan cannot determine are named, and their rows and
+//!    split, docs/decisions.md), plus the spread of the filter's last particle set when
+//!    the answer is the filter's own. Parameters the scan cannot determine are named, and their rows and
 //!    columns are left out (`None`) instead of printed as a confident number.
 //! 4. **Fit** (as Open3D's `fitness` and `inlier_rmse`, on the surface distance of
 //!    [`Surface::distance2`] rather than to the nearest model point, so that it does not
@@ -34,7 +36,8 @@ use nalgebra::Point3;
 use nalgebra::Rotation3;
 use rayon::prelude::*;
 
-/// Hypotheses besides the filter's estimate polished and compared at the end.
+/// Hypotheses polished and compared at the end besides the filter's estimate: the best
+/// `ARBITRATED + 1`.
 pub const ARBITRATED: usize = 6;
 /// A pose is an alternative when its mean cost excess is below this many standard errors.
 pub const ALTERNATIVE_SIGMAS: f64 = 2.0;
@@ -186,7 +189,9 @@ pub fn conclude(
     let curv = surface.curvature(scan, &pose, &image);
     let k2 = COVARIANCE_INFLATION * COVARIANCE_INFLATION * curv.residual_variance;
     let mut cov = curv.degeneracy.inverse * k2;
-    if let Some((frame, set)) = particles {
+    // The filter's last particle set (unweighted) describes the answer only when the answer
+    // is the filter's own.
+    if let Some((frame, set)) = particles.filter(|_| best == 0) {
         let poses: Vec<Pose> = set.iter().filter_map(|x| x.as_slice().try_into().ok()).map(|x| frame.pose(x)).collect();
         if poses.len() > 1 {
             let errs: Vec<[f64; 7]> = poses.iter().map(|p| local_error(p, &pose, &at)).collect();

@@ -10,7 +10,8 @@
 //!
 //! - **Clouds**: at most [`FEATURE_POINTS`] points of each (random, seeded), normals from
 //!   their 12 nearest neighbours, oriented away from the cloud's centroid.
-//! - **Descriptor**: for a point `p` and each neighbour `q` within the radius, the Darboux
+//! - **Descriptor**: for a point `p` and each of its (at most 47) nearest neighbours `q`
+//!   within the radius, the Darboux
 //!   frame `u = n_p, v = u x (q - p) / |q - p|, w = u x v` gives
 //!   `alpha = v . n_q`, `phi = u . (q - p) / |q - p|`, `theta = atan2(w . n_q, u . n_q)`,
 //!   each binned into 11 (SPFH, 33 bins, normalised); FPFH adds the neighbours' SPFH

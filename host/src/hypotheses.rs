@@ -20,8 +20,10 @@
 //! [`SearchSettings::fine_iterations`] more on [`SearchSettings::fine_points`]
 //! (least-squares scale); ranked by [`Surface::cost`] over the whole cost sample. Poses
 //! count as distinct when they differ by more than 5 deg, 2% of the diagonal at the scan's
-//! centroid or 2% in scale; a scale outside half to twice the radius ratio is a collapse
-//! and dropped.
+//! centroid or 2% in scale; a scale outside half to twice the median start's (the radius
+//! ratio) is a collapse and dropped (which also bounds the views it handles: a view so
+//! small that the radius ratio is more than twice the true scale, about a tenth of an
+//! elongated part, is out of reach).
 
 use crate::cloud::centroid;
 use crate::geometry::Pose;
@@ -181,9 +183,10 @@ pub fn grid_starts(scan: &[Point3<f64>], model: &[Point3<f64>], n: usize) -> Vec
         .collect()
 }
 
-/// Refine `starts` and return the distinct hypotheses, best first (at least one when
-/// `starts` is not empty). `exact` poses are ranked as they are, without refinement.
-/// `sample` is the cost sample (a random subset of the scan, in random order).
+/// Refine `starts` and return the distinct hypotheses, best first (empty when every one is
+/// implausible: the caller keeps its own start then). `exact` poses are ranked as they
+/// are, without refinement. `sample` is the cost sample (a random subset of the scan, in
+/// random order); distinctness is judged at its centroid.
 pub fn search(
     surface: &Surface,
     sample: &[Point3<f64>],

@@ -45,7 +45,8 @@ pub struct InitialPose {
     pub model_clusters: Clustering,
     /// Mean squared closest-point distance of the cost sample at `pose`.
     pub cost: f64,
-    /// Every candidate ranked (the pairings' poses after their centroid ICP).
+    /// Every candidate, in the order they were made (the pairings' poses after their
+    /// centroid ICP), for the global search.
     pub candidates: Vec<Pose>,
 }
 

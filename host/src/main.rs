@@ -361,6 +361,10 @@ fn main() {
     }
 }
 
+/// The scan's bounding-box diagonal may be this many times the model's at least (and its
+/// inverse at most).
+const MIN_EXTENT_RATIO: f64 = 1e-6;
+
 fn load(path: &Path, name: &str) -> Result<Cloud> {
     Ok(read_cloud(path, name)?)
 }
@@ -383,6 +387,13 @@ fn register(a: &RegisterArgs) -> Result<()> {
     }
     if scan.len() < 3 || model.len() < 3 {
         bail!("registration needs at least 3 points in each cloud (model {}, scan {})", model.len(), scan.len());
+    }
+    let extent_ratio = scan.diagonal() / model.diagonal();
+    if !(MIN_EXTENT_RATIO..=1.0 / MIN_EXTENT_RATIO).contains(&extent_ratio) {
+        bail!(
+            "the scan's extent is {extent_ratio:e} times the model's: beyond {MIN_EXTENT_RATIO:e} to {:e} (different units?)",
+            1.0 / MIN_EXTENT_RATIO
+        );
     }
     if let Some(out) = &a.out_aligned {
         format_from_path(out)?;
@@ -625,8 +636,8 @@ fn eval(a: &EvalArgs) -> Result<()> {
 fn eval_realistic(a: &EvalArgs) -> Result<()> {
     use pficp::eval::realistic::{self, Family, RealisticOptions, Split};
     let cases = a.cases.unwrap_or(if a.quick { 8 } else { 100 });
-    if cases == 0 {
-        bail!("--cases must be at least 1");
+    if cases == 0 || cases > realistic::MAX_CASES {
+        bail!("--cases must be 1 to {} (got {cases})", realistic::MAX_CASES);
     }
     let mut methods = vec![Method::PfIcp];
     methods.extend(a.with.iter().map(|&m| Method::from(m)).filter(|m| *m != Method::PfIcp));

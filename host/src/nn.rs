@@ -76,7 +76,10 @@ impl NearestNeighbours {
         if queries.len() < PARALLEL_MIN {
             queries.iter().map(|q| self.closest(q).dist2).sum()
         } else {
-            queries.par_iter().map(|q| self.closest(q).dist2).sum()
+            // Distances in parallel, the sum in order: a parallel float sum's order (and so
+            // its rounding) would depend on the threads' scheduling.
+            let d: Vec<f64> = queries.par_iter().map(|q| self.closest(q).dist2).collect();
+            d.iter().sum()
         }
     }
 }

@@ -1,17 +1,24 @@
 //! PF-ICP (Algorithm 6): k-means start, ICP covariance, SIR particle filter over the
-//! 7 registration parameters, ICP polish.
+//! 7 registration parameters, ICP polish; with a global search before the filter and a
+//! conclusion after it (docs/decisions.md, "Global registration").
 //!
 //! Stages (each timed in [`StageTimes`]):
 //! 1. **Clustering and start** ([`crate::init`]): k-means on both clouds, paired centroids,
-//!    SVD (Eq. 15).
+//!    SVD (Eq. 15); then the global search ([`crate::hypotheses`], with
+//!    [`crate::features`]' proposals): the filter starts from its best hypothesis.
 //! 2. **Covariance** ([`crate::covariance`], Algorithm 5): spread of ICP on `n_C`
 //!    one-point-per-cluster subsets; its standard deviations set the propagation region
 //!    (`+-2 sigma`), the variance of the subset MSDs is `Q`.
 //! 3. **Filter** ([`crate::particle_filter`]): particles `[a, b, c, s, phi, theta, psi]`
-//!    in the centred frame ([`Centred`]: rotation about the clouds' centroids), each weighed by the MSD of the transformed scan (a fixed random subset of at most
-//!    `weight_points` scan points); after every iteration a few ICP iterations refine the
-//!    weighted estimate (`icp_per_iteration`, 0 to turn off).
-//! 4. **Polish**: ICP on the whole scan from the filter's estimate.
+//!    in the centred frame ([`Centred`]: rotation about the clouds' centroids), each
+//!    weighed by the capped surface cost ([`Surface::cost`]) of the transformed scan (a
+//!    fixed random subset of at most `weight_points` scan points); after every iteration a
+//!    few trimmed ICP iterations refine the weighted estimate and the best particle
+//!    (`icp_per_iteration`, 0 to turn off); stop on the thresholds, a stalled best cost
+//!    (`patience`) or the cap.
+//! 4. **Polish and conclusion** ([`crate::conclusion`]): point-to-plane ICP with scale
+//!    (`polish_iterations`) on the whole scan from the filter's estimate and the best
+//!    hypotheses, the lowest cost wins; alternatives, covariance, fit.
 //!
 //! [`register_with`] takes the particles' costs and weights from a [`ParticleWeights`]
 //! source instead (the board: `crate::board_pf`); everything else is the same.
@@ -60,7 +67,7 @@ pub struct PfIcpSettings {
     pub weight_points: usize,
     /// ICP iterations run on the estimate after every filter iteration (0: none).
     pub icp_per_iteration: usize,
-    /// ICP iterations of the final polish on the whole scan (0: none).
+    /// Iterations of the final point-to-plane polish on the whole scan (0: none).
     pub polish_iterations: usize,
     /// Stop when the average closest-point distance is below this fraction of the
     /// model's bounding-box diagonal ...
@@ -270,14 +277,13 @@ pub fn register(nn: &NearestNeighbours, scan: &[Point3<f64>], settings: &PfIcpSe
 }
 
 /// The fixed random subset of the scan the particle costs are taken over (at most
-/// `settings.weight_points` points, drawn with the seed).
+/// `settings.weight_points` points, drawn with the seed, in random order).
 pub fn weight_sample(scan: &[Point3<f64>], settings: &PfIcpSettings) -> Vec<Point3<f64>> {
+    // Always in random order, even when every point is taken: the search takes its small
+    // subsets as prefixes, and a scan in file order (scan lines, a sorted view) would give
+    // it a slab at one end.
     let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
-    if scan.len() > settings.weight_points {
-        scan.choose_multiple(&mut rng, settings.weight_points).copied().collect()
-    } else {
-        scan.to_vec()
-    }
+    scan.choose_multiple(&mut rng, settings.weight_points.min(scan.len())).copied().collect()
 }
 
 /// Everything PF-ICP computes before its filter (stages 1 and 2): the weight sample, the

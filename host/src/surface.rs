@@ -111,7 +111,8 @@ impl<'a> Surface<'a> {
             .map(|p| {
                 let near = nn.nearest_k(p, NORMAL_NEIGHBOURS + 1);
                 let nb: Vec<Point3<f64>> = near.iter().map(|c| pts[c.index]).collect();
-                let gap = near.get(1).map_or(0.0, |c| c.dist2.sqrt());
+                // The first neighbour at a distance (duplicated points have several at 0).
+                let gap = near.iter().find(|c| c.dist2 > 0.0).map_or(0.0, |c| c.dist2.sqrt());
                 (least_axis(&nb), gap)
             })
             .unzip();
@@ -234,8 +235,12 @@ impl<'a> Surface<'a> {
             count += 1;
         }
         let residual_variance = sum2 / (count as f64 - 7.0).max(1.0);
-        let extent = crate::cloud::bbox_diagonal(self.nn.points()).max(1e-12);
-        let degeneracy = degeneracy(&jtj, extent, scale);
+        // The scan image's RMS radius about `at`: a translation by it, a relative scale change
+        // of 1 and a turn of 1 rad move the points by about as much.
+        let kept: Vec<&Point3<f64>> = (0..q.len()).filter(|&i| mask[i]).map(|i| &q[i]).collect();
+        let radius =
+            (kept.iter().map(|p| (*p - at).norm_squared()).sum::<f64>() / kept.len().max(1) as f64).sqrt().max(1e-300);
+        let degeneracy = degeneracy(&jtj, radius, scale);
         Curvature { jtj, residual_variance, pairs: count, degeneracy }
     }
 }
@@ -248,7 +253,8 @@ impl<'a> Surface<'a> {
 pub const LOCAL_NAMES: [&str; 7] = ["tx", "ty", "tz", "scale", "rx", "ry", "rz"];
 
 /// A direction counts as undetermined below this fraction of the largest curvature (in
-/// units made comparable: lengths over the model's extent, scale relative, radians).
+/// units made comparable: translations in the scan image's RMS radius, scale relative,
+/// radians).
 const FLAT: f64 = 1e-6;
 
 /// Describe the null directions of a 3 x 3 block (`kind`: "translation" or "rotation",
@@ -280,8 +286,8 @@ fn describe_block(m: &nalgebra::Matrix3<f64>, top: f64, kind: &str, names: [&str
 }
 
 /// What `J^T J` leaves undetermined, and its pseudo-inverse over the rest.
-fn degeneracy(jtj: &SMatrix<f64, 7, 7>, extent: f64, scale: f64) -> Degeneracy {
-    let unit = [extent, extent, extent, scale, 1.0, 1.0, 1.0];
+fn degeneracy(jtj: &SMatrix<f64, 7, 7>, radius: f64, scale: f64) -> Degeneracy {
+    let unit = [radius, radius, radius, scale, 1.0, 1.0, 1.0];
     let d = SMatrix::<f64, 7, 7>::from_diagonal(&SVector::<f64, 7>::from_column_slice(&unit));
     let m = d * jtj * d;
     let e = m.symmetric_eigen();

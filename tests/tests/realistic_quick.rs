@@ -3,7 +3,7 @@
 //! cannot silently regress. The figures of the full benchmark (100 cases a family) are in
 //! docs/benchmarks.md.
 
-use pficp::eval::realistic::{self, Family, RealisticOptions, CHI2_7_95};
+use pficp::eval::realistic::{self, Family, RealisticOptions};
 
 #[test]
 fn quick_realistic_benchmark_keeps_its_success_floor() {
@@ -24,7 +24,7 @@ fn quick_realistic_benchmark_keeps_its_success_floor() {
             .cases
             .iter()
             .filter(|c| c.results[0].score.success)
-            .filter(|c| c.results[0].mahalanobis2.is_some_and(|d| d <= CHI2_7_95))
+            .filter(|c| c.results[0].inside_95 == Some(true))
             .count();
         assert!(
             inside + 1 >= cell.successes,

@@ -52,7 +52,7 @@ use std::time::Instant;
 
 /// Model points per case.
 pub const MODEL_POINTS: usize = 2000;
-/// Scan points per case before the cut (about this many after it).
+/// Scan points per case (after the cut; the view is drawn from `SCAN_POINTS / visible`).
 pub const SCAN_POINTS: usize = 1000;
 /// Noise standard deviation per coordinate, as a fraction of the model's diagonal.
 pub const NOISE_FRACTION: f64 = 0.005;
@@ -257,6 +257,7 @@ pub fn make_case(family: Family, shape: Shape, index: usize, seed: u64) -> Case 
         let c = centroid(&view);
         view.sort_by(|a, b| (a - c).dot(&dir).total_cmp(&(b - c).dot(&dir)));
         view.truncate(((view.len() as f64) * visible).round() as usize);
+        view.shuffle(&mut rng);
     }
     let noise = Normal::new(0.0, NOISE_FRACTION * diag).expect("positive sigma");
     for p in view.iter_mut() {
@@ -348,17 +349,27 @@ pub fn score(estimate: &Pose, case: &Case) -> Score {
 
 /// 95% quantile of the chi-square distribution with 7 degrees of freedom.
 pub const CHI2_7_95: f64 = 14.067;
+/// 95% quantiles of the chi-square distribution with 1 to 7 degrees of freedom.
+pub const CHI2_95: [f64; 7] = [3.841, 5.991, 7.815, 9.488, 11.070, 12.592, CHI2_7_95];
+/// Most cases a family.
+pub const MAX_CASES: usize = 100_000;
+
+/// Whether a squared Mahalanobis distance over `dof` parameters lies inside the 95% region.
+pub fn inside_95(d2: f64, dof: usize) -> bool {
+    dof > 0 && d2 <= CHI2_95[dof.min(7) - 1]
+}
 
 /// Squared Mahalanobis distance of `truth` from the conclusion's pose under its covariance,
-/// over the determined parameters (`None` if the covariance is not positive definite).
-pub fn mahalanobis2(c: &crate::conclusion::Conclusion, truth: &Pose, at: &Point3<f64>) -> Option<f64> {
+/// over the determined parameters, and their number (`None` if the covariance is not
+/// positive definite).
+pub fn mahalanobis2(c: &crate::conclusion::Conclusion, truth: &Pose, at: &Point3<f64>) -> Option<(f64, usize)> {
     let e = crate::conclusion::local_error(&c.pose, truth, at);
     let k: Vec<usize> = (0..7).filter(|&i| c.uncertainty.sigma[i].is_some()).collect();
     let n = k.len();
     let m = nalgebra::DMatrix::from_fn(n, n, |a, b| c.uncertainty.covariance[k[a]][k[b]].unwrap_or(0.0));
     let v = nalgebra::DVector::from_fn(n, |a, _| e[k[a]]);
     let inv = m.cholesky()?.inverse();
-    Some((v.transpose() * inv * v)[(0, 0)])
+    Some(((v.transpose() * inv * v)[(0, 0)], n))
 }
 
 /// What to run.
@@ -423,6 +434,12 @@ pub struct CaseResult {
     /// symmetric truth) under the reported covariance, over the determined parameters.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub mahalanobis2: Option<f64>,
+    /// PF-ICP only: the number of determined parameters (the chi-square's degrees of freedom).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dof: Option<usize>,
+    /// PF-ICP only: the truth lies inside the reported 95% region.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub inside_95: Option<bool>,
     /// Capped surface cost of the estimate on the whole scan ([`crate::surface::Surface::cost`],
     /// cap 5% of the diagonal), to compare with the truth's.
     pub cost: f64,
@@ -566,14 +583,17 @@ pub fn run(opts: &RealisticOptions) -> anyhow::Result<RealisticReport> {
                 .map(|&m| {
                     let o = run_method(m, &nn, &c.scan, &settings);
                     let sc = score(&o.registration.pose, &c);
+                    let md = o.pf.as_ref().and_then(|pf| {
+                        let g = c.shape.symmetries()[sc.symmetry];
+                        let truth = symmetric_truth(&c.truth, &g, &c.shape.centre());
+                        mahalanobis2(&pf.conclusion, &truth, &centroid(&c.scan))
+                    });
                     CaseResult {
                         method: m.name().to_string(),
                         alternatives: o.pf.as_ref().map(|pf| pf.conclusion.alternatives.len()),
-                        mahalanobis2: o.pf.as_ref().and_then(|pf| {
-                            let g = c.shape.symmetries()[sc.symmetry];
-                            let truth = symmetric_truth(&c.truth, &g, &c.shape.centre());
-                            mahalanobis2(&pf.conclusion, &truth, &centroid(&c.scan))
-                        }),
+                        mahalanobis2: md.map(|m| m.0),
+                        dof: md.map(|m| m.1),
+                        inside_95: o.pf.as_ref().map(|_| md.is_some_and(|(d, k)| inside_95(d, k))),
                         score: sc,
                         seconds: o.elapsed.as_secs_f64(),
                         cost: surface.cost(&c.scan, &o.registration.pose, 0.05 * c.diag),
@@ -587,10 +607,13 @@ pub fn run(opts: &RealisticOptions) -> anyhow::Result<RealisticReport> {
                 let sc = score(&pf.registration.pose, &c);
                 let g = c.shape.symmetries()[sc.symmetry];
                 let truth = symmetric_truth(&c.truth, &g, &c.shape.centre());
+                let md = mahalanobis2(&pf.conclusion, &truth, &centroid(&c.scan));
                 results.push(CaseResult {
                     method: BOARD_COLUMN.to_string(),
                     alternatives: Some(pf.conclusion.alternatives.len()),
-                    mahalanobis2: mahalanobis2(&pf.conclusion, &truth, &centroid(&c.scan)),
+                    mahalanobis2: md.map(|m| m.0),
+                    dof: md.map(|m| m.1),
+                    inside_95: Some(md.is_some_and(|(d, k)| inside_95(d, k))),
                     score: sc,
                     seconds,
                     cost: surface.cost(&c.scan, &pf.registration.pose, 0.05 * c.diag),
@@ -644,7 +667,7 @@ pub fn run(opts: &RealisticOptions) -> anyhow::Result<RealisticReport> {
                         cases
                             .iter()
                             .filter(|c| c.results[j].score.success)
-                            .filter(|c| c.results[j].mahalanobis2.is_some_and(|d| d <= CHI2_7_95))
+                            .filter(|c| c.results[j].inside_95 == Some(true))
                             .count()
                     }),
                     with_alternatives: pf
