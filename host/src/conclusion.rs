@@ -4,8 +4,9 @@
 //! 1. **Polish and choice**: the filter's estimate and the best hypotheses of the global
 //!    search ([`crate::hypotheses`]: the first [`ARBITRATED`] + 1, and any other within
 //!    [`CANDIDATE_COST_FACTOR`] of the best's cost, [`MAX_CANDIDATES`] poses in all) are
-//!    each polished on the whole scan ([`Surface::polish`]); the lowest capped surface cost
-//!    wins. A filter that settled in a wrong basin loses to a hypothesis in the right one.
+//!    each polished on the scan ([`Surface::polish`]; on [`COMPARE_POINTS`] of a larger one,
+//!    the winner then on all of it); the lowest capped surface cost wins. A filter that
+//!    settled in a wrong basin loses to a hypothesis in the right one.
 //! 2. **Alternatives** (ambiguity): every other polished hypothesis that differs from the
 //!    answer by more than 5 deg, 2% of the diagonal at the scan's centroid or 2% in scale
 //!    and fits as well within the noise: the mean of its per-point cost excess over the
@@ -48,6 +49,9 @@ pub const INLIER_DISTANCE: f64 = 0.02;
 /// Hypotheses polished besides the best [`ARBITRATED`] for alternatives: those whose cost in
 /// the search is within this factor of the best's (at most [`MAX_CANDIDATES`] in all).
 pub const CANDIDATE_COST_FACTOR: f64 = 2.0;
+/// Scan points the candidates are polished and compared on (every k-th point of a larger
+/// scan; the winner is polished again on the whole scan).
+pub const COMPARE_POINTS: usize = 20_000;
 /// The polish may change a candidate's scale by these factors at most.
 pub const SCALE_DRIFT: (f64, f64) = (0.8, 1.25);
 /// Most poses polished at the end.
@@ -149,11 +153,15 @@ pub fn conclude(
     // A polish whose scale runs away from its start is a collapse onto part of the model
     // (every one-sided cost rewards it): that candidate is dropped (the filter's estimate
     // stays, unpolished).
+    // Candidates are polished and compared on at most COMPARE_POINTS scan points (every
+    // k-th of a larger scan): memory and time stay bounded for huge scans.
+    let stride = scan.len().div_ceil(COMPARE_POINTS).max(1);
+    let compared: Vec<Point3<f64>> = scan.iter().step_by(stride).copied().collect();
     let polished: Vec<(Pose, Vec<f64>)> = starts
         .par_iter()
         .enumerate()
         .filter_map(|(i, p)| {
-            let q = surface.polish(scan, p, polish_iterations);
+            let q = surface.polish(&compared, p, polish_iterations);
             let ratio = q.scale / p.scale;
             let q = if (SCALE_DRIFT.0..=SCALE_DRIFT.1).contains(&ratio) {
                 q
@@ -162,7 +170,7 @@ pub fn conclude(
             } else {
                 return None;
             };
-            let c = surface.costs(scan, &q, cap);
+            let c = surface.costs(&compared, &q, cap);
             Some((q, c))
         })
         .collect();
@@ -170,7 +178,14 @@ pub fn conclude(
     let best = (0..polished.len())
         .min_by(|&a, &b| mean(&polished[a].1).total_cmp(&mean(&polished[b].1)).then(a.cmp(&b)))
         .unwrap_or(0);
-    let (pose, costs) = (polished[best].0, polished[best].1.clone());
+    let (mut pose, costs) = (polished[best].0, polished[best].1.clone());
+    if stride > 1 {
+        // The winner on the whole scan.
+        let q = surface.polish(scan, &pose, polish_iterations);
+        if (SCALE_DRIFT.0..=SCALE_DRIFT.1).contains(&(q.scale / pose.scale)) {
+            pose = q;
+        }
+    }
     let mut alternatives: Vec<Alternative> = Vec::new();
     for (i, (p, c)) in polished.iter().enumerate() {
         if i == best || same_pose(p, &pose, &at, diag) || alternatives.iter().any(|a| same_pose(&a.pose, p, &at, diag))
@@ -227,7 +242,7 @@ pub fn conclude(
             (inliers.iter().map(|x| x * x).sum::<f64>() / inliers.len() as f64).sqrt()
         },
         inlier_distance,
-        cost: mean(&costs),
+        cost: if stride > 1 { surface.cost(scan, &pose, cap) } else { mean(&costs) },
     };
     Conclusion {
         pose,
@@ -283,5 +298,35 @@ mod tests {
             "{:?}",
             c.uncertainty.sigma
         );
+    }
+}
+
+#[cfg(test)]
+mod large_scan_tests {
+    use super::*;
+    use crate::nn::NearestNeighbours;
+    use crate::parts::Part;
+    use crate::pf_icp::{register, PfIcpSettings};
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    /// A scan larger than COMPARE_POINTS is compared on a stride sample and polished in full:
+    /// the pose is still right and the fit is taken over every point.
+    #[test]
+    fn a_scan_larger_than_the_comparison_sample_registers() {
+        let mut rng = ChaCha8Rng::seed_from_u64(21);
+        let truth = Pose::from_params(&[0.05, 0.1, -0.1, 0.9, -0.3, 0.2, 0.5]);
+        let model = Part::NearCubeNotch.sample_surface(2000, &mut rng);
+        let scan: Vec<Point3<f64>> = Part::NearCubeNotch
+            .sample_surface(COMPARE_POINTS + 5000, &mut rng)
+            .iter()
+            .map(|p| truth.inverse().apply(p))
+            .collect();
+        let nn = NearestNeighbours::new(&model);
+        let r = register(&nn, &scan, &PfIcpSettings { seed: 2, ..Default::default() });
+        let c = &r.conclusion;
+        assert!(c.pose.rotation_angle_to(&truth).to_degrees() < 1.0, "{:?}", c.pose.euler_deg());
+        assert!((c.pose.scale / truth.scale - 1.0).abs() < 0.01);
+        assert!(c.alternatives.is_empty() && c.fit.fitness > 0.95);
     }
 }
