@@ -163,6 +163,12 @@ fn farthest_beyond(points: &[Point3<f64>], ratio: f64) -> Option<(usize, f64, f6
     d.iter().position(|&x| x > ratio * spread).map(|i| (i, d[i], spread))
 }
 
+/// RMS distance of a non-empty slice of points from their centroid.
+pub fn rms_radius(points: &[Point3<f64>]) -> f64 {
+    let c = centroid(points);
+    (points.iter().map(|p| (p - c).norm_squared()).sum::<f64>() / points.len() as f64).sqrt()
+}
+
 /// Mean of a non-empty slice of points.
 pub fn centroid(points: &[Point3<f64>]) -> Point3<f64> {
     let sum: Vector3<f64> = points.iter().map(|p| p.coords).sum();

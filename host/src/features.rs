@@ -28,7 +28,7 @@ use crate::geometry::Pose;
 use crate::hypotheses::same_pose;
 use crate::nn::NearestNeighbours;
 use crate::svd_match::{match_pairs, ScaleRule};
-use nalgebra::{Matrix3, Point3, Vector3};
+use nalgebra::{Point3, Vector3};
 use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -62,22 +62,6 @@ fn subsample(points: &[Point3<f64>], n: usize, rng: &mut ChaCha8Rng) -> Vec<Poin
     points.choose_multiple(rng, n).copied().collect()
 }
 
-fn normal_of(points: &[Point3<f64>], near: &[usize]) -> Vector3<f64> {
-    let c = near.iter().fold(Vector3::zeros(), |a, &i| a + points[i].coords) / near.len().max(1) as f64;
-    let mut cov = Matrix3::zeros();
-    for &i in near {
-        let d = points[i].coords - c;
-        cov += d * d.transpose();
-    }
-    let e = cov.symmetric_eigen();
-    let n = e.eigenvectors.column(e.eigenvalues.imin()).into_owned();
-    if n.iter().all(|v| v.is_finite()) && n.norm() > 0.0 {
-        n.normalize()
-    } else {
-        Vector3::z()
-    }
-}
-
 fn bin(x: f64, lo: f64, hi: f64) -> usize {
     (((x - lo) / (hi - lo) * BINS as f64).floor().max(0.0) as usize).min(BINS - 1)
 }
@@ -100,7 +84,8 @@ fn describe(points: Vec<Point3<f64>>, radius: f64) -> Described {
         .par_iter()
         .map(|p| {
             let idx: Vec<usize> = nn.nearest_k(p, NORMAL_NEIGHBOURS).into_iter().map(|q| q.index).collect();
-            let n = normal_of(&points, &idx);
+            let nb: Vec<Point3<f64>> = idx.iter().map(|&i| points[i]).collect();
+            let n = crate::surface::least_axis(&nb);
             if n.dot(&(p - c)) < 0.0 {
                 -n
             } else {

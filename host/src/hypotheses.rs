@@ -165,11 +165,7 @@ fn distinct(ranked: Vec<Hypothesis>, at: &Point3<f64>, diag: f64) -> Vec<Hypothe
 /// The ratio of the clouds' RMS radii about their centroids: a scale guess (scan to
 /// model), too large by up to about a third on a partial view.
 pub fn radius_ratio(scan: &[Point3<f64>], model: &[Point3<f64>]) -> f64 {
-    let rms = |pts: &[Point3<f64>]| {
-        let c = centroid(pts);
-        (pts.iter().map(|p| (p - c).norm_squared()).sum::<f64>() / pts.len().max(1) as f64).sqrt()
-    };
-    rms(model) / rms(scan).max(1e-300)
+    crate::cloud::rms_radius(model) / crate::cloud::rms_radius(scan).max(1e-300)
 }
 
 /// The start poses of the uniform set: each rotation with the centroids' translation and
@@ -210,37 +206,36 @@ pub fn search(
     // A scale far from the radii's ratio is a scan collapsed onto part of the model.
     let plausible =
         |h: &Hypothesis| h.cost.is_finite() && (s0 == 0.0 || (h.pose.scale > 0.5 * s0 && h.pose.scale < 2.0 * s0));
-    let mut screened: Vec<Hypothesis> = starts
-        .par_iter()
-        .map(|s| {
-            let pose = trimmed_icp(nn, screen_pts, s, settings.screen_iterations, settings.trim, ScaleRule::Ratio);
-            Hypothesis { pose, cost: surface.cost(screen_pts, &pose, cap) }
-        })
-        .collect();
-    screened.retain(plausible);
-    screened.sort_by(|a, b| a.cost.total_cmp(&b.cost));
-    let screened: Vec<Hypothesis> = distinct(screened, &at, diag).into_iter().take(settings.screen_keep).collect();
-    let mut coarse: Vec<Hypothesis> = screened
-        .par_iter()
-        .map(|h| {
-            let pose =
-                trimmed_icp(nn, coarse_pts, &h.pose, settings.coarse_iterations, settings.trim, ScaleRule::Ratio);
-            Hypothesis { pose, cost: surface.cost(coarse_pts, &pose, cap) }
-        })
-        .collect();
-    coarse.retain(plausible);
-    coarse.sort_by(|a, b| a.cost.total_cmp(&b.cost));
-    let kept: Vec<Hypothesis> = distinct(coarse, &at, diag).into_iter().take(settings.keep).collect();
-    let mut fine: Vec<Hypothesis> = kept
-        .par_iter()
-        .map(|h| {
-            let pose =
-                trimmed_icp(nn, fine_pts, &h.pose, settings.fine_iterations, settings.trim, ScaleRule::LeastSquares);
-            Hypothesis { pose, cost: surface.cost(sample, &pose, cap) }
-        })
-        .chain(exact.par_iter().map(|p| Hypothesis { pose: *p, cost: surface.cost(sample, p, cap) }))
-        .collect();
-    fine.retain(plausible);
+    // One pass: trimmed ICP from each pose, ranked by the cost over `cost_pts`, implausible
+    // scales dropped, best first.
+    let pass = |from: &[Pose], pts: &[Point3<f64>], iterations: usize, rule: ScaleRule, cost_pts: &[Point3<f64>]| {
+        let mut out: Vec<Hypothesis> = from
+            .par_iter()
+            .map(|s| {
+                let pose = trimmed_icp(nn, pts, s, iterations, settings.trim, rule);
+                Hypothesis { pose, cost: surface.cost(cost_pts, &pose, cap) }
+            })
+            .collect();
+        out.retain(plausible);
+        out.sort_by(|a, b| a.cost.total_cmp(&b.cost));
+        out
+    };
+    let best = |ranked: Vec<Hypothesis>, n: usize| -> Vec<Pose> {
+        distinct(ranked, &at, diag).into_iter().take(n).map(|h| h.pose).collect()
+    };
+    let screened = pass(starts, screen_pts, settings.screen_iterations, ScaleRule::Ratio, screen_pts);
+    let coarse = pass(
+        &best(screened, settings.screen_keep),
+        coarse_pts,
+        settings.coarse_iterations,
+        ScaleRule::Ratio,
+        coarse_pts,
+    );
+    let mut fine =
+        pass(&best(coarse, settings.keep), fine_pts, settings.fine_iterations, ScaleRule::LeastSquares, sample);
+    // The exact poses, unrefined, join the last ranking (a stable sort: ties keep the
+    // refined ones first, as before).
+    fine.extend(exact.iter().map(|p| Hypothesis { pose: *p, cost: surface.cost(sample, p, cap) }).filter(plausible));
     fine.sort_by(|a, b| a.cost.total_cmp(&b.cost));
     distinct(fine, &at, diag)
 }

@@ -77,11 +77,6 @@ fn principal_axes(points: &[Point3<f64>]) -> (Matrix3<f64>, Vector3<f64>) {
     (axes, Vector3::new(eig.eigenvalues[idx[0]], eig.eigenvalues[idx[1]], eig.eigenvalues[idx[2]]).map(|v| v.max(0.0)))
 }
 
-fn rms_radius(points: &[Point3<f64>]) -> f64 {
-    let c = centroid(points);
-    (points.iter().map(|p| (p - c).norm_squared()).sum::<f64>() / points.len() as f64).sqrt()
-}
-
 /// Rotation candidates mapping the scan's principal frame onto the model's.
 fn rotation_candidates(scan: &[Point3<f64>], model: &[Point3<f64>]) -> Vec<Matrix3<f64>> {
     let (em, sm) = principal_axes(scan);
@@ -153,7 +148,7 @@ pub fn initial_pose(
     if mode != InitMode::Index || candidates.is_empty() {
         let centroid_nn = NearestNeighbours::new(&model_clusters.centroids);
         let (mu_m, mu_d) = (centroid(scan), centroid(model));
-        let s = rms_radius(model) / rms_radius(scan).max(1e-300);
+        let s = crate::hypotheses::radius_ratio(scan, model);
         let starts: Vec<Pose> = rotation_candidates(scan, model)
             .into_iter()
             .map(|r| Pose { scale: s, rotation: r, translation: mu_d.coords - s * (r * mu_m.coords) })

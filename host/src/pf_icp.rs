@@ -325,6 +325,12 @@ pub struct Prior {
 
 /// Stages 1 and 2 of PF-ICP: the start (k-means), the covariance and the filter's prior.
 pub fn prior(nn: &NearestNeighbours, scan: &[Point3<f64>], settings: &PfIcpSettings) -> Prior {
+    prior_on(&Surface::new(nn), scan, settings)
+}
+
+/// [`prior`] on a model whose [`Surface`] is already built.
+fn prior_on(surface: &Surface, scan: &[Point3<f64>], settings: &PfIcpSettings) -> Prior {
+    let nn = surface.nn();
     let model = nn.points();
     let diag = crate::cloud::bbox_diagonal(model);
     let sample = weight_sample(scan, settings);
@@ -342,7 +348,7 @@ pub fn prior(nn: &NearestNeighbours, scan: &[Point3<f64>], settings: &PfIcpSetti
                 hypotheses::radius_ratio(scan, model),
                 settings.seed,
             ));
-            hypotheses::search(&Surface::new(nn), &sample, &[initial.pose], &starts, search)
+            hypotheses::search(surface, &sample, &[initial.pose], &starts, search)
         }
         None => Vec::new(),
     };
@@ -398,6 +404,7 @@ pub fn register_with(
     settings: &PfIcpSettings,
     weights: Option<&dyn ParticleWeights>,
 ) -> Result<PfIcpResult, WeighError> {
+    let surface = Surface::new(nn);
     let Prior {
         sample,
         initial,
@@ -414,12 +421,11 @@ pub fn register_with(
         clustering_time,
         covariance_time,
         ..
-    } = prior(nn, scan, settings);
+    } = prior_on(&surface, scan, settings);
     let t2 = Instant::now();
     if let Some(source) = weights {
         source.prepare(&sample)?;
     }
-    let surface = Surface::new(nn);
     let start_scale = frame.pose(&init_params).scale;
     let objective = PoseObjective {
         surface: &surface,
