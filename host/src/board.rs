@@ -8,12 +8,26 @@
 //! - Each request is sent after a lone delimiter, which ends any partial frame left in the
 //!   board's receiver (an empty frame is ignored by the board).
 //! - **A reply** is the frame that echoes the sequence with `command | 0x80`; any other frame
-//!   (a stale reply, a duplicate) is skipped.
-//! - **Every read is bounded**: each reply must arrive within the timeout (default 2 s) plus
-//!   the time the board needs for it, modelled from the bytes at the baud rate and, for
-//!   Evaluate and Nearest, the pipeline's clocks
-//!   ([`pficp_fpga::pipeline::clocks_per_particle`]). A silent board is a
-//!   [`BoardError::Timeout`], a port that goes away a [`BoardError::Io`].
+//!   (a stale reply, a duplicate) is skipped. Bytes left from an earlier exchange (a reply
+//!   that came too late, half a frame) are dropped before each request is sent.
+//! - **Every read is bounded**: each reply must arrive within the timeout (default 2 s, at
+//!   most [`MAX_TIMEOUT`]) plus the time the board needs for it, modelled from the bytes at
+//!   the baud rate ([`MIN_BAUD`] to [`MAX_BAUD`]) and, for Evaluate and Nearest, the
+//!   pipeline's clocks ([`pficp_fpga::pipeline::clocks_per_particle`]) on the board's
+//!   lanes at its clock, never taken as slower than [`MIN_CLOCK_HZ`] whatever Identify says.
+//!   A silent board is a [`BoardError::Timeout`] (saying how many bytes came that were no
+//!   reply: a babbling line or a wrong baud rate), a port that goes away a
+//!   [`BoardError::Io`], a board that only answers with another sequence number or for
+//!   another command a [`BoardError::Unexpected`] at the same deadline, a port that sends
+//!   back the request itself (a loopback adapter, a tty in echo mode) a
+//!   [`BoardError::Echo`] at once.
+//! - **Replies are checked**, not trusted: lengths and fields on decoding; acknowledged
+//!   offsets, counts and sizes; Nearest's indices within the model and its cost the sum of
+//!   its distances; the weights equal to [`pficp_fpga::weights::weights`] of the board's own
+//!   costs (so weights that are all 0 or do not sum to `w_sum` are caught); a Status count
+//!   that only rises and stays within the Run's; a Result whose pose is
+//!   [`pficp_fpga::pf::pose_of`] its parameters. A failed check is a [`BoardError::Reply`]
+//!   or [`BoardError::Filter`] naming the field.
 //! - **Resends**: an error reply `BadCrc` or `Busy` for this request, a frame error (sequence
 //!   0) or a reply frame that does not decode (bad CRC, bad COBS) sends the same request
 //!   again with the same sequence, at most [`MAX_RETRIES`] times. A reply to an earlier copy
@@ -28,7 +42,9 @@
 //!   [`BoardClient::result`], [`BoardClient::wait_for_run`]): Run is answered at once, but
 //!   a board that computes the whole filter before answering (the byte-level reference on
 //!   a pseudo-terminal) is allowed the modelled run time ([`BoardClient::run_allowance`])
-//!   for that answer too. A Run whose reply was lost is not simply sent again: Status
+//!   for that answer too; the wait for the run's end is capped twice: no new iteration for
+//!   the allowance, or more than the allowance times (iterations + 1) in all, is a
+//!   [`BoardError::RunTimeout`]. A Run whose reply was lost is not simply sent again: Status
 //!   tells whether the first copy is running; if not, Run is sent again (the filter is
 //!   deterministic, so a repeated run gives the same result).
 
@@ -39,7 +55,7 @@ use pficp_fpga::messages::{
     MAX_POSES, RESULT_BYTES, RUN_REPLY_BYTES, STATUS_BYTES,
 };
 use pficp_fpga::pf::PfConfig;
-use pficp_fpga::pipeline::clocks_per_particle;
+use pficp_fpga::pipeline::{clocks_per_particle, COST_MASK};
 use pficp_fpga::protocol::{Command, Deframer, ErrorCode, Frame, FrameError, DELIMITER, VERSION};
 use serialport::SerialPort;
 use std::io::{ErrorKind, Read, Write};
@@ -47,8 +63,17 @@ use std::time::{Duration, Instant};
 
 /// The board's nominal baud rate.
 pub const DEFAULT_BAUD: u32 = 921_600;
+/// The slowest baud rate the client opens a port at (below it a request takes minutes).
+pub const MIN_BAUD: u32 = 9_600;
+/// The fastest baud rate the client opens a port at (above any USB-serial bridge's).
+pub const MAX_BAUD: u32 = 12_000_000;
 /// Time allowed for each reply on top of the modelled transfer and compute time.
 pub const DEFAULT_TIMEOUT: Duration = Duration::from_secs(2);
+/// The longest time per reply the client accepts (`--timeout-ms`).
+pub const MAX_TIMEOUT: Duration = Duration::from_secs(600);
+/// The slowest clock the deadlines assume, whatever the board's Identify says (the design
+/// runs at 50 MHz): a board that claims 1 Hz does not buy itself hours.
+pub const MIN_CLOCK_HZ: u32 = 10_000_000;
 /// Resends of one request after a corrupted exchange (so at most 3 attempts).
 pub const MAX_RETRIES: usize = 2;
 /// Largest model and scan the protocol addresses (12-bit indices).
@@ -83,9 +108,10 @@ pub enum BoardError {
     },
     /// No reply within the time allowed.
     #[error(
-        "the board on {port} did not answer {command:?} within {} ms (is it connected, configured and set to {baud} baud? \
+        "the board on {port} did not answer {command:?} within {} ms{} (is it connected, configured and set to {baud} baud? \
          a board slower than its clock says, such as the simulated one, needs a larger --timeout-ms)",
-        waited.as_millis()
+        waited.as_millis(),
+        noise_note(*.received)
     )]
     Timeout {
         /// The port.
@@ -96,6 +122,42 @@ pub enum BoardError {
         waited: Duration,
         /// The port's baud rate.
         baud: u32,
+        /// Bytes that arrived during the wait without making a reply.
+        received: usize,
+    },
+    /// Only replies with another sequence number or for another command arrived in the time
+    /// allowed (a board that numbers its replies wrongly, or another device on the port).
+    #[error(
+        "the board on {port} did not answer {command:?} (sequence {seq}) within {} ms; it sent a reply \
+         {} with sequence {got_seq} instead",
+        waited.as_millis(),
+        reply_name(*.got_code)
+    )]
+    Unexpected {
+        /// The port.
+        port: String,
+        /// The request.
+        command: Command,
+        /// The request's sequence number.
+        seq: u8,
+        /// The command code of the last reply that was not ours.
+        got_code: u8,
+        /// Its sequence number.
+        got_seq: u8,
+        /// Time waited.
+        waited: Duration,
+    },
+    /// The port sent back the request itself: a loopback adapter or a tty in echo mode, not
+    /// a board.
+    #[error(
+        "{port} sends back what is written to it ({command:?} came back as sent): a loopback adapter or a \
+         terminal in echo mode, not the board"
+    )]
+    Echo {
+        /// The port.
+        port: String,
+        /// The request that came back.
+        command: Command,
     },
     /// The board answered with an error reply.
     #[error("the board answered {command:?} with error {code:?} ({})", *code as u8)]
@@ -138,17 +200,25 @@ pub enum BoardError {
     #[error("the particle filter stopped: {0}")]
     Filter(String),
     /// The on-board filter stalled: the board answers Status and says "running", but its
-    /// iteration count did not move for the whole allowance.
+    /// iteration count did not move for the whole allowance, or the run took longer than
+    /// the allowance for every iteration.
     #[error(
         "the board on {port} did not finish the filter: no new iteration for {} ms, {} ms since Run \
-         ({} ms modelled board time for the whole run); last Status: {state:?}, {iterations} iterations",
+         (allowed: {} ms without a new iteration, {} ms in all; {} ms modelled board time for the whole run); \
+         last Status: {state:?}, {iterations} iterations",
         waited.as_millis(),
         total.as_millis(),
+        stall_limit.as_millis(),
+        overall_limit.as_millis(),
         modelled.as_millis()
     )]
     RunTimeout {
         /// The port.
         port: String,
+        /// The time allowed without a new iteration.
+        stall_limit: Duration,
+        /// The time allowed in all.
+        overall_limit: Duration,
         /// Time waited since the iteration count last changed (or since the wait began).
         waited: Duration,
         /// Time waited in all.
@@ -160,6 +230,20 @@ pub enum BoardError {
         /// Iterations the last Status reported.
         iterations: u16,
     },
+}
+
+/// The Timeout message's note on bytes that came but made no reply.
+fn noise_note(received: usize) -> String {
+    if received == 0 {
+        String::new()
+    } else {
+        format!(" ({received} bytes came that were no valid reply: line noise, a wrong baud rate or another device?)")
+    }
+}
+
+/// A reply code by its command's name.
+fn reply_name(code: u8) -> String {
+    Command::from_code(code).map_or_else(|| format!("with code {code:#04x}"), |c| format!("to {c:?}"))
 }
 
 /// Counters of one client's traffic.
@@ -183,6 +267,16 @@ enum Read1 {
     Reply(Frame),
     /// Send again; `executed` when the board may have executed the request.
     Resend { reason: String, executed: bool },
+}
+
+/// What one frame means for the request waited for.
+enum Judged {
+    /// The reply, or a reason to resend.
+    Outcome(Read1),
+    /// A reply (or error reply) that is not for this request.
+    Foreign { code: u8, seq: u8 },
+    /// Nothing to note (a frame that is not a reply).
+    Skip,
 }
 
 /// A client of one board on one serial port.
@@ -220,8 +314,15 @@ impl BoardClient {
     /// buffered. `timeout` is the time allowed per reply (plus the modelled board time).
     pub fn open(path: &str, baud: u32, timeout: Duration) -> Result<Self, BoardError> {
         let open_error = |reason: String| BoardError::Open { path: path.to_string(), reason };
-        if baud == 0 {
-            return Err(open_error("the baud rate must be above 0".into()));
+        if !(MIN_BAUD..=MAX_BAUD).contains(&baud) {
+            return Err(open_error(format!("baud rate {baud}: the client runs {MIN_BAUD} to {MAX_BAUD} baud")));
+        }
+        if timeout.is_zero() || timeout > MAX_TIMEOUT {
+            return Err(open_error(format!(
+                "a timeout of {} ms per reply: the client allows 1 to {} ms",
+                timeout.as_millis(),
+                MAX_TIMEOUT.as_millis()
+            )));
         }
         if !std::path::Path::new(path).exists() {
             return Err(open_error("no such device (is the board plugged in? check the path)".into()));
@@ -265,9 +366,10 @@ impl BoardClient {
         }
     }
 
-    /// Set the time allowed per reply (on top of the modelled board time).
+    /// Set the time allowed per reply (on top of the modelled board time; at most
+    /// [`MAX_TIMEOUT`]).
     pub fn set_timeout(&mut self, timeout: Duration) {
-        self.timeout = timeout;
+        self.timeout = timeout.min(MAX_TIMEOUT);
     }
 
     /// The time allowed per reply (on top of the modelled board time).
@@ -477,7 +579,8 @@ impl BoardClient {
         scale_fn: impl FnOnce(&[u64]) -> WeightScale,
     ) -> Result<(Vec<u64>, WeightSummary), BoardError> {
         let costs = self.costs(poses)?;
-        let summary = self.weigh(scale_fn(&costs))?;
+        let scale = scale_fn(&costs);
+        let summary = self.weigh(scale)?;
         let sum: u64 = summary.weights.iter().map(|&w| w as u64).sum();
         if sum == 0 {
             // Normalising would divide by zero: every weight NaN.
@@ -492,6 +595,19 @@ impl BoardClient {
                 command: Command::Evaluate,
                 problem: MessageError::Field { field: "w_sum", got: summary.w_sum as u64, expected: sum },
             });
+        }
+        let min = costs.iter().copied().min().unwrap_or(0);
+        if summary.min_cost != min {
+            return Err(BoardError::Reply {
+                command: Command::Evaluate,
+                problem: MessageError::Field { field: "min_cost", got: summary.min_cost, expected: min },
+            });
+        }
+        if summary.weights != pficp_fpga::weights::weights(&costs, &scale) {
+            return Err(BoardError::Filter(format!(
+                "the board on {} returned weights that are not the exp table's for its own costs",
+                self.name
+            )));
         }
         Ok((costs, summary))
     }
@@ -512,8 +628,19 @@ impl BoardClient {
             let request = NearestRequest { first: at as u16, count: n as u16, pose: *pose };
             let clocks = clocks_per_particle(n, self.sizes.0 as usize, self.lanes());
             let reply = self.transact(Command::Nearest, request.encode(), 10 + 7 * n, clocks, true)?;
-            let r = NearestReply::decode(&reply.data, &request)
-                .map_err(|problem| BoardError::Reply { command: Command::Nearest, problem })?;
+            let bad = |problem| BoardError::Reply { command: Command::Nearest, problem };
+            let r = NearestReply::decode(&reply.data, &request).map_err(bad)?;
+            if let Some(&(i, _)) = r.results.iter().find(|&&(i, _)| i >= self.sizes.0) {
+                return Err(bad(MessageError::Field {
+                    field: "model index",
+                    got: i as u64,
+                    expected: self.sizes.0 as u64,
+                }));
+            }
+            let sum = r.results.iter().fold(0u64, |c, n| (c + n.1) & COST_MASK);
+            if r.cost != sum {
+                return Err(bad(MessageError::Field { field: "cost", got: r.cost, expected: sum }));
+            }
             out.cost += r.cost;
             out.results.extend(r.results);
             at += n;
@@ -530,8 +657,13 @@ impl BoardClient {
     /// The modelled board time of the on-board filter of `cfg` ([`Self::run_clocks`] at the
     /// board's clock; 100 MHz before Identify).
     pub fn modelled_run_time(&self, cfg: &PfConfig) -> Duration {
-        let clock_hz = self.identity.map_or(100e6, |i| i.clock_hz.max(1) as f64);
-        Duration::from_secs_f64(self.run_clocks(cfg) as f64 / clock_hz)
+        Duration::from_secs_f64(self.run_clocks(cfg) as f64 / self.clock_hz())
+    }
+
+    /// The clock the deadlines assume: the board's (100 MHz before Identify), never below
+    /// [`MIN_CLOCK_HZ`].
+    fn clock_hz(&self) -> f64 {
+        self.identity.map_or(100e6, |i| i.clock_hz.max(MIN_CLOCK_HZ) as f64)
     }
 
     /// How long a run of `cfg` may take before it is an error: [`RUN_SAFETY`] times the
@@ -600,9 +732,32 @@ impl BoardClient {
     /// The finished filter's best particle, cost and pose (Result). A board still running
     /// answers `Busy`, one that has run no filter since power-up or reset `NoResult`: both
     /// [`BoardError::Board`].
+    ///
+    /// The reply is checked: at least 1 iteration and no more than the last Run asked for,
+    /// the largest point distance within the cost, the pose the one
+    /// [`pficp_fpga::pf::pose_of`] builds from the parameters.
     pub fn result(&mut self) -> Result<ResultReply, BoardError> {
         let reply = self.transact(Command::Result, Vec::new(), RESULT_BYTES, 0, true)?;
-        ResultReply::decode(&reply.data).map_err(|problem| BoardError::Reply { command: Command::Result, problem })
+        let bad = |problem| BoardError::Reply { command: Command::Result, problem };
+        let r = ResultReply::decode(&reply.data).map_err(bad)?;
+        let cap = self.run_iterations.unwrap_or(u16::MAX);
+        if r.iterations == 0 || r.iterations > cap {
+            return Err(bad(MessageError::Field {
+                field: "iterations",
+                got: r.iterations as u64,
+                expected: cap as u64,
+            }));
+        }
+        if r.max_d2 > r.cost {
+            return Err(bad(MessageError::Field { field: "max_d2 (above the cost)", got: r.max_d2, expected: r.cost }));
+        }
+        if r.pose != pficp_fpga::pf::pose_of(&r.params) {
+            return Err(BoardError::Filter(format!(
+                "the board on {} returned a pose that is not the one its parameters {:?} give",
+                self.name, r.params
+            )));
+        }
+        Ok(r)
     }
 
     /// Poll Status every `every` until the filter is done (state 2); `progress` gets each
@@ -610,8 +765,10 @@ impl BoardClient {
     /// iteration count has not changed for `limit` (counted from the call, then from each
     /// change) is a [`BoardError::RunTimeout`] naming `modelled`: a hung board is caught
     /// after `limit`, while a slow one that keeps making progress (the simulated board runs
-    /// about 40 times slower than real time) is waited for. One that reports no run (state 0:
-    /// reset?) is a [`BoardError::Filter`]; one that stops answering a
+    /// about 40 times slower than real time) is waited for, up to `limit` times (the Run's
+    /// iterations + 1) in all, since the count must rise and stay within the Run's (a count
+    /// that goes back or passes it is a [`BoardError::Filter`] at once). One that reports no
+    /// run (state 0: reset?) is a [`BoardError::Filter`]; one that stops answering a
     /// [`BoardError::Timeout`] within the timeout per reply.
     pub fn wait_for_run(
         &mut self,
@@ -624,6 +781,7 @@ impl BoardClient {
         let mut since = start;
         let mut last_iterations = None;
         let mut polls = 0;
+        let overall = limit * (self.run_iterations.map_or(1, |k| k as u32) + 1);
         loop {
             let s = self.status()?;
             polls += 1;
@@ -664,9 +822,11 @@ impl BoardClient {
                 RunState::Running => {}
             }
             let waited = since.elapsed();
-            if waited >= limit {
+            if waited >= limit || start.elapsed() >= overall {
                 return Err(BoardError::RunTimeout {
                     port: self.name.clone(),
+                    stall_limit: limit,
+                    overall_limit: overall,
                     waited,
                     total: start.elapsed(),
                     modelled,
@@ -674,7 +834,7 @@ impl BoardClient {
                     iterations: s.iterations,
                 });
             }
-            std::thread::sleep(every.min(limit - waited));
+            std::thread::sleep(every.min(limit - waited).min(overall.saturating_sub(start.elapsed())));
         }
     }
 
@@ -692,9 +852,8 @@ impl BoardClient {
     fn board_time(&self, request_bytes: usize, reply_data: usize, clocks: u64) -> Duration {
         // Reply on the wire: body + CRC + COBS overhead + delimiter; 10 bits per byte (8N1).
         let reply_bytes = reply_data + 4 + (reply_data + 4) / 254 + 2;
-        let wire = (request_bytes + reply_bytes) as f64 * 10.0 / self.baud as f64;
-        let clock_hz = self.identity.map_or(100e6, |i| i.clock_hz.max(1) as f64);
-        Duration::from_secs_f64(wire + clocks as f64 / clock_hz)
+        let wire = (request_bytes + reply_bytes) as f64 * 10.0 / self.baud.max(MIN_BAUD) as f64;
+        Duration::from_secs_f64(wire + clocks as f64 / self.clock_hz())
     }
 
     fn next_seq(&mut self) -> u8 {
@@ -729,6 +888,7 @@ impl BoardClient {
         let mut wire = vec![DELIMITER];
         wire.extend(Frame { code: command as u8, seq, data }.encode());
         let allowed = self.timeout + extra + self.board_time(wire.len(), reply_data, clocks);
+        self.forget_received();
         let mut last = String::new();
         for attempt in 0..=MAX_RETRIES {
             if attempt > 0 {
@@ -751,6 +911,15 @@ impl BoardClient {
         Err(BoardError::Retries { command, attempts: MAX_RETRIES + 1, last })
     }
 
+    /// Drop what an earlier exchange left: half a frame in the deframer, bytes read but not
+    /// looked at, bytes waiting in the port (a reply that came after its deadline).
+    fn forget_received(&mut self) {
+        self.deframer = Deframer::default();
+        self.rx.clear();
+        self.rx_at = 0;
+        let _ = self.port.clear(serialport::ClearBuffer::Input);
+    }
+
     fn io_error(&self, during: String, source: std::io::Error) -> BoardError {
         BoardError::Io { port: self.name.clone(), during, error: source }
     }
@@ -763,9 +932,13 @@ impl BoardClient {
                 self.stats.bytes_sent += wire.len();
                 Ok(())
             }
-            Err(e) if e.kind() == ErrorKind::TimedOut => {
-                Err(BoardError::Timeout { port: self.name.clone(), command, waited: allowed, baud: self.baud })
-            }
+            Err(e) if e.kind() == ErrorKind::TimedOut => Err(BoardError::Timeout {
+                port: self.name.clone(),
+                command,
+                waited: allowed,
+                baud: self.baud,
+                received: 0,
+            }),
             Err(e) => Err(self.io_error(during(), e)),
         }
     }
@@ -776,24 +949,30 @@ impl BoardClient {
         let deadline = start + allowed;
         let during = || format!("waiting for the reply to {command:?}");
         let mut buf = [0u8; 512];
+        // Replies that were not ours (the last one's code and sequence), bytes that came.
+        let mut foreign = None;
+        let mut received = 0;
         loop {
             while self.rx_at < self.rx.len() {
                 let b = self.rx[self.rx_at];
                 self.rx_at += 1;
                 let Some(decoded) = self.deframer.push(b) else { continue };
-                if let Some(outcome) = Self::judge(decoded, command, seq)? {
-                    return Ok(outcome);
+                match self.judge(decoded, command, seq)? {
+                    Judged::Outcome(outcome) => return Ok(outcome),
+                    Judged::Foreign { code, seq } => foreign = Some((code, seq)),
+                    Judged::Skip => {}
                 }
             }
             self.rx.clear();
             self.rx_at = 0;
             let now = Instant::now();
             if now >= deadline {
-                return Err(BoardError::Timeout {
-                    port: self.name.clone(),
-                    command,
-                    waited: now - start,
-                    baud: self.baud,
+                let (port, waited) = (self.name.clone(), now - start);
+                return Err(match foreign {
+                    Some((got_code, got_seq)) => {
+                        BoardError::Unexpected { port, command, seq, got_code, got_seq, waited }
+                    }
+                    None => BoardError::Timeout { port, command, waited, baud: self.baud, received },
                 });
             }
             self.port.set_timeout(deadline - now).map_err(|e| self.io_error(during(), e.into()))?;
@@ -804,6 +983,7 @@ impl BoardClient {
                 }
                 Ok(n) => {
                     self.stats.bytes_received += n;
+                    received += n;
                     self.rx.extend_from_slice(&buf[..n]);
                 }
                 Err(e) if e.kind() == ErrorKind::TimedOut || e.kind() == ErrorKind::Interrupted => {}
@@ -813,20 +993,30 @@ impl BoardClient {
     }
 
     /// What a frame (or an undecodable one) means for the request (`command`, `seq`):
-    /// the reply, a reason to resend, an error, or nothing (a stale frame, skipped).
-    fn judge(decoded: Result<Frame, FrameError>, command: Command, seq: u8) -> Result<Option<Read1>, BoardError> {
+    /// the reply, a reason to resend, an error, a reply that is not ours (remembered for
+    /// the timeout), or nothing (a stray frame, skipped).
+    fn judge(&self, decoded: Result<Frame, FrameError>, command: Command, seq: u8) -> Result<Judged, BoardError> {
         let frame = match decoded {
             Ok(f) => f,
             // It may have been our reply (or a stale one): a repeatable request is resent.
             Err(e) => {
-                return Ok(Some(Read1::Resend { reason: format!("undecodable reply frame ({e:?})"), executed: true }))
+                let reason = format!("undecodable reply frame ({e:?})");
+                return Ok(Judged::Outcome(Read1::Resend { reason, executed: true }));
             }
         };
+        if frame.code == command as u8 && frame.seq == seq {
+            // A board never sends a request: the port gave back what was written to it.
+            return Err(BoardError::Echo { port: self.name.clone(), command });
+        }
         if frame.code == command as u8 | 0x80 && frame.seq == seq {
-            return Ok(Some(Read1::Reply(frame)));
+            return Ok(Judged::Outcome(Read1::Reply(frame)));
         }
         if frame.code != Command::Error as u8 | 0x80 || frame.data.len() != 2 {
-            return Ok(None);
+            return Ok(if frame.code & 0x80 != 0 {
+                Judged::Foreign { code: frame.code, seq: frame.seq }
+            } else {
+                Judged::Skip
+            });
         }
         let code = ErrorCode::from_byte(frame.data[0]);
         if frame.seq == seq && frame.data[1] == command as u8 {
@@ -835,7 +1025,7 @@ impl BoardClient {
                     Err(BoardError::Board { command, code: ErrorCode::Busy })
                 }
                 Some(c @ (ErrorCode::BadCrc | ErrorCode::Busy)) => {
-                    Ok(Some(Read1::Resend { reason: format!("error reply {c:?}"), executed: false }))
+                    Ok(Judged::Outcome(Read1::Resend { reason: format!("error reply {c:?}"), executed: false }))
                 }
                 Some(code) => Err(BoardError::Board { command, code }),
                 None => Err(BoardError::Reply {
@@ -852,9 +1042,9 @@ impl BoardClient {
             // A frame error: our request arrived garbled, or line noise came before it (then
             // our request may still have run).
             let what = code.map_or_else(|| format!("code {}", frame.data[0]), |c| format!("{c:?}"));
-            return Ok(Some(Read1::Resend { reason: format!("frame error {what}"), executed: true }));
+            return Ok(Judged::Outcome(Read1::Resend { reason: format!("frame error {what}"), executed: true }));
         }
-        Ok(None)
+        Ok(Judged::Foreign { code: frame.code, seq: frame.seq })
     }
 }
 

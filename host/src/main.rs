@@ -63,11 +63,12 @@ struct LinkArgs {
 
 impl LinkArgs {
     fn open(&self, port: &str) -> Result<BoardClient> {
-        if self.timeout_ms == 0 {
-            bail!("--timeout-ms must be at least 1");
+        use pficp::board::{MAX_BAUD, MAX_TIMEOUT, MIN_BAUD};
+        if self.timeout_ms == 0 || self.timeout_ms > MAX_TIMEOUT.as_millis() as u64 {
+            bail!("--timeout-ms {}: must be 1 to {}", self.timeout_ms, MAX_TIMEOUT.as_millis());
         }
-        if self.baud == 0 {
-            bail!("--baud must be at least 1");
+        if !(MIN_BAUD..=MAX_BAUD).contains(&self.baud) {
+            bail!("--baud {}: the client runs {MIN_BAUD} to {MAX_BAUD} baud", self.baud);
         }
         Ok(BoardClient::open(port, self.baud, Duration::from_millis(self.timeout_ms))?)
     }

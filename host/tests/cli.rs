@@ -173,6 +173,22 @@ fn a_silent_board_is_a_clear_error() {
 }
 
 #[test]
+fn absurd_link_options_are_refused_before_the_port_is_opened() {
+    let board = support::PtyBoard::reference();
+    let p = board.path.as_str();
+    assert_error(&pficp(&["board", "info", "--port", p, "--baud", "1"]), &["--baud 1", "9600 to 12000000"]);
+    assert_error(&pficp(&["board", "info", "--port", p, "--baud", "4000000000"]), &["--baud 4000000000"]);
+    assert_error(&pficp(&["board", "info", "--port", p, "--timeout-ms", "0"]), &["--timeout-ms 0"]);
+    assert_error(&pficp(&["board", "info", "--port", p, "--timeout-ms", "86400000"]), &["--timeout-ms 86400000"]);
+}
+
+#[test]
+fn an_echoing_port_is_named() {
+    let board = support::PtyBoard::serve(Box::new(|bytes| Some(bytes.to_vec())));
+    assert_error(&pficp(&["board", "info", "--port", &board.path]), &[&board.path, "loopback"]);
+}
+
+#[test]
 fn board_info_prints_the_identity() {
     let board = support::PtyBoard::reference();
     let o = pficp(&["board", "info", "--port", &board.path]);

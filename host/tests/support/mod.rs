@@ -57,6 +57,34 @@ impl PtyBoard {
         PtyBoard { client_end: Some(client_end), path, stop, thread: Some(thread) }
     }
 
+    /// A line that sends `next()` every millisecond, whatever it is sent (which it drops):
+    /// a babbling device.
+    pub fn babbling(mut next: impl FnMut() -> Vec<u8> + Send + 'static) -> PtyBoard {
+        let (mut board_end, client_end) = TTYPort::pair().expect("a pseudo-terminal");
+        let path = client_end.name().expect("the client end has a path");
+        board_end.set_timeout(Duration::from_millis(1)).unwrap();
+        let stop = Arc::new(AtomicBool::new(false));
+        let flag = stop.clone();
+        let thread = std::thread::spawn(move || {
+            let mut buf = [0u8; 4096];
+            while !flag.load(Ordering::Relaxed) {
+                match board_end.read(&mut buf) {
+                    Ok(0) => break,
+                    Ok(_) => {}
+                    Err(e) if e.kind() == ErrorKind::TimedOut || e.kind() == ErrorKind::Interrupted => {}
+                    Err(_) => break,
+                }
+                match board_end.write(&next()) {
+                    Ok(_) => {}
+                    // The client does not read and the line is full: babble on.
+                    Err(e) if e.kind() == ErrorKind::TimedOut || e.kind() == ErrorKind::Interrupted => {}
+                    Err(_) => break,
+                }
+            }
+        });
+        PtyBoard { client_end: Some(client_end), path, stop, thread: Some(thread) }
+    }
+
     /// The reference board.
     pub fn reference() -> PtyBoard {
         PtyBoard::serve(reference_handler())
