@@ -66,6 +66,16 @@ fn bad_files_give_one_line_errors() {
     assert_error(&register(&empty, &good, &[]), &["empty.xyz", "empty"]);
     let junk = write(dir.path(), "junk.xyz", b"1 2 3\n4 five 6\n");
     assert_error(&register(&good, &junk, &[]), &["junk.xyz", "line 2"]);
+    // Beyond the point limit: refused from the header, before the body is read.
+    let huge = write(
+        dir.path(),
+        "huge.ply",
+        b"ply\nformat binary_little_endian 1.0\nelement vertex 1000000000000\nproperty float x\nproperty float y\nproperty float z\nend_header\n",
+    );
+    assert_error(&register(&good, &huge, &[]), &["huge.ply", "more than 10000000 points"]);
+    // A file without line ends: refused after one line's limit, not read whole.
+    let endless = write(dir.path(), "endless.xyz", &vec![b'7'; pficp::io::MAX_LINE_BYTES + 1]);
+    assert_error(&register(&good, &endless, &[]), &["endless.xyz", "line 1 is longer than"]);
 }
 
 #[test]

@@ -2,14 +2,21 @@
 //!
 //! [`read_cloud`] picks the reader from the file extension and validates the
 //! points into a [`Cloud`]; [`write_cloud`] writes raw points in a chosen
-//! [`Format`]. The byte-level functions [`read_points_from_bytes`] and
-//! [`write_points_to_bytes`] do the work and never touch the file system.
-//! Every error is an [`IoError`] whose one-line message names the file.
+//! [`Format`]. [`read_points`] streams any reader: one line (at most
+//! [`MAX_LINE_BYTES`]) or one binary record at a time, and no more than the point limit
+//! ([`crate::cloud::MAX_POINTS`] for files), so a huge file costs at most the limit's
+//! points in memory, never the file's size. [`read_points_from_bytes`] and
+//! [`write_points_to_bytes`] are the byte-level forms. Every error is an [`IoError`] whose
+//! one-line message names the file.
 
+mod lines;
 mod ply;
 mod text;
 
+use std::io::BufRead;
 use std::path::Path;
+
+pub use lines::MAX_LINE_BYTES;
 
 use nalgebra::Point3;
 use thiserror::Error;
@@ -95,6 +102,23 @@ pub enum ParseError {
         /// The field (possibly shortened).
         text: String,
     },
+    /// More points than the reader was allowed (counted before they are stored).
+    #[error("more than {limit} points (the largest cloud the tool reads)")]
+    TooManyPoints {
+        /// The limit.
+        limit: usize,
+    },
+    /// A line longer than [`MAX_LINE_BYTES`] (a file without line ends?).
+    #[error("line {line} is longer than {limit} bytes (is this a point-cloud file?)")]
+    LineTooLong {
+        /// 1-based line number.
+        line: usize,
+        /// The limit.
+        limit: usize,
+    },
+    /// The file could not be read to its end.
+    #[error("read error: {0}")]
+    Read(String),
     /// A line with too few fields.
     #[error("too few columns at line {line}: found {found}, need at least {needed}")]
     TooFewColumns {
@@ -174,9 +198,10 @@ pub fn format_from_path(path: &Path) -> Result<Format, IoError> {
 pub fn read_cloud(path: &Path, name: &str) -> Result<Cloud, IoError> {
     let file = path.display().to_string();
     let format = format_from_path(path)?;
-    let bytes = std::fs::read(path).map_err(|error| IoError::Read { file: file.clone(), error })?;
-    let points =
-        read_points_from_bytes(&bytes, format).map_err(|problem| IoError::Parse { file: file.clone(), problem })?;
+    let f = std::fs::File::open(path).map_err(|error| IoError::Read { file: file.clone(), error })?;
+    let reader = std::io::BufReader::with_capacity(1 << 16, f);
+    let points = read_points(reader, format, crate::cloud::MAX_POINTS)
+        .map_err(|problem| IoError::Parse { file: file.clone(), problem })?;
     Cloud::new(name, points).map_err(|problem| IoError::Cloud { file, problem })
 }
 
@@ -187,14 +212,21 @@ pub fn write_cloud(path: &Path, points: &[Point3<f64>], format: Format) -> Resul
         .map_err(|error| IoError::Write { file: path.display().to_string(), error })
 }
 
-/// Parse the points in `bytes`. Both PLY formats detect ascii or binary from
-/// the header. The points are not validated (see [`Cloud::new`]).
-pub fn read_points_from_bytes(bytes: &[u8], format: Format) -> Result<Vec<Point3<f64>>, ParseError> {
+/// Parse the points `reader` gives, at most `limit` of them (one more is
+/// [`ParseError::TooManyPoints`], as is a PLY header declaring more). Both PLY formats
+/// detect ascii or binary from the header. The points are not validated (see
+/// [`Cloud::new`]).
+pub fn read_points(reader: impl BufRead, format: Format, limit: usize) -> Result<Vec<Point3<f64>>, ParseError> {
     match format {
-        Format::PlyAscii | Format::PlyBinary => ply::read(bytes),
-        Format::Xyz => text::read_xyz(bytes),
-        Format::Csv => text::read_csv(bytes),
+        Format::PlyAscii | Format::PlyBinary => ply::read(reader, limit),
+        Format::Xyz => text::read_xyz(reader, limit),
+        Format::Csv => text::read_csv(reader, limit),
     }
+}
+
+/// [`read_points`] of `bytes`, at most [`crate::cloud::MAX_POINTS`].
+pub fn read_points_from_bytes(bytes: &[u8], format: Format) -> Result<Vec<Point3<f64>>, ParseError> {
+    read_points(bytes, format, crate::cloud::MAX_POINTS)
 }
 
 /// Serialise `points` in `format`. Text formats round-trip every f64 exactly.

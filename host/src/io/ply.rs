@@ -4,8 +4,11 @@
 //! body is read up to the end of the `vertex` element, skipping any elements
 //! declared before it. Elements after the vertices (faces, ...) are ignored.
 
+use std::io::{BufRead, Read};
+
 use nalgebra::Point3;
 
+use super::lines::{read_error, Lines};
 use super::{fmt_f64, parse_f64, shorten, ParseError};
 
 /// A PLY scalar type.
@@ -111,44 +114,36 @@ enum Encoding {
 struct Header {
     encoding: Encoding,
     elements: Vec<Element>,
-    /// Lines in the header, `end_header` included.
-    lines: usize,
-    /// Offset of the first body byte.
-    body_start: usize,
 }
 
-/// Read the vertex positions of a PLY file of either supported encoding.
-pub(super) fn read(bytes: &[u8]) -> Result<Vec<Point3<f64>>, ParseError> {
-    let header = parse_header(bytes)?;
+/// Read the vertex positions of a PLY file of either supported encoding, at most `limit`
+/// of them (a header declaring more is refused before the body is read).
+pub(super) fn read(reader: impl BufRead, limit: usize) -> Result<Vec<Point3<f64>>, ParseError> {
+    let mut lines = Lines::new(reader);
+    let header = parse_header(&mut lines)?;
     let v = header.elements.iter().position(|e| e.name == "vertex").ok_or(ParseError::MissingVertexElement)?;
     let vertex = &header.elements[v];
     if let Some(p) = vertex.props.iter().find(|p| matches!(p.kind, Kind::List { .. })) {
         return Err(ParseError::ListInVertex(p.name.clone()));
     }
+    if vertex.count > limit {
+        return Err(ParseError::TooManyPoints { limit });
+    }
     let find =
         |axis: &'static str| vertex.props.iter().position(|p| p.name == axis).ok_or(ParseError::MissingProperty(axis));
     let xyz = [find("x")?, find("y")?, find("z")?];
-    let body = bytes.get(header.body_start..).unwrap_or_default();
     let before = &header.elements[..v];
     match header.encoding {
-        Encoding::Ascii => read_ascii(body, header.lines, before, vertex, xyz),
-        Encoding::BinaryLe => read_binary(body, before, vertex, xyz),
+        Encoding::Ascii => read_ascii(lines, before, vertex, xyz),
+        Encoding::BinaryLe => read_binary(lines.into_inner(), before, vertex, xyz),
     }
 }
 
-/// Parse the header; `bytes` may continue with any body.
-fn parse_header(bytes: &[u8]) -> Result<Header, ParseError> {
+/// Parse the header from the first line; `lines` stands just after `end_header`.
+fn parse_header<R: BufRead>(lines: &mut Lines<R>) -> Result<Header, ParseError> {
     let mut encoding = None;
     let mut elements: Vec<Element> = Vec::new();
-    let mut pos = 0;
-    let mut line_no = 0;
-    while pos < bytes.len() {
-        let rest = bytes.get(pos..).unwrap_or_default();
-        let len = rest.iter().position(|&b| b == b'\n');
-        let raw = rest.get(..len.unwrap_or(rest.len())).unwrap_or_default();
-        pos += len.map_or(rest.len(), |l| l + 1);
-        line_no += 1;
-        let line = String::from_utf8_lossy(raw);
+    while let Some((line_no, line)) = lines.next_line()? {
         let bad_line = || ParseError::BadHeaderLine { line: line_no, text: shorten(line.trim()) };
         let tokens: Vec<&str> = line.split_whitespace().collect();
         if line_no == 1 {
@@ -183,17 +178,12 @@ fn parse_header(bytes: &[u8]) -> Result<Header, ParseError> {
                 push_property(&mut elements, name, kind).ok_or_else(bad_line)?;
             }
             ["end_header"] => {
-                return Ok(Header {
-                    encoding: encoding.ok_or(ParseError::MissingFormat)?,
-                    elements,
-                    lines: line_no,
-                    body_start: pos,
-                });
+                return Ok(Header { encoding: encoding.ok_or(ParseError::MissingFormat)?, elements });
             }
             _ => return Err(bad_line()),
         }
     }
-    Err(if line_no == 0 { ParseError::NotPly } else { ParseError::MissingEndHeader })
+    Err(if lines.count() == 0 { ParseError::NotPly } else { ParseError::MissingEndHeader })
 }
 
 /// The scalar type named `ty` on header line `line`.
@@ -212,25 +202,33 @@ fn truncated(element: &Element, read: usize) -> ParseError {
     ParseError::Truncated { element: element.name.clone(), read, declared: element.count }
 }
 
-/// Ascii body: one entry a non-blank line. `header_lines` numbers lines.
-fn read_ascii(
-    body: &[u8],
-    header_lines: usize,
+/// Room reserved for points up front: the declared count, but not more than this (a
+/// header may lie; the vector grows if it does not).
+const RESERVE: usize = 1 << 16;
+
+/// Ascii body: one entry a non-blank line, numbered on from the header's lines.
+fn read_ascii<R: BufRead>(
+    mut lines: Lines<R>,
     before: &[Element],
     vertex: &Element,
     xyz: [usize; 3],
 ) -> Result<Vec<Point3<f64>>, ParseError> {
-    let text = String::from_utf8_lossy(body);
-    let mut lines =
-        text.lines().enumerate().map(|(i, l)| (header_lines + 1 + i, l)).filter(|(_, l)| !l.trim().is_empty());
+    // The next non-blank line, or the truncation error of `element` after `read` entries.
+    fn entry<'a, R: BufRead>(
+        lines: &'a mut Lines<R>,
+        element: &Element,
+        read: usize,
+    ) -> Result<(usize, std::borrow::Cow<'a, str>), ParseError> {
+        lines.next_nonblank()?.ok_or_else(|| truncated(element, read))
+    }
     for element in before.iter().filter(|e| !e.props.is_empty()) {
         for read in 0..element.count {
-            lines.next().ok_or_else(|| truncated(element, read))?;
+            entry(&mut lines, element, read)?;
         }
     }
-    let mut points = Vec::with_capacity(vertex.count.min(body.len() / 6));
+    let mut points = Vec::with_capacity(vertex.count.min(RESERVE));
     for read in 0..vertex.count {
-        let (line, text) = lines.next().ok_or_else(|| truncated(vertex, read))?;
+        let (line, text) = entry(&mut lines, vertex, read)?;
         let fields: Vec<&str> = text.split_whitespace().collect();
         if fields.len() < vertex.props.len() {
             return Err(ParseError::TooFewColumns { line, found: fields.len(), needed: vertex.props.len() });
@@ -241,16 +239,24 @@ fn read_ascii(
     Ok(points)
 }
 
-/// Binary little-endian body.
+/// Fill `buf` from `reader`: `Ok(false)` if the body ends first.
+fn fill(reader: &mut impl Read, buf: &mut [u8]) -> Result<bool, ParseError> {
+    match reader.read_exact(buf) {
+        Ok(()) => Ok(true),
+        Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => Ok(false),
+        Err(e) => Err(read_error(e)),
+    }
+}
+
+/// Binary little-endian body, one record at a time.
 fn read_binary(
-    body: &[u8],
+    mut reader: impl BufRead,
     before: &[Element],
     vertex: &Element,
     xyz: [usize; 3],
 ) -> Result<Vec<Point3<f64>>, ParseError> {
-    let mut pos = 0;
     for element in before {
-        pos = skip_binary(body, pos, element)?;
+        skip_binary(&mut reader, element)?;
     }
     let mut offsets = Vec::with_capacity(vertex.props.len());
     let mut stride = 0;
@@ -261,11 +267,12 @@ fn read_binary(
         offsets.push((stride, s));
         stride += s.size();
     }
-    let rest = body.get(pos..).unwrap_or_default();
-    let mut points = Vec::with_capacity(vertex.count.min(rest.len() / stride.max(1)));
-    let mut records = rest.chunks_exact(stride.max(1));
+    let mut points = Vec::with_capacity(vertex.count.min(RESERVE));
+    let mut record = vec![0u8; stride];
     for read in 0..vertex.count {
-        let record = records.next().ok_or_else(|| truncated(vertex, read))?;
+        if !fill(&mut reader, &mut record)? {
+            return Err(truncated(vertex, read));
+        }
         let mut c = [0.0; 3];
         for (slot, &i) in c.iter_mut().zip(xyz.iter()) {
             let (off, s) = offsets.get(i).copied().ok_or_else(|| truncated(vertex, read))?;
@@ -277,37 +284,41 @@ fn read_binary(
     Ok(points)
 }
 
-/// Skip all entries of `element` starting at `pos`; the position after them.
-fn skip_binary(body: &[u8], pos: usize, element: &Element) -> Result<usize, ParseError> {
-    let remaining = body.len().saturating_sub(pos);
+/// Skip all entries of `element` (streamed: nothing is kept).
+fn skip_binary(reader: &mut impl BufRead, element: &Element) -> Result<(), ParseError> {
+    fn skip(reader: &mut impl BufRead, n: u64) -> Result<u64, ParseError> {
+        std::io::copy(&mut reader.by_ref().take(n), &mut std::io::sink()).map_err(read_error)
+    }
     if let Some(size) = element.fixed_size() {
         if size == 0 {
-            return Ok(pos);
+            return Ok(());
         }
-        return match size.checked_mul(element.count) {
-            Some(total) if total <= remaining => Ok(pos + total),
-            _ => Err(truncated(element, remaining / size)),
-        };
+        let total = (size as u64).saturating_mul(element.count as u64);
+        let skipped = skip(reader, total)?;
+        return if skipped == total { Ok(()) } else { Err(truncated(element, (skipped / size as u64) as usize)) };
     }
-    let mut pos = pos;
     for read in 0..element.count {
         for p in &element.props {
             let size = match p.kind {
-                Kind::Scalar(s) => Some(s.size()),
+                Kind::Scalar(s) => s.size() as u64,
                 Kind::List { len, item } => {
-                    let n = body.get(pos..).and_then(|b| len.read_le(b));
-                    pos += len.size();
+                    let mut b = [0u8; 8];
+                    if !fill(reader, &mut b[..len.size()])? {
+                        return Err(truncated(element, read));
+                    }
                     // Negative lengths are rejected as truncation: nothing valid follows.
-                    n.filter(|n| *n >= 0.0).and_then(|n| (n as usize).checked_mul(item.size()))
+                    match len.read_le(&b).filter(|n| *n >= 0.0) {
+                        Some(n) => (n as u64).saturating_mul(item.size() as u64),
+                        None => return Err(truncated(element, read)),
+                    }
                 }
             };
-            pos = size
-                .and_then(|s| pos.checked_add(s))
-                .filter(|&end| end <= body.len())
-                .ok_or_else(|| truncated(element, read))?;
+            if skip(reader, size)? != size {
+                return Err(truncated(element, read));
+            }
         }
     }
-    Ok(pos)
+    Ok(())
 }
 
 /// The header for `n` double-precision vertices in `format`.
@@ -348,8 +359,12 @@ mod tests {
         Point3::new(x, y, z)
     }
 
+    fn read_all(bytes: &[u8]) -> Result<Vec<Point3<f64>>, ParseError> {
+        read(bytes, usize::MAX)
+    }
+
     fn err(bytes: &[u8]) -> String {
-        read(bytes).unwrap_err().to_string()
+        read_all(bytes).unwrap_err().to_string()
     }
 
     const ASCII_HEADER: &str = "ply\nformat ascii 1.0\nelement vertex 2\n\
@@ -364,7 +379,7 @@ mod tests {
             element face 1\nproperty list uchar int vertex_indices\nend_header\n\
             3 0.1 0.2 0.3\n\
             0 3 2 255 1 0 0\n\n0 6 5 1 4 0 0 extra\n1 -9 -8 7 -7 1 1\n3 0 1 2\n";
-        let pts = read(text.as_bytes()).unwrap();
+        let pts = read_all(text.as_bytes()).unwrap();
         assert_eq!(pts, vec![p(1.0, 2.0, 3.0), p(4.0, 5.0, 6.0), p(-7.0, -8.0, -9.0)]);
     }
 
@@ -386,18 +401,18 @@ mod tests {
             b.extend_from_slice(&7u16.to_le_bytes());
         }
         b.extend_from_slice(&[3, 0, 0, 0, 0, 1, 0, 0, 0, 2, 0, 0, 0]);
-        assert_eq!(read(&b).unwrap(), vec![p(0.25, -1.5, 7.0), p(1e300, 2.0, -3.0)]);
+        assert_eq!(read_all(&b).unwrap(), vec![p(0.25, -1.5, 7.0), p(1e300, 2.0, -3.0)]);
     }
 
     #[test]
     fn writers_round_trip_exactly() {
         let pts = vec![p(0.1, -0.0, 5e-324), p(f64::MAX, 1e-7, 2.0 / 3.0)];
-        assert_eq!(read(&write_ascii(&pts)).unwrap(), pts);
+        assert_eq!(read_all(&write_ascii(&pts)).unwrap(), pts);
         let bin = write_binary(&pts);
-        assert_eq!(read(&bin).unwrap(), pts);
+        assert_eq!(read_all(&bin).unwrap(), pts);
         let s = String::from_utf8_lossy(&bin);
         assert!(s.contains("format binary_little_endian 1.0") && s.contains("property double z"));
-        assert!(read(&write_binary(&[])).unwrap().is_empty());
+        assert!(read_all(&write_binary(&[])).unwrap().is_empty());
     }
 
     #[test]
@@ -459,24 +474,33 @@ mod tests {
         assert!(err(b.as_bytes()).contains("declared `e`"));
     }
 
+    #[test]
+    fn a_header_declaring_more_than_the_limit_is_refused_before_the_body() {
+        let h = ASCII_HEADER.replace("vertex 2", "vertex 11");
+        assert_eq!(read(h.as_bytes(), 10), Err(ParseError::TooManyPoints { limit: 10 }));
+        let b = h.replace("ascii", "binary_little_endian");
+        assert_eq!(read(b.as_bytes(), 10), Err(ParseError::TooManyPoints { limit: 10 }));
+        assert_eq!(read(write_binary(&[p(1.0, 2.0, 3.0); 10]).as_slice(), 10).unwrap().len(), 10);
+    }
+
     proptest! {
         #[test]
         fn random_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..512)) {
-            let _ = read(&bytes);
+            let _ = read_all(&bytes);
             let mut with_header = ASCII_HEADER.replace("ascii", "binary_little_endian").into_bytes();
             with_header.extend_from_slice(&bytes);
-            let _ = read(&with_header);
+            let _ = read_all(&with_header);
             let mut ascii = ASCII_HEADER.as_bytes().to_vec();
             ascii.extend_from_slice(&bytes);
-            let _ = read(&ascii);
+            let _ = read_all(&ascii);
         }
 
         #[test]
         fn random_headers_never_panic(text in "(ply\n)?((format|element|property|list|end_header|vertex|face|x|y|z|uchar|float|ascii|binary_little_endian|[0-9]{1,3}|-1| |\n)){0,40}") {
-            let _ = read(text.as_bytes());
+            let _ = read_all(text.as_bytes());
             let mut b = text.into_bytes();
             b.extend_from_slice(&[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12]);
-            let _ = read(&b);
+            let _ = read_all(&b);
         }
 
         #[test]
@@ -484,9 +508,9 @@ mod tests {
             let pts: Vec<_> = (0..n).map(|i| p(i as f64, 0.5, -1.0)).collect();
             let bin = write_binary(&pts);
             let cut = cut.min(bin.len() - 1);
-            prop_assert!(read(&bin[..cut]).is_err());
+            prop_assert!(read_all(&bin[..cut]).is_err());
             let ascii = write_ascii(&pts);
-            let _ = read(&ascii[..cut.min(ascii.len())]);
+            let _ = read_all(&ascii[..cut.min(ascii.len())]);
         }
 
         #[test]
@@ -496,7 +520,7 @@ mod tests {
             if let Some(b) = bin.get_mut(i % len) {
                 *b = byte;
             }
-            let _ = read(&bin);
+            let _ = read_all(&bin);
         }
     }
 }
