@@ -752,6 +752,8 @@ impl SequencerModel {
                     n.rng = if r.seed == 0 { 1 } else { r.seed };
                     n.run_r = true;
                     n.fin_r = false;
+                    // Nothing evaluated yet: Status reports no best cost (not the last run's).
+                    n.best_cost_r = m(48);
                     n.iter_done = 0;
                     n.k = 0;
                     n.half = false;

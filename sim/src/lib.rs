@@ -17,6 +17,7 @@
 //! change) at `10 c - 5`. [`Mismatch::cycle`] `c` is therefore at VCD time `10 c`.
 #![warn(missing_docs)]
 
+pub mod fuzz;
 pub mod serial;
 
 use pficp_fpga::board::BoardConfig;

@@ -1,10 +1,25 @@
 //! The host's end of the Verilated board's serial line, at the board's real bit timing:
 //! [`SerialBoard`] shifts queued bytes onto `uart_rx` (8N1, `bit_clocks` clocks per bit,
 //! back to back), decodes `uart_tx` by sampling each bit in its middle, and optionally runs
-//! the byte-level reference ([`BoardModel`]) beside it, comparing every byte the board sends.
-
+//! the byte-level reference ([`BoardModel`]) beside it. With the reference:
+//! - every byte the board sends is compared with the reference's as it arrives, except
+//!   the bytes of a Status reply, which are compared as a whole frame: equal to the
+//!   reference's, or, when the board says "running" (a timeless reference cannot know
+//!   the progress), a reply with the reference's sequence and command whose iteration
+//!   count rises, stays within the run's total (the reference's) and whose best cost is
+//!   no better than the run's final best ([`SerialBoard::progress_frames`] counts them);
+//! - the LEDs are checked on every clock against their rule (docs/board.md): 0 the
+//!   heartbeat, bit 26 of the clocks since power-up; 1 receive activity, lit from within a
+//!   bit of the first start bit the board receives to between `2^21` clocks after the last
+//!   stop bit (less, more: a bit period either way); 2 busy, lit whenever the board sends;
+//!   3 the last reply was an error, checked as each reply frame ends.
+//!
+//! The first difference is a [`ByteMismatch`]; [`SerialBoard::comparison`] returns it,
+//! and [`SerialBoard::expected_pending`] the reference's bytes the board has not sent.
 use crate::{BoardInputs, BoardPins, VerilatedBoard};
 use pficp_fpga::board::{BoardConfig, BoardModel};
+use pficp_fpga::messages::{RunState, StatusReply};
+use pficp_fpga::protocol::{Command, Frame};
 use std::collections::VecDeque;
 use std::path::Path;
 
@@ -13,22 +28,27 @@ pub const LED_BUSY: u8 = 1 << 2;
 /// LED bit of "the last answer was an error".
 pub const LED_ERROR: u8 = 1 << 3;
 
-/// The first byte where the board and the reference disagree.
+/// The first place where the board and the reference disagree.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ByteMismatch {
-    /// Clock at which the board's byte was complete.
+    /// Clock at which it was seen.
     pub clock: u64,
-    /// Index of the byte among all the board sent.
+    /// Index of the (first) byte concerned among all the board sent.
     pub index: u64,
     /// What the reference sends there (`None`: nothing more).
     pub expected: Option<u8>,
     /// What the board sent (`None`: a framing error, stop bit low).
     pub actual: Option<u8>,
+    /// What is wrong, when it is more than a byte (a Status reply, an LED).
+    pub problem: Option<String>,
 }
 
 impl std::fmt::Display for ByteMismatch {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let show = |b: Option<u8>| b.map_or("nothing".to_string(), |b| format!("0x{b:02x}"));
+        if let Some(p) = &self.problem {
+            return write!(f, "clock {}, after board byte {}: {p}", self.clock, self.index);
+        }
         write!(
             f,
             "board byte {} (clock {}): the board sent {}, the reference {}",
@@ -39,6 +59,12 @@ impl std::fmt::Display for ByteMismatch {
         )
     }
 }
+
+/// Clocks after the last received stop bit for which the receive LED stays lit
+/// (`rx_glow` counts down from `2^22 - 1`; the LED is its bit 21).
+pub const RX_GLOW_CLOCKS: u64 = 1 << 21;
+/// The heartbeat LED's bit of the clock count.
+pub const HEARTBEAT_BIT: u32 = 26;
 
 #[derive(Clone, Copy, Debug)]
 enum RxPhase {
@@ -67,11 +93,19 @@ pub struct SerialBoard {
     compared: u64,
     mismatch: Option<ByteMismatch>,
     quiet: u64,
-    /// The board's bytes of the frame being received (compared at its delimiter).
+    /// The board's bytes of the frame being received.
     frame_bytes: Vec<Option<u8>>,
-    /// Status replies of a running filter: not compared (a timeless reference cannot know
-    /// the progress), and the reference's Status reply dropped.
+    /// The frame being received is a Status reply (by the reference's): compared whole.
+    status_frame: bool,
+    /// Status replies of a running filter, checked by the progress rule.
     progress_frames: u64,
+    /// The iteration count of the last running Status (it must not go back).
+    last_progress: u16,
+    /// Clock of the first and of the last bit shifted to the board (receive LED).
+    rx_first: Option<u64>,
+    rx_last: Option<u64>,
+    /// The last reply frame was an error (the error LED's rule).
+    last_error: bool,
 }
 
 impl SerialBoard {
@@ -95,7 +129,12 @@ impl SerialBoard {
             mismatch: None,
             quiet: 0,
             frame_bytes: Vec::new(),
+            status_frame: false,
             progress_frames: 0,
+            last_progress: 0,
+            rx_first: None,
+            rx_last: None,
+            last_error: false,
         }
     }
 
@@ -224,6 +263,13 @@ impl SerialBoard {
             }
             RxPhase::Stop(n, v) => RxPhase::Stop(n - 1, v),
         };
+        if self.shifting.is_some() {
+            self.rx_first.get_or_insert(self.clocks());
+            self.rx_last = Some(self.clocks());
+        }
+        if self.reference.is_some() && self.mismatch.is_none() {
+            self.check_leds(pins.leds);
+        }
         let active = self.shifting.is_some()
             || !self.outgoing.is_empty()
             || !matches!(self.rx, RxPhase::Idle)
@@ -241,37 +287,149 @@ impl SerialBoard {
         if self.reference.is_none() {
             return;
         }
+        if self.frame_bytes.is_empty() {
+            // A new frame: a Status reply (by the reference's next frame) is compared whole.
+            self.status_frame = self.expected_frame().is_some_and(|f| f.code == Command::Status as u8 | 0x80);
+        }
         self.frame_bytes.push(byte);
+        if !self.status_frame {
+            let expected = self.expected.pop_front();
+            self.compared += 1;
+            if expected != byte {
+                self.note(ByteMismatch { clock: self.clocks(), index, expected, actual: byte, problem: None });
+            }
+        }
         if byte != Some(0) {
             return;
         }
-        // A whole frame: a Status reply that says "running" is progress, not compared.
-        let frame: Vec<u8> = self.frame_bytes.iter().map(|b| b.unwrap_or(0)).collect();
-        let board_frames = std::mem::take(&mut self.frame_bytes);
-        let progress = pficp_fpga::protocol::Frame::decode(&frame[..frame.len() - 1])
-            .is_ok_and(|f| f.code == 0x88 && f.data.first() == Some(&1));
-        if progress {
-            self.progress_frames += 1;
-            // Drop the reference's answer to the same request (up to its delimiter).
-            while let Some(e) = self.expected.pop_front() {
-                if e == 0 {
-                    break;
-                }
-            }
-            return;
+        let board_bytes = std::mem::take(&mut self.frame_bytes);
+        let first_index = index + 1 - board_bytes.len() as u64;
+        let frame: Vec<u8> = board_bytes.iter().map(|b| b.unwrap_or(0)).collect();
+        let decoded = Frame::decode(&frame[..frame.len() - 1]).ok();
+        if self.status_frame {
+            self.status_frame = false;
+            self.compare_status(&board_bytes, decoded.as_ref(), first_index);
         }
-        let first_index = index + 1 - board_frames.len() as u64;
-        for (k, actual) in board_frames.into_iter().enumerate() {
-            let expected = self.expected.pop_front();
-            self.compared += 1;
-            if expected != actual && self.mismatch.is_none() {
-                self.mismatch =
-                    Some(ByteMismatch { clock: self.clocks(), index: first_index + k as u64, expected, actual });
-            }
+        if decoded.as_ref().is_some_and(|f| f.code == Command::Run as u8 | 0x80) {
+            self.last_progress = 0; // a new run: its count starts again
+        }
+        // The error LED shows whether this reply was an error, from before its first byte.
+        self.last_error = decoded.is_some_and(|f| f.code == Command::Error as u8 | 0x80);
+        let led = self.board.pins().leds & LED_ERROR != 0;
+        if led != self.last_error {
+            let problem =
+                format!("LED 3 (last answer an error) is {}, the reply just sent says {}", led, self.last_error);
+            self.note(ByteMismatch {
+                clock: self.clocks(),
+                index,
+                expected: None,
+                actual: None,
+                problem: Some(problem),
+            });
         }
     }
 
-    /// Status replies of a running filter seen so far (not compared with the reference).
+    /// The reference's next frame (its bytes up to the first delimiter), decoded.
+    fn expected_frame(&self) -> Option<Frame> {
+        let end = self.expected.iter().position(|&b| b == 0)?;
+        let raw: Vec<u8> = self.expected.iter().take(end).copied().collect();
+        Frame::decode(&raw).ok()
+    }
+
+    /// A Status reply from the board (`bytes`, decoded `frame`) against the reference's:
+    /// equal, or a running board's progress within what the reference knows.
+    fn compare_status(&mut self, bytes: &[Option<u8>], frame: Option<&Frame>, first_index: u64) {
+        let end = self.expected.iter().position(|&b| b == 0).map_or(self.expected.len(), |e| e + 1);
+        let expected: Vec<u8> = self.expected.drain(..end).collect();
+        self.compared += bytes.len() as u64;
+        let mismatch = |k: usize, problem: Option<String>| ByteMismatch {
+            clock: 0,
+            index: first_index + k as u64,
+            expected: expected.get(k).copied(),
+            actual: bytes.get(k).copied().flatten(),
+            problem,
+        };
+        let running = frame.and_then(|f| StatusReply::decode(&f.data).ok().map(|s| (f, s)));
+        let Some((frame, status)) = running.filter(|(_, s)| s.state == RunState::Running) else {
+            // Not running: every byte as the reference's.
+            let same = bytes.len() == expected.len() && bytes.iter().zip(&expected).all(|(b, e)| *b == Some(*e));
+            if !same {
+                let k = bytes
+                    .iter()
+                    .zip(&expected)
+                    .position(|(b, e)| *b != Some(*e))
+                    .unwrap_or(bytes.len().min(expected.len()));
+                self.note(ByteMismatch { clock: self.clocks(), ..mismatch(k, None) });
+            }
+            return;
+        };
+        let reference = Frame::decode(&expected[..expected.len().saturating_sub(1)]).ok();
+        let reference = reference.and_then(|f| StatusReply::decode(&f.data).ok().map(|s| (f.seq, s)));
+        let problem = match reference {
+            None => Some("the board says running; the reference's reply is no Status".to_string()),
+            Some((seq, _)) if seq != frame.seq => {
+                Some(format!("running Status with sequence {}, not {seq}", frame.seq))
+            }
+            Some((_, r)) if r.state != RunState::Done => {
+                Some(format!("the board says running; the reference (which runs a filter at once) says {:?}", r.state))
+            }
+            Some((_, r)) if status.iterations > r.iterations => {
+                Some(format!("running Status at {} iterations, beyond the run's {}", status.iterations, r.iterations))
+            }
+            Some(_) if status.iterations < self.last_progress => Some(format!(
+                "running Status at {} iterations after {}: the count went back",
+                status.iterations, self.last_progress
+            )),
+            Some((_, r)) if status.best_cost < r.best_cost => Some(format!(
+                "running Status with best cost {}, better than the run's final best {}",
+                status.best_cost, r.best_cost
+            )),
+            Some(_) => None,
+        };
+        self.progress_frames += 1;
+        self.last_progress = status.iterations;
+        if let Some(p) = problem {
+            self.note(ByteMismatch { clock: self.clocks(), ..mismatch(0, Some(p)) });
+        }
+    }
+
+    /// The LEDs against their rule (module documentation), on this clock.
+    fn check_leds(&mut self, leds: u8) {
+        let now = self.clocks();
+        let bit = self.bit as u64;
+        let heartbeat = (now >> HEARTBEAT_BIT) & 1 == 1;
+        // Lit for sure: from a bit after the first start bit to a bit before the glow ends;
+        // dark for sure: before any start bit, or a bit after the glow ends.
+        let rx = match (self.rx_first, self.rx_last) {
+            (Some(first), Some(last)) if now > first + bit && now + bit < last + RX_GLOW_CLOCKS => Some(true),
+            (Some(_), Some(last)) if now > last + RX_GLOW_CLOCKS + bit => Some(false),
+            (None, _) => Some(false),
+            _ => None,
+        };
+        let sending = !matches!(self.rx, RxPhase::Idle);
+        let problem = if (leds & 1 != 0) != heartbeat {
+            Some(format!("LED 0 (heartbeat) is {}, bit {HEARTBEAT_BIT} of clock {now} is {heartbeat}", leds & 1))
+        } else if rx.is_some_and(|lit| (leds & 2 != 0) != lit) {
+            Some(format!("LED 1 (receive activity) is {}, expected {}", (leds >> 1) & 1, rx.unwrap() as u8))
+        } else if sending && leds & LED_BUSY == 0 {
+            Some("LED 2 (busy) is dark while the board sends".to_string())
+        } else {
+            None
+        };
+        if let Some(p) = problem {
+            let index = self.received_total;
+            self.note(ByteMismatch { clock: now, index, expected: None, actual: None, problem: Some(p) });
+        }
+    }
+
+    /// Keep the first mismatch.
+    fn note(&mut self, m: ByteMismatch) {
+        if self.mismatch.is_none() {
+            self.mismatch = Some(m);
+        }
+    }
+
+    /// Status replies of a running filter seen so far (checked by the progress rule).
     pub fn progress_frames(&self) -> u64 {
         self.progress_frames
     }

@@ -83,6 +83,22 @@ fn checked(b: &mut SerialBoard, wire: &[u8]) -> Vec<u8> {
     got
 }
 
+/// Send a request and run until its reply's delimiter (not until idle: a running filter
+/// keeps the board busy), every byte checked against the reference.
+fn reply_of(b: &mut SerialBoard, wire: &[u8]) -> Vec<u8> {
+    b.send(wire);
+    let mut got = Vec::new();
+    let start = b.clocks();
+    while !got.contains(&0) {
+        b.step();
+        got.extend(b.take_received());
+        assert!(b.clocks() - start < HANG, "no reply within {HANG} clocks");
+    }
+    let (n, m) = b.comparison();
+    assert!(m.is_none(), "after {n} bytes: {}", m.unwrap());
+    got
+}
+
 fn stores(m: &BoardModel) -> (Vec<u64>, Vec<u64>, (u16, u16), Vec<u64>) {
     (m.model_store().to_vec(), m.scan_store().to_vec(), m.sizes(), m.stored_costs().to_vec())
 }
@@ -227,4 +243,90 @@ fn reset_in_the_middle_of_a_command_returns_to_idle_with_the_stores_kept() {
         let again = unchecked.exchange(&wire, HANG).unwrap();
         assert_eq!(again, reference.receive_all(&wire), "cut at {cut}: the stores survived the reset");
     }
+}
+
+/// The board's stores, read back through the line and checked against the reference: the
+/// sizes (Identify), every scan point's nearest model point (Nearest, in frames) and an
+/// evaluation of every stored... of two poses (Evaluate with FIRST and LAST).
+fn check_stores(b: &mut SerialBoard, seq: &mut u8) {
+    let mut next = || {
+        *seq = seq.wrapping_add(1).max(1);
+        *seq
+    };
+    checked(b, &frame(Command::Identify, next(), vec![]));
+    let (_, scan) = b.reference().unwrap().sizes();
+    if scan > 0 {
+        let near = NearestRequest { first: 0, count: scan.min(messages::MAX_NEAREST as u16), pose: pose(5) };
+        checked(b, &frame(Command::Nearest, next(), near.encode()));
+    }
+    let ev =
+        EvaluateRequest { first: true, last: true, scale: WeightScale::for_two_q(1e7), poses: vec![pose(6), pose(7)] };
+    checked(b, &frame(Command::Evaluate, next(), ev.encode()));
+}
+
+/// `frames` drawn wires ([`pficp_sim::fuzz::FrameFuzzer`], state-changing requests among
+/// them: loads, sizes, evaluations, runs) through the Verilated board beside the
+/// reference, every byte compared; after an accepted Run the filter is polled with Status
+/// until done (each running reply checked by the progress rule); the stores are read back
+/// every 500 frames and at the end. Returns (frames per kind, runs, running Status seen).
+fn fuzz_rtl(frames: usize, seed: u64) -> ([usize; pficp_sim::fuzz::KINDS.len()], usize, u64) {
+    use pficp_sim::fuzz::{FrameFuzzer, MAX_MODEL, MAX_SCAN};
+    let mut b = SerialBoard::new(BoardConfig::FAST_SIM).with_reference();
+    let mut fuzz = FrameFuzzer::new(seed);
+    let mut kinds = [0; pficp_sim::fuzz::KINDS.len()];
+    let (mut runs, mut seq) = (0, 0u8);
+    for n in 0..frames {
+        let d = fuzz.next_wire();
+        kinds[d.kind] += 1;
+        if d.command == Some(Command::Run) {
+            // A Run's reply comes at once, then the filter runs (the board is busy but
+            // answers Status): poll until it is no longer running.
+            runs += 1;
+            let mut poll = d.wire;
+            for polls in 0.. {
+                let reply = reply_of(&mut b, &poll);
+                let f = Frame::decode(&reply[..reply.len() - 1]).unwrap();
+                if polls > 0 && f.data.first() != Some(&1) {
+                    break;
+                }
+                assert!(polls < 100_000, "the filter did not finish");
+                b.run(2_000);
+                poll = frame(Command::Status, 200, vec![]);
+            }
+            b.run_until_idle(HANG).expect("idle after the run");
+        } else {
+            for segment in d.wire.split_inclusive(|&x| x == 0) {
+                checked(&mut b, segment);
+            }
+        }
+        let (m, s) = b.reference().unwrap().sizes();
+        if m > MAX_MODEL || s > MAX_SCAN {
+            checked(&mut b, &fuzz.resize());
+        }
+        if n % 500 == 499 {
+            check_stores(&mut b, &mut seq);
+        }
+    }
+    check_stores(&mut b, &mut seq);
+    (kinds, runs, b.progress_frames())
+}
+
+#[test]
+fn fuzzed_requests_that_change_state_are_answered_as_the_reference_answers() {
+    let (kinds, runs, progress) = fuzz_rtl(1_200, seed());
+    eprintln!("RTL fuzz (seed {}): {kinds:?}, {runs} runs, {progress} running Status", seed());
+    assert!(kinds.iter().all(|&k| k > 50), "{kinds:?}");
+    assert!(runs > 10 && progress > 0, "{runs} runs, {progress} running Status");
+}
+
+#[test]
+#[ignore = "10^4 frames through the RTL: run in release with --ignored"]
+fn fuzzed_requests_full() {
+    let t = std::time::Instant::now();
+    let (kinds, runs, progress) = fuzz_rtl(10_000, seed() + 100);
+    eprintln!(
+        "RTL fuzz (seed {}): 10000 frames {kinds:?}, {runs} runs, {progress} running Status, in {:.1} s",
+        seed() + 100,
+        t.elapsed().as_secs_f64()
+    );
 }

@@ -120,10 +120,22 @@ fn serve(args: Args) -> Result<i32> {
         if board.pins().leds & LED_BUSY != 0 { " (busy)" } else { "" }
     );
     if args.check {
+        let pending = board.expected_pending();
         match mismatch {
-            None => {
-                eprintln!("pficp-sim-board: check: {compared} bytes compared with the reference, all equal");
+            None if pending == 0 => {
+                eprintln!(
+                    "pficp-sim-board: check: {compared} bytes compared with the reference, all equal, none pending; \
+                     {} running Status replies within the progress rule; LEDs by their rule",
+                    board.progress_frames()
+                );
                 Ok(0)
+            }
+            None => {
+                eprintln!(
+                    "pficp-sim-board: check: MISMATCH: the reference has {pending} bytes the board never sent \
+                     ({compared} bytes compared, none differed)"
+                );
+                Ok(1)
             }
             Some(m) => {
                 eprintln!("pficp-sim-board: check: MISMATCH: {m} ({compared} bytes compared)");

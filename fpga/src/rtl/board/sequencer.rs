@@ -877,6 +877,8 @@ impl Logic for PfSequencer {
                     }
                     self.run_r.d.next = true;
                     self.fin_r.d.next = false;
+                    // Nothing evaluated yet: Status reports no best cost (not the last run's).
+                    self.best_cost_r.d.next = self.all48.val();
                     self.iter_done.d.next = 0.into();
                     self.k.d.next = 0.into();
                     self.half.d.next = 0.into();
