@@ -183,22 +183,31 @@ fn cli_design_nn_one_lane() {
     assert_eq!(json["resources"]["dsp"].as_u64().unwrap(), 9 + 3, "transform 9 + one lane 3: {json}");
 }
 
-/// The board (the default design): lints clean with the three waivers, each of which it needs,
-/// synthesises with its 8 pins (clock, reset_n, uart_rx, uart_tx, leds[3:0]) and one BUFG, fits
-/// the limits, and comes with its UCF and ISE script.
+/// The shipped board (the default design at the default P = 16, as `hdl-gen --out DIR`
+/// builds it): lints clean with the three waivers, each of which it needs, synthesises with
+/// its 8 pins (clock, reset_n, uart_rx, uart_tx, leds[3:0]) and one BUFG, fits the limits
+/// (LUT <= 60 %, DSP48A1 <= 58, RAMB16 <= 116, logic levels <= 20: the command fails
+/// otherwise), and comes with its UCF and ISE script.
 #[test]
-fn cli_board_one_lane() {
+fn cli_board_as_shipped() {
     let dir = fresh_dir("hdl-gen-cli-board");
-    let (okay, stdout, stderr) = hdl_gen(&["--out", dir.to_str().unwrap(), "--lanes", "1"]);
+    let (okay, stdout, stderr) = hdl_gen(&["--out", dir.to_str().unwrap()]);
     assert!(okay, "{stdout}\n{stderr}");
-    assert!(stdout.contains("pficp_fpga::rtl::board_verilog(BoardConfig { lanes: 1,"), "{stdout}");
+    assert!(stdout.contains("pficp_fpga::rtl::board_verilog(BoardConfig { lanes: 16,"), "{stdout}");
     assert!(stdout.contains("lint: clean"), "{stdout}");
     assert!(stdout.contains("**within limits**"), "{stdout}");
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("resources.json")).unwrap()).unwrap();
-    assert_eq!(json["resources"]["io_buffers"], 8, "{json}");
-    assert_eq!(json["resources"]["bufg"], 1, "{json}");
-    assert!(json["resources"]["dsp"].as_u64().unwrap() >= 3, "{json}");
+    let r = &json["resources"];
+    eprintln!(
+        "board P = 16: LUT {}, FF {}, DSP48A1 {}, RAMB16 {}, {} logic levels",
+        r["lut"], r["ff"], r["dsp"], r["bram16"], r["depth"]
+    );
+    assert_eq!(r["io_buffers"], 8, "{json}");
+    assert_eq!(r["bufg"], 1, "{json}");
+    // The lanes' multipliers are in DSP48A1s, not in LUTs.
+    assert!(r["dsp"].as_u64().unwrap() >= 48, "{json}");
+    assert!(json["limits"]["violations"].as_array().unwrap().is_empty(), "{json}");
     for f in [hdl_gen::UCF_FILE, hdl_gen::ise::TCL_FILE, "resources.md", "yosys.log"] {
         assert!(dir.join(f).is_file(), "{f}");
     }
@@ -206,7 +215,7 @@ fn cli_board_one_lane() {
     let raw = dir.join("raw_board.v");
     std::fs::write(
         &raw,
-        pficp_fpga::rtl::board_verilog(&pficp_fpga::board::BoardConfig { lanes: 1, ..Default::default() }),
+        pficp_fpga::rtl::board_verilog(&pficp_fpga::board::BoardConfig::default()),
     )
     .unwrap();
     let r = ok(lint_file(&raw));
