@@ -213,11 +213,7 @@ fn cli_board_as_shipped() {
     }
     // Every waiver is needed by the board: without them, -Wall reports exactly their codes.
     let raw = dir.join("raw_board.v");
-    std::fs::write(
-        &raw,
-        pficp_fpga::rtl::board_verilog(&pficp_fpga::board::BoardConfig::default()),
-    )
-    .unwrap();
+    std::fs::write(&raw, pficp_fpga::rtl::board_verilog(&pficp_fpga::board::BoardConfig::default())).unwrap();
     let r = ok(lint_file(&raw));
     let mut codes: Vec<&str> = r.messages.iter().filter_map(|m| m.code.as_deref()).collect();
     codes.sort();

@@ -330,3 +330,23 @@ fn fuzzed_requests_full() {
         t.elapsed().as_secs_f64()
     );
 }
+
+/// The LEDs by their rule, checked on every clock by the serial line beside the reference
+/// (`sim::serial`): here each rule is also seen to change state.
+#[test]
+fn the_leds_follow_their_rule() {
+    use pficp_sim::serial::{LED_ERROR, RX_GLOW_CLOCKS};
+    let mut rng = Rng(seed() + 3);
+    let mut b = loaded(&mut rng);
+    let led = |b: &SerialBoard, bit: u8| b.pins().leds & bit != 0;
+    assert!(led(&b, 2), "receive activity lit just after a request");
+    assert!(!led(&b, LED_ERROR), "the last reply was no error");
+    checked(&mut b, &frame(Command::Identify, 7, vec![1, 2, 3])); // BadLength
+    assert!(led(&b, LED_ERROR), "the last reply was an error");
+    checked(&mut b, &frame(Command::Identify, 8, vec![]));
+    assert!(!led(&b, LED_ERROR));
+    b.run(RX_GLOW_CLOCKS + 1_000);
+    assert!(!led(&b, 2), "receive activity dark {} clocks after the last byte", RX_GLOW_CLOCKS + 1_000);
+    let (n, m) = b.comparison();
+    assert!(m.is_none(), "after {n} bytes: {}", m.unwrap());
+}
