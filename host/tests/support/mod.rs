@@ -27,62 +27,53 @@ pub struct PtyBoard {
 }
 
 impl PtyBoard {
-    /// Serve `handler` on a new pseudo-terminal.
-    pub fn serve(mut handler: Handler) -> PtyBoard {
+    /// A new pseudo-terminal whose board end runs `turn` (with reads timing out after
+    /// `read_timeout`) until it returns false or the board is dropped.
+    fn run(read_timeout: Duration, mut turn: impl FnMut(&mut TTYPort) -> bool + Send + 'static) -> PtyBoard {
         let (mut board_end, client_end) = TTYPort::pair().expect("a pseudo-terminal");
         let path = client_end.name().expect("the client end has a path");
-        board_end.set_timeout(Duration::from_millis(20)).unwrap();
+        board_end.set_timeout(read_timeout).unwrap();
         let stop = Arc::new(AtomicBool::new(false));
         let flag = stop.clone();
-        let thread = std::thread::spawn(move || {
-            let mut buf = [0u8; 4096];
-            while !flag.load(Ordering::Relaxed) {
-                let n = match board_end.read(&mut buf) {
-                    Ok(0) => break,
-                    Ok(n) => n,
-                    Err(e) if e.kind() == ErrorKind::TimedOut || e.kind() == ErrorKind::Interrupted => continue,
-                    Err(_) => break, // the client's end is gone
-                };
-                match handler(&buf[..n]) {
-                    Some(out) => {
-                        if !out.is_empty() && board_end.write_all(&out).is_err() {
-                            break;
-                        }
-                    }
-                    None => break,
-                }
-            }
-            // Dropping `board_end` closes the line: the client's reads fail.
-        });
+        // Dropping `board_end` at the end closes the line: the client's reads fail.
+        let thread = std::thread::spawn(move || while !flag.load(Ordering::Relaxed) && turn(&mut board_end) {});
         PtyBoard { client_end: Some(client_end), path, stop, thread: Some(thread) }
+    }
+
+    /// Serve `handler` on a new pseudo-terminal.
+    pub fn serve(mut handler: Handler) -> PtyBoard {
+        let mut buf = [0u8; 4096];
+        PtyBoard::run(Duration::from_millis(20), move |port| {
+            let n = match port.read(&mut buf) {
+                Ok(0) => return false,
+                Ok(n) => n,
+                Err(e) if e.kind() == ErrorKind::TimedOut || e.kind() == ErrorKind::Interrupted => return true,
+                Err(_) => return false, // the client's end is gone
+            };
+            match handler(&buf[..n]) {
+                Some(out) => out.is_empty() || port.write_all(&out).is_ok(),
+                None => false,
+            }
+        })
     }
 
     /// A line that sends `next()` every millisecond, whatever it is sent (which it drops):
     /// a babbling device.
     pub fn babbling(mut next: impl FnMut() -> Vec<u8> + Send + 'static) -> PtyBoard {
-        let (mut board_end, client_end) = TTYPort::pair().expect("a pseudo-terminal");
-        let path = client_end.name().expect("the client end has a path");
-        board_end.set_timeout(Duration::from_millis(1)).unwrap();
-        let stop = Arc::new(AtomicBool::new(false));
-        let flag = stop.clone();
-        let thread = std::thread::spawn(move || {
-            let mut buf = [0u8; 4096];
-            while !flag.load(Ordering::Relaxed) {
-                match board_end.read(&mut buf) {
-                    Ok(0) => break,
-                    Ok(_) => {}
-                    Err(e) if e.kind() == ErrorKind::TimedOut || e.kind() == ErrorKind::Interrupted => {}
-                    Err(_) => break,
-                }
-                match board_end.write(&next()) {
-                    Ok(_) => {}
-                    // The client does not read and the line is full: babble on.
-                    Err(e) if e.kind() == ErrorKind::TimedOut || e.kind() == ErrorKind::Interrupted => {}
-                    Err(_) => break,
-                }
+        let mut buf = [0u8; 4096];
+        PtyBoard::run(Duration::from_millis(1), move |port| {
+            match port.read(&mut buf) {
+                Ok(0) => return false,
+                Ok(_) => {}
+                Err(e) if e.kind() == ErrorKind::TimedOut || e.kind() == ErrorKind::Interrupted => {}
+                Err(_) => return false,
             }
-        });
-        PtyBoard { client_end: Some(client_end), path, stop, thread: Some(thread) }
+            match port.write(&next()) {
+                Ok(_) => true,
+                // The client does not read and the line is full: babble on.
+                Err(e) => e.kind() == ErrorKind::TimedOut || e.kind() == ErrorKind::Interrupted,
+            }
+        })
     }
 
     /// The reference board.
