@@ -22,8 +22,9 @@
 pub const COORD_FRAC: u32 = 13;
 /// Fraction bits of a pose matrix entry.
 pub const MATRIX_FRAC: u32 = 15;
-/// Fraction bits of a pose translation (same as coordinates).
-pub const TRANSLATION_FRAC: u32 = 13;
+/// Fraction bits of a pose translation, Q5.13 (same as coordinates; the filter's translation
+/// parameters are [`crate::pf::PARAM_TRANSLATION_FRAC`]).
+pub const POSE_TRANSLATION_FRAC: u32 = 13;
 /// Bits of a pose matrix entry and translation.
 pub const POSE_BITS: u32 = 18;
 /// Fraction bits of a squared distance and a cost.
@@ -32,6 +33,10 @@ pub const DIST_FRAC: u32 = 2 * COORD_FRAC;
 pub const DIST_BITS: u32 = 34;
 /// Bits of a particle cost.
 pub const COST_BITS: u32 = 48;
+/// Mask of a cost (48 bits); costs wrap at it, and its value means "no cost yet".
+pub const COST_MASK: u64 = (1 << COST_BITS) - 1;
+/// Most particles the board holds (the weight stage's costs, the filter's set).
+pub const MAX_PARTICLES: usize = 256;
 /// Largest model and scan: 4,096 points (12-bit index).
 pub const MAX_POINTS: usize = 4096;
 /// Bits of a point index.
@@ -90,7 +95,7 @@ impl FxPose {
     pub fn from_f64(m: &[f64; 9], t: &[f64; 3]) -> FxPose {
         FxPose {
             m: m.map(|v| quantise(v, MATRIX_FRAC, POSE_BITS) as i32),
-            t: t.map(|v| quantise(v, TRANSLATION_FRAC, POSE_BITS) as i32),
+            t: t.map(|v| quantise(v, POSE_TRANSLATION_FRAC, POSE_BITS) as i32),
         }
     }
 
@@ -111,6 +116,9 @@ impl FxPose {
         w
     }
 }
+
+/// Bits of a packed point (the model and scan memory word).
+pub const POINT_WORD_BITS: u32 = 48;
 
 /// Pack a point into the 48-bit memory word: x in bits 0..16, y in 16..32, z in 32..48.
 pub fn pack_point(p: FxPoint) -> u64 {

@@ -1,14 +1,19 @@
-//! PF-ICP hardware side.
+//! PF-ICP hardware side: the formats, the bit-exact references, the wire protocol (always)
+//! and the rust_hdl RTL (feature `rtl`).
 //!
 //! - [`format`]: the fixed-point formats shared by host, reference and RTL.
 //! - [`pipeline`]: the cycle-accurate reference of the nearest-neighbour pipeline.
 //! - [`weights`]: the cycle-accurate reference of the weight stage (minimum cost, exp table).
-//! - [`particle_weights`]: the two wired together, as the RTL top.
-//! - [`protocol`]: the wire protocol (COBS framing, CRC-16, commands), shared with the host.
-//! - `rtl` (feature `rtl`): the rust_hdl RTL of the pipeline and its Verilog.
-//!
-//! The bit-exact reference of the pipeline, the wire protocol and (behind the `rtl`
-//! feature) the rust_hdl RTL land with the hardware issues.
+//! - [`particle_weights`]: the two wired together, as the RTL top of that name.
+//! - [`pf`]: the on-board particle filter's bit-exact functional reference (`pf::run`), its
+//!   formats, CORDIC, pose program and PRNG.
+//! - [`sequencer`]: the cycle-accurate model of the filter's RTL (`PfSequencer`) and its
+//!   clock formulas; [`seq_state`]: their one list of states.
+//! - [`protocol`]: the wire protocol (COBS framing, CRC-16, commands, error codes).
+//! - [`messages`]: each command's data layout, encoded and decoded.
+//! - [`board`]: the board's configuration and the byte-level reference board (`BoardModel`).
+//! - `rtl` (feature `rtl`): the rust_hdl RTL of the pipeline, the weight stage, the board
+//!   top and its blocks, and their Verilog.
 #![warn(missing_docs)]
 
 pub mod board;
@@ -20,5 +25,6 @@ pub mod pipeline;
 pub mod protocol;
 #[cfg(feature = "rtl")]
 pub mod rtl;
+pub mod seq_state;
 pub mod sequencer;
 pub mod weights;

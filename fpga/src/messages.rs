@@ -30,7 +30,7 @@ pub const STATUS_BYTES: usize = 9;
 /// Data bytes of the Result reply.
 pub const RESULT_BYTES: usize = 2 + 6 + 5 + 3 * PARAMS + POSE_BYTES;
 /// The best cost a Status reports before any run: `2^48 - 1`.
-pub const NO_COST: u64 = (1 << 48) - 1;
+pub const NO_COST: u64 = crate::format::COST_MASK;
 /// Mask of a best point distance in the Result reply (34 bits).
 pub const MAX_D2_MASK: u64 = (1 << 34) - 1;
 

@@ -25,8 +25,9 @@ use crate::format::{exp_table, FxPose, EXP_ENTRIES};
 pub const PARAMS: usize = 7;
 /// Index of the scale parameter.
 pub const SCALE: usize = 3;
-/// Fraction bits of a translation parameter (Q5.19).
-pub const TRANSLATION_FRAC: u32 = 19;
+/// Fraction bits of a translation parameter, Q5.19 (the pose built from it has
+/// [`crate::format::POSE_TRANSLATION_FRAC`]).
+pub const PARAM_TRANSLATION_FRAC: u32 = 19;
 /// Fraction bits of the scale parameter (Q3.21).
 pub const SCALE_FRAC: u32 = 21;
 /// Bits of a parameter (angles: a full turn).
@@ -44,8 +45,7 @@ pub const CORDIC_ATAN: [i32; CORDIC_STEPS] =
 pub const CORDIC_K: i32 = 159188;
 /// Fraction bits inside the CORDIC (two guard bits over the output).
 pub const CORDIC_FRAC: u32 = 18;
-/// Most particles.
-pub const MAX_PARTICLES: usize = 256;
+pub use crate::format::MAX_PARTICLES;
 /// Words of a Run request after its 6 header bytes (6 bytes each, little-endian).
 pub const RUN_WORDS: usize = 24;
 /// Data bytes of a Run request.

@@ -11,7 +11,7 @@ use crate::format::{dist2, pack_point, transform, unpack_point, FxPoint, FxPose,
 /// Squared distances are below this; a lane's minimum starts here.
 pub const DIST_INIT: u64 = (1 << crate::format::DIST_BITS) - 1;
 /// Mask of a 48-bit cost.
-pub const COST_MASK: u64 = (1 << crate::format::COST_BITS) - 1;
+pub use crate::format::COST_MASK;
 
 /// Input ports (before an edge).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -168,7 +168,7 @@ impl PipelineModel {
         let mut next = self.clone();
         next.ram_q = ram[(self.addr as usize) % MAX_POINTS];
         if i.model_we {
-            ram[(i.model_waddr as usize) % MAX_POINTS] = i.model_wdata & ((1 << 48) - 1);
+            ram[(i.model_waddr as usize) % MAX_POINTS] = i.model_wdata & ((1 << crate::format::POINT_WORD_BITS) - 1);
         }
         next.ram = ram;
         // Transform pipeline (runs in every state; only Load feeds it).

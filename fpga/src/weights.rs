@@ -4,10 +4,9 @@
 
 use crate::format::{exp_table, WeightScale, EXCESS_MAX, EXP_ENTRIES};
 
-/// Most particles the stage holds.
-pub const MAX_PARTICLES: usize = 256;
+pub use crate::format::MAX_PARTICLES;
 /// Mask of a 48-bit cost; also the minimum after `clear`.
-pub const COST_MAX: u64 = (1 << 48) - 1;
+pub const COST_MAX: u64 = crate::format::COST_MASK;
 
 /// Input ports (before an edge).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -42,7 +42,9 @@ use crate::pf_icp::{
 use nalgebra::Point3;
 use pficp_fpga::format::{FxPoint, FxPose, WeightScale, DIST_FRAC};
 use pficp_fpga::messages::{Identity, ResultReply, RunState, MAX_D2_MASK, NO_COST};
-use pficp_fpga::pf::{wrap24, Particle, PfConfig, PARAMS, PARAM_BITS, SCALE, SCALE_FRAC, SIGMA_BITS, TRANSLATION_FRAC};
+use pficp_fpga::pf::{
+    wrap24, Particle, PfConfig, PARAMS, PARAM_BITS, PARAM_TRANSLATION_FRAC, SCALE, SCALE_FRAC, SIGMA_BITS,
+};
 use pficp_fpga::protocol::{Command, ErrorCode, VERSION};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -326,9 +328,9 @@ pub fn pf_config(
     let (rm, rs) = (model_norm.radius, scan_norm.radius);
     let p = &prior.init_params;
     let centre: Particle = [
-        param24(p[0] / rm, TRANSLATION_FRAC),
-        param24(p[1] / rm, TRANSLATION_FRAC),
-        param24(p[2] / rm, TRANSLATION_FRAC),
+        param24(p[0] / rm, PARAM_TRANSLATION_FRAC),
+        param24(p[1] / rm, PARAM_TRANSLATION_FRAC),
+        param24(p[2] / rm, PARAM_TRANSLATION_FRAC),
         param24(p[3] * rs / rm, SCALE_FRAC).max(1),
         binary_angle(p[4]),
         binary_angle(p[5]),
@@ -337,7 +339,7 @@ pub fn pf_config(
     let widen = settings.region_sigmas / 2.0;
     let lsb = |d: usize, x: f64| -> u32 {
         let v = match d {
-            0..=2 => x / rm * (1u64 << TRANSLATION_FRAC) as f64,
+            0..=2 => x / rm * (1u64 << PARAM_TRANSLATION_FRAC) as f64,
             3 => x * rs / rm * (1u64 << SCALE_FRAC) as f64,
             _ => x / std::f64::consts::TAU * (1u64 << PARAM_BITS) as f64,
         };
@@ -366,7 +368,7 @@ pub fn pf_config(
 
 /// The pose (scan to model, original frame) of the board's parameters.
 pub fn params_pose(params: &Particle, model_norm: &Normalisation, scan_norm: &Normalisation) -> Pose {
-    let t = |k: usize| params[k] as f64 / (1u64 << TRANSLATION_FRAC) as f64;
+    let t = |k: usize| params[k] as f64 / (1u64 << PARAM_TRANSLATION_FRAC) as f64;
     let a = |k: usize| params[k] as f64 / (1u64 << PARAM_BITS) as f64 * std::f64::consts::TAU;
     let s = params[SCALE] as f64 / (1u64 << SCALE_FRAC) as f64;
     let pose_n = Pose::from_params(&[t(0), t(1), t(2), s, a(4), a(5), a(6)]);

@@ -79,7 +79,7 @@ pub fn coordinate_error_bound(s: f64) -> f64 {
     let half = |frac: u32| 0.5 / (1u64 << frac) as f64;
     s * 3.0 * half(format::COORD_FRAC)
         + 3.0 * half(format::MATRIX_FRAC)
-        + half(format::TRANSLATION_FRAC)
+        + half(format::POSE_TRANSLATION_FRAC)
         + half(format::COORD_FRAC)
         + half(format::COORD_FRAC)
 }
