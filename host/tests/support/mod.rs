@@ -68,8 +68,8 @@ impl PtyBoard {
                 Err(e) if e.kind() == ErrorKind::TimedOut || e.kind() == ErrorKind::Interrupted => {}
                 Err(_) => return false,
             }
-            match port.write(&next()) {
-                Ok(_) => true,
+            match port.write_all(&next()) {
+                Ok(()) => true,
                 // The client does not read and the line is full: babble on.
                 Err(e) => e.kind() == ErrorKind::TimedOut || e.kind() == ErrorKind::Interrupted,
             }
