@@ -474,13 +474,27 @@ impl Fuzz {
     }
 }
 
-/// Rounds of the fuzz test (each one case and a recovery).
+/// Rounds of the fuzz test in every `cargo test` (each one case and a recovery: about
+/// 190,000 reply frames); [`fuzz_the_board_full`] runs 60,000 (over 10^6 frames).
 const ROUNDS: u32 = 9000;
 
 #[test]
 fn fuzz_the_board() {
+    fuzz_rounds(ROUNDS, Rng::from_env());
+}
+
+/// Over 10^6 frames through the reference:
+/// `cargo test --release -p pficp-fpga --test board_fuzz -- --ignored --nocapture`.
+#[test]
+#[ignore = "over 10^6 frames: run in release with --ignored"]
+fn fuzz_the_board_full() {
+    let z = fuzz_rounds(60_000, Rng(2));
+    assert!(z.frames_out > 1_000_000, "{} reply frames", z.frames_out);
+}
+
+/// `rounds` rounds of every kind in turn with `r`; the state at the end.
+fn fuzz_rounds(rounds: u32, mut r: Rng) -> Fuzz {
     let start = std::time::Instant::now();
-    let mut r = Rng::from_env();
     let mut z = Fuzz::new();
     let mut counts = [0usize; 6];
     // Load something to search, so Evaluate and Nearest get past their capacity checks.
@@ -489,7 +503,7 @@ fn fuzz_the_board() {
         z.request(&Frame { code, seq: 0, data: [&le16(0)[..], &le16(170), &pts].concat() });
     }
     z.request(&Frame { code: 0x04, seq: 0, data: [le16(64), le16(48)].concat() });
-    for round in 0..ROUNDS {
+    for round in 0..rounds {
         let seq = round as u8;
         match round % 6 {
             0 => {
@@ -566,6 +580,7 @@ fn fuzz_the_board() {
     }
     assert!(z.runs > 0 && z.results > 0, "{} runs, {} results", z.runs, z.results);
     assert_eq!(z.errors_out[ErrorCode::Busy as usize], 0);
+    z
 }
 
 fn loaded_board() -> BoardModel {

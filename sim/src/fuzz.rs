@@ -1,7 +1,8 @@
-//! Seeded random frames for the board, the same for the byte-level reference
-//! (`tests/tests/fuzz_board.rs`, 10^6 frames) and the Verilated board
-//! (`sim/tests/board_faults.rs`, 10^4): [`FrameFuzzer::next_wire`] draws one of
-//! [`KINDS`], from line noise to well-formed requests that change the board's state.
+//! Seeded random frames for the Verilated board (`sim/tests/board_faults.rs`, 10^4 frames
+//! with `--ignored`): [`FrameFuzzer::next_wire`] draws one of [`KINDS`], from line noise to
+//! well-formed requests that change the board's state, and the byte-level reference beside
+//! the RTL says what each must get. (The reference alone is fuzzed deeper, with predicted
+//! error codes, in `fpga/tests/board_fuzz.rs`.)
 //!
 //! Bounds (so that a fuzz run measures robustness, not the reference's compute time): the
 //! reference computes a whole Run when its request arrives, so Run requests ask for at most
