@@ -29,6 +29,14 @@ pub const RUN_REPLY_BYTES: usize = 4;
 pub const STATUS_BYTES: usize = 9;
 /// Data bytes of the Result reply.
 pub const RESULT_BYTES: usize = 2 + 6 + 5 + 3 * PARAMS + POSE_BYTES;
+/// Mask of the 24-bit `w_sum` field (the weight stage's accumulator).
+pub const W_SUM_MASK: u32 = (1 << 24) - 1;
+/// Data bytes of a Nearest request: first, count, pose.
+pub const NEAREST_REQUEST_BYTES: usize = 4 + POSE_BYTES;
+/// Data bytes of an Evaluate request before its poses: flags, pre_shift, q_mul, n.
+pub const EVALUATE_HEADER_BYTES: usize = 6;
+/// Data bytes of a load request before its points: offset, count.
+pub const LOAD_HEADER_BYTES: usize = 4;
 /// The best cost a Status reports before any run: `2^48 - 1`.
 pub const NO_COST: u64 = crate::format::COST_MASK;
 /// Mask of a best point distance in the Result reply (34 bits).

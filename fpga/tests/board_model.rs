@@ -1,0 +1,853 @@
+//! The byte-level reference board (`pficp_fpga::board::BoardModel`, docs/protocol.md)
+//! command by command: every reply and every error, the stores after each, frames and
+//! resynchronisation, and the board against the cycle models of its pipeline and weight
+//! stage.
+
+use pficp_fpga::board::*;
+use pficp_fpga::format::{pack_point, FxPose};
+use pficp_fpga::format::{unpack_point, FxPoint, WeightScale};
+use pficp_fpga::messages::{point_bytes, pose_bytes, IDENTITY_BYTES};
+use pficp_fpga::messages::{Identity, ResultReply, StatusReply, FLAG_FIRST, FLAG_LAST, MAX_LOAD_POINTS};
+use pficp_fpga::pf::{PfConfig, PfOutcome};
+use pficp_fpga::pipeline::{run_particle, PipelineModel};
+use pficp_fpga::protocol::{cobs_encode, crc16, FrameError, MAX_FRAME};
+use pficp_fpga::protocol::{ErrorCode, Frame};
+use pficp_fpga::weights::{WeightInputs, WeightModel};
+
+const IDENTIFY: u8 = 0x01;
+const LOAD_MODEL: u8 = 0x02;
+const LOAD_SCAN: u8 = 0x03;
+const SET_SIZES: u8 = 0x04;
+const EVALUATE: u8 = 0x05;
+const NEAREST: u8 = 0x06;
+const RUN: u8 = 0x07;
+const STATUS: u8 = 0x08;
+const RESULT: u8 = 0x09;
+/// Q3.15 one (the identity matrix's diagonal).
+const ONE: i32 = 1 << 15;
+
+fn req(code: u8, seq: u8, data: Vec<u8>) -> Frame {
+    Frame { code, seq, data }
+}
+
+/// Everything a command may change.
+#[derive(Debug, PartialEq)]
+struct Snapshot(Vec<u64>, Vec<u64>, (u16, u16), Vec<u64>, Option<PfOutcome>);
+
+fn snap(b: &BoardModel) -> Snapshot {
+    Snapshot(
+        b.model_store().to_vec(),
+        b.scan_store().to_vec(),
+        b.sizes(),
+        b.stored_costs().to_vec(),
+        b.pf_outcome().cloned(),
+    )
+}
+
+/// Execute `f`, expect a normal reply; its data.
+fn ok(b: &mut BoardModel, f: Frame) -> Vec<u8> {
+    let r = b.execute(&f);
+    assert_eq!((r.code, r.seq), (f.code | 0x80, f.seq), "{r:?} for command {:#04x}", f.code);
+    r.data
+}
+
+/// Execute `f`, expect the error reply `e` and no change.
+fn rejects(b: &mut BoardModel, f: Frame, e: ErrorCode) {
+    let before = snap(b);
+    let r = b.execute(&f);
+    assert_eq!(r, Frame::error(f.seq, e, f.code), "command {:#04x}, {} data bytes", f.code, f.data.len());
+    assert_eq!(r.code, 0xff);
+    assert_eq!(r.data, vec![e as u8, f.code]);
+    assert!(snap(b) == before, "a rejected command changed the board");
+}
+
+fn u16s(a: u16, b: u16) -> Vec<u8> {
+    vec![a as u8, (a >> 8) as u8, b as u8, (b >> 8) as u8]
+}
+
+fn load_data(offset: u16, count: u16, points: &[FxPoint]) -> Vec<u8> {
+    let mut d = u16s(offset, count);
+    for &p in points {
+        d.extend_from_slice(&point_bytes(p));
+    }
+    d
+}
+
+fn eval_data(flags: u8, pre_shift: u8, q_mul: u32, n: u8, poses: &[FxPose]) -> Vec<u8> {
+    let mut d = vec![flags, pre_shift, q_mul as u8, (q_mul >> 8) as u8, (q_mul >> 16) as u8, n];
+    for p in poses {
+        d.extend_from_slice(&pose_bytes(p));
+    }
+    d
+}
+
+fn nearest_data(first: u16, count: u16, pose: &FxPose) -> Vec<u8> {
+    let mut d = u16s(first, count);
+    d.extend_from_slice(&pose_bytes(pose));
+    d
+}
+
+fn le_at(d: &[u8], at: usize, bytes: usize) -> u64 {
+    (0..bytes).map(|k| (d[at + k] as u64) << (8 * k)).sum()
+}
+
+/// Identity rotation, translation `t` (Q5.13: the point's own scale), so a scan point
+/// `s` goes exactly to `s + t`.
+fn shift(t: [i32; 3]) -> FxPose {
+    FxPose { m: [ONE, 0, 0, 0, ONE, 0, 0, 0, ONE], t }
+}
+
+/// The model: a 4 x 4 x 4 grid, 2,000 LSB apart (coordinates -3000, -1000, 1000, 3000).
+fn grid() -> Vec<FxPoint> {
+    let g = |v: usize| (-3000 + 2000 * v as i32) as i16;
+    (0..64).map(|k| [g(k / 16), g(k / 4 % 4), g(k % 4)]).collect()
+}
+
+/// Scan point `i` sits at grid point `home(i)` plus `offset(i)` (each axis within 300).
+fn home(i: usize) -> usize {
+    (7 * i + 3) % 64
+}
+fn offset(i: usize) -> [i32; 3] {
+    [(i * 37 % 601) as i32 - 300, (i * 53 % 601) as i32 - 300, (i * 71 % 601) as i32 - 300]
+}
+fn scan_cloud(n: usize) -> Vec<FxPoint> {
+    let g = grid();
+    (0..n).map(|i| std::array::from_fn(|a| (g[home(i)][a] as i32 + offset(i)[a]) as i16)).collect()
+}
+/// Translation of particle `k` (each axis within 300).
+fn t_of(k: usize) -> [i32; 3] {
+    [(k * 13 % 601) as i32 - 300, (k * 29 % 601) as i32 - 300, (k * 47 % 601) as i32 - 300]
+}
+
+/// Squared distance of scan point `i` shifted by `t` to its home, by hand: with every
+/// axis off by at most 600 and the grid 2,000 apart, the home is the nearest point.
+fn hand_dist(i: usize, t: [i32; 3]) -> u64 {
+    (0..3).map(|a| ((offset(i)[a] + t[a]) as i64).pow(2) as u64).sum()
+}
+fn hand_cost(n_scan: usize, t: [i32; 3]) -> u64 {
+    (0..n_scan).map(|i| hand_dist(i, t)).sum()
+}
+
+/// A board with the grid as model, `n_scan` scan points, sizes set.
+fn loaded(n_scan: usize) -> BoardModel {
+    let mut b = BoardModel::new(BoardConfig::default());
+    ok(&mut b, req(LOAD_MODEL, 1, load_data(0, 64, &grid())));
+    let scan = scan_cloud(n_scan);
+    for (k, chunk) in scan.chunks(MAX_LOAD_POINTS).enumerate() {
+        let off = (k * MAX_LOAD_POINTS) as u16;
+        ok(&mut b, req(LOAD_SCAN, 2, load_data(off, chunk.len() as u16, chunk)));
+    }
+    ok(&mut b, req(SET_SIZES, 3, u16s(64, n_scan as u16)));
+    b
+}
+
+/// The weight stage's cycle-accurate model over `costs`: (weights, w_sum, min_cost).
+fn weigh_cycles(costs: &[u64], pre_shift: u8, q_mul: u32) -> (Vec<u16>, u32, u64) {
+    let mut m = WeightModel::new();
+    m.step(&WeightInputs { clear: true, ..Default::default() });
+    for &c in costs {
+        m.step(&WeightInputs { cost_valid: true, cost: c, ..Default::default() });
+    }
+    let min = m.outputs().min_cost;
+    m.step(&WeightInputs { weigh: true, pre_shift, q_mul, ..Default::default() });
+    let mut w = Vec::new();
+    for _ in 0..1000 {
+        m.step(&WeightInputs::default());
+        let o = m.outputs();
+        if o.w_valid {
+            w.push(o.weight);
+        }
+        if o.w_done {
+            return (w, o.w_sum, min);
+        }
+    }
+    panic!("the weight stage never finished");
+}
+
+/// Parse an Evaluate reply by hand: (costs, Some((stored, min, w_sum, weights))).
+#[allow(clippy::type_complexity)]
+fn parse_eval(d: &[u8], n: usize, last: bool) -> (Vec<u64>, Option<(usize, u64, u32, Vec<u16>)>) {
+    let costs = (0..n).map(|k| le_at(d, 6 * k, 6)).collect();
+    if !last {
+        assert_eq!(d.len(), 6 * n);
+        return (costs, None);
+    }
+    let at = 6 * n;
+    let stored = le_at(d, at, 2) as usize;
+    assert_eq!(d.len(), at + 2 + 6 + 3 + 2 * stored);
+    let w = (0..stored).map(|k| le_at(d, at + 11 + 2 * k, 2) as u16).collect();
+    (costs, Some((stored, le_at(d, at + 2, 6), le_at(d, at + 8, 3) as u32, w)))
+}
+
+#[test]
+fn wire_bytes_are_exact() {
+    // Computed independently (a separate CRC-16/CCITT-FALSE and COBS in Python) for a
+    // 16-lane board at 100 MHz and 921,600 baud, protocol version 2.
+    let mut b = BoardModel::new(BoardConfig { lanes: 16, clock_hz: 100_000_000, baud: 921_600 });
+    let request = [0x05, 0x01, 0x05, 0x9b, 0x7e, 0x00];
+    let reply = [
+        0x04, 0x81, 0x05, 0x02, 0x02, 0x10, 0x02, 0x10, 0x02, 0x10, 0x05, 0x01, 0x25, 0xaa, 0x90, 0x04, 0xe1, 0xf5,
+        0x05, 0x03, 0x10, 0x0e, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x03, 0x41, 0x17, 0x00,
+    ];
+    for (k, &byte) in request.iter().enumerate() {
+        let out = b.receive(byte);
+        if k + 1 < request.len() {
+            assert!(out.is_empty(), "a reply before the delimiter");
+        } else {
+            assert_eq!(out, reply);
+        }
+    }
+    let sizes = [0x04, 0x04, 0x09, 0x03, 0x02, 0x02, 0x03, 0x73, 0x5d, 0x00];
+    assert_eq!(b.receive_all(&sizes), [0x04, 0x84, 0x09, 0x03, 0x02, 0x02, 0x03, 0x53, 0x89, 0x00]);
+    assert_eq!(b.sizes(), (3, 2));
+    // The same SetSizes with its CRC's low byte flipped: BadCrc, sequence and command 0.
+    let mut bad = sizes;
+    bad[7] ^= 0x01;
+    assert_eq!(b.receive_all(&bad), [0x02, 0xff, 0x02, 0x01, 0x03, 0x52, 0xfc, 0x00]);
+}
+
+#[test]
+fn identify_reports_config_limits_and_sizes() {
+    let config = BoardConfig { lanes: 4, clock_hz: 50_000_000, baud: 115_200 };
+    let mut b = BoardModel::new(config);
+    assert_eq!(b.config(), config);
+    let d = ok(&mut b, req(IDENTIFY, 77, vec![]));
+    assert_eq!(d.len(), IDENTITY_BYTES);
+    let fields: Vec<u64> = [(0, 2), (2, 1), (3, 2), (5, 2), (7, 2), (9, 1), (10, 1), (11, 1), (12, 4), (16, 4)]
+        .iter()
+        .map(|&(at, n)| le_at(&d, at, n))
+        .collect();
+    assert_eq!(fields, vec![2, 4, 4096, 4096, 256, 37, 170, 144, 50_000_000, 115_200]);
+    assert_eq!(&d[20..26], &[0; 6], "sizes and stored costs are 0 after power-up");
+    ok(&mut b, req(LOAD_MODEL, 1, load_data(0, 1, &[[1, 2, 3]])));
+    ok(&mut b, req(SET_SIZES, 2, u16s(1000, 4096)));
+    ok(&mut b, req(EVALUATE, 3, eval_data(FLAG_FIRST, 0, 0, 2, &[shift([0; 3]), shift([1, 1, 1])])));
+    let d = ok(&mut b, req(IDENTIFY, 4, vec![]));
+    assert_eq!(&d[20..26], &[0xe8, 0x03, 0x00, 0x10, 2, 0]);
+}
+
+#[test]
+fn loads_write_the_stores_and_leave_the_sizes() {
+    let mut b = BoardModel::new(BoardConfig::default());
+    let pts: Vec<FxPoint> = (0..170)
+        .map(|k| [k as i16 * 193 - 16000, -(k as i16) * 7, if k % 2 == 0 { i16::MIN } else { i16::MAX }])
+        .collect();
+    let d = ok(&mut b, req(LOAD_MODEL, 9, load_data(4096 - 170, 170, &pts)));
+    assert_eq!(d, vec![0x56, 0x0f, 0xaa, 0x00], "offset 3926 and count 170 echoed");
+    let word = |p: FxPoint| (p[0] as u16 as u64) | (p[1] as u16 as u64) << 16 | (p[2] as u16 as u64) << 32;
+    for (k, &p) in pts.iter().enumerate() {
+        assert_eq!(b.model_store()[3926 + k], word(p));
+        assert_eq!(b.model_store()[3926 + k], pack_point(p));
+    }
+    assert!(b.model_store()[..3926].iter().all(|&w| w == 0));
+    assert!(b.scan_store().iter().all(|&w| w == 0), "LoadModel does not touch the scan");
+    let d = ok(&mut b, req(LOAD_SCAN, 10, load_data(5, 2, &[[-1, -1, -1], [1, 0, -2]])));
+    assert_eq!(d, u16s(5, 2));
+    assert_eq!(b.scan_store()[5..7], [0xffff_ffff_ffff, 0xfffe_0000_0001]);
+    assert_eq!(b.scan_store()[4], 0);
+    assert_eq!(b.scan_store()[7], 0);
+    // Overwriting part of a load.
+    ok(&mut b, req(LOAD_SCAN, 11, load_data(6, 1, &[[0, 0, 7]])));
+    assert_eq!(b.scan_store()[5..7], [0xffff_ffff_ffff, 7 << 32]);
+    assert_eq!(b.sizes(), (0, 0), "loading does not change the sizes");
+}
+
+#[test]
+fn set_sizes_echoes_its_data() {
+    let mut b = BoardModel::new(BoardConfig::default());
+    for (m, s) in [(1, 1), (4096, 4096), (4096, 1), (17, 300)] {
+        assert_eq!(ok(&mut b, req(SET_SIZES, 0, u16s(m, s))), u16s(m, s));
+        assert_eq!(b.sizes(), (m, s));
+    }
+}
+
+#[test]
+fn evaluate_costs_match_the_hand_computation() {
+    let mut b = loaded(20);
+    let ts = [[0; 3], t_of(1), t_of(2), [-300, 300, 7]];
+    let poses: Vec<FxPose> = ts.iter().map(|&t| shift(t)).collect();
+    let d = ok(&mut b, req(EVALUATE, 42, eval_data(FLAG_FIRST, 0, 0, 4, &poses)));
+    let (costs, summary) = parse_eval(&d, 4, false);
+    let want: Vec<u64> = ts.iter().map(|&t| hand_cost(20, t)).collect();
+    assert_eq!(costs, want);
+    assert!(summary.is_none());
+    assert_eq!(b.stored_costs(), &want[..]);
+    // Without FIRST the next batch is appended.
+    let d = ok(&mut b, req(EVALUATE, 43, eval_data(0, 0, 0, 1, &[shift([5, 5, 5])])));
+    assert_eq!(parse_eval(&d, 1, false).0, vec![hand_cost(20, [5, 5, 5])]);
+    assert_eq!(b.stored_costs().len(), 5);
+    // FIRST forgets them.
+    ok(&mut b, req(EVALUATE, 44, eval_data(FLAG_FIRST, 0, 0, 1, &[shift([1, 2, 3])])));
+    assert_eq!(b.stored_costs(), &[hand_cost(20, [1, 2, 3])]);
+}
+
+#[test]
+fn evaluate_and_nearest_match_the_cycle_accurate_pipeline() {
+    let mut s = 99u64;
+    let mut rnd = |r: i64| {
+        s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        ((s >> 33) as i64 % (2 * r + 1) - r) as i16
+    };
+    let model: Vec<FxPoint> = (0..150).map(|_| [rnd(9000), rnd(9000), rnd(9000)]).collect();
+    let scan: Vec<FxPoint> = (0..40).map(|_| [rnd(9000), rnd(9000), rnd(9000)]).collect();
+    let pose = FxPose::from_f64(&[0.9, -0.3, 0.1, 0.3, 0.9, 0.0, -0.1, 0.05, 0.95], &[0.1, -0.2, 0.05]);
+    let mut b = BoardModel::new(BoardConfig::default());
+    ok(&mut b, req(LOAD_MODEL, 0, load_data(0, 150, &model)));
+    ok(&mut b, req(LOAD_SCAN, 0, load_data(0, 40, &scan)));
+    ok(&mut b, req(SET_SIZES, 0, u16s(150, 40)));
+    let mut pipe = PipelineModel::new(b.config().lanes);
+    let (want, _) = run_particle(&mut pipe, &model, &scan, &pose, |_| false);
+    let d = ok(&mut b, req(EVALUATE, 0, eval_data(FLAG_FIRST, 0, 0, 1, &[pose])));
+    assert_eq!(parse_eval(&d, 1, false).0, vec![want.cost]);
+    let d = ok(&mut b, req(NEAREST, 0, nearest_data(10, 25, &pose)));
+    let mut pipe = PipelineModel::new(b.config().lanes);
+    let (part, _) = run_particle(&mut pipe, &model, &scan[10..35], &pose, |_| false);
+    assert_eq!(le_at(&d, 4, 6), part.cost);
+    let got: Vec<(u16, u64)> = (0..25).map(|k| (le_at(&d, 10 + 7 * k, 2) as u16, le_at(&d, 12 + 7 * k, 5))).collect();
+    assert_eq!(got, part.nearest);
+    assert_eq!(&part.nearest[..], &want.nearest[10..35]);
+}
+
+/// The 50 particles of the Evaluate flow: 49 small shifts and one far off (saturated x).
+fn fifty() -> Vec<FxPose> {
+    (0..50).map(|k| if k == 31 { shift([131_071, 0, 0]) } else { shift(t_of(k)) }).collect()
+}
+
+fn fifty_costs(n_scan: usize) -> Vec<u64> {
+    let g = grid();
+    (0..50)
+        .map(|k| {
+            if k != 31 {
+                return hand_cost(n_scan, t_of(k));
+            }
+            // x saturates at 32767: the nearest grid points have x = 3000 and the home's y, z.
+            (0..n_scan)
+                .map(|i| {
+                    let dx = 32767 - 3000i64;
+                    let dy = offset(i)[1] as i64;
+                    let dz = offset(i)[2] as i64;
+                    assert!(g[home(i)][0] <= 3000);
+                    (dx * dx + dy * dy + dz * dz) as u64
+                })
+                .sum()
+        })
+        .collect()
+}
+
+#[test]
+fn fifty_particles_in_two_frames_first_37_then_last_13() {
+    let mut b = loaded(20);
+    let poses = fifty();
+    let want = fifty_costs(20);
+    let scale = WeightScale::for_two_q(2.0 * 20.0 * 300.0 * 300.0);
+    // Unused flag bits and the high bits of pre_shift and q_mul are ignored.
+    let pre = scale.pre_shift as u8 | 0xc0;
+    let q = scale.q_mul | 0xfe_0000;
+    let d = ok(&mut b, req(EVALUATE, 1, eval_data(FLAG_FIRST | 0xf4, pre ^ 0x3f, !q, 37, &poses[..37])));
+    let (costs, summary) = parse_eval(&d, 37, false);
+    assert_eq!((costs, summary), (want[..37].to_vec(), None));
+    let d = ok(&mut b, req(EVALUATE, 2, eval_data(FLAG_LAST | 0xf8, pre, q, 13, &poses[37..])));
+    assert_eq!(d.len(), 13 * 6 + 11 + 50 * 2);
+    let (costs, summary) = parse_eval(&d, 13, true);
+    assert_eq!(costs, want[37..].to_vec());
+    let (stored, min, w_sum, w) = summary.unwrap();
+    let (cw, csum, cmin) = weigh_cycles(&want, pre, q);
+    assert_eq!((stored, min, w_sum, &w), (50, cmin, csum, &cw));
+    assert_eq!(min, *want.iter().min().unwrap());
+    assert_eq!(w_sum, w.iter().map(|&x| x as u32).sum::<u32>());
+    assert_eq!(w[want.iter().position(|&c| c == min).unwrap()], 65535, "the best particle weighs 1");
+    assert_eq!(w[31], pficp_fpga::format::exp_table()[255], "the far particle gets the smallest weight");
+    assert!(w.iter().filter(|&&x| x > 1000).count() > 10, "a scale that spreads the weights");
+    assert_eq!(b.stored_costs(), &want[..]);
+}
+
+#[test]
+fn zero_poses_with_last_weighs_the_stored_costs() {
+    let mut b = loaded(20);
+    let poses = fifty();
+    let want = fifty_costs(20);
+    ok(&mut b, req(EVALUATE, 1, eval_data(FLAG_FIRST, 0, 0, 37, &poses[..37])));
+    ok(&mut b, req(EVALUATE, 2, eval_data(0, 0, 0, 13, &poses[37..])));
+    assert_eq!(b.stored_costs(), &want[..]);
+    for (pre, q) in [(10u8, 70_000u32), (0, 1), (63, 0x1ffff), (0, 0x1ffff), (5, 0)] {
+        let d = ok(&mut b, req(EVALUATE, 3, eval_data(FLAG_LAST, pre, q, 0, &[])));
+        let (costs, summary) = parse_eval(&d, 0, true);
+        assert!(costs.is_empty());
+        let (cw, csum, cmin) = weigh_cycles(&want, pre, q);
+        assert_eq!(summary, Some((50, cmin, csum, cw)), "pre_shift {pre} q_mul {q}");
+        assert_eq!(b.stored_costs(), &want[..], "weighing keeps the stored costs");
+    }
+    let id = ok(&mut b, req(IDENTIFY, 4, vec![]));
+    assert_eq!(le_at(&id, 24, 2), 50);
+    // Full capacity: 256 stored, weighed; the 24-bit sum holds 256 full weights.
+    ok(&mut b, req(EVALUATE, 5, eval_data(FLAG_FIRST, 0, 0, 1, &[shift([0; 3])])));
+    for _ in 0..255 {
+        ok(&mut b, req(EVALUATE, 6, eval_data(0, 0, 0, 1, &[shift([0; 3])])));
+    }
+    let d = ok(&mut b, req(EVALUATE, 7, eval_data(FLAG_LAST, 0, 1000, 0, &[])));
+    let (_, summary) = parse_eval(&d, 0, true);
+    let (stored, min, w_sum, w) = summary.unwrap();
+    assert_eq!((stored, min, w_sum), (256, hand_cost(20, [0; 3]), 256 * 65535));
+    assert!(w.iter().all(|&x| x == 65535));
+}
+
+#[test]
+fn nearest_returns_indices_distances_and_their_cost() {
+    let mut b = loaded(200);
+    let t = [-120, 250, 33];
+    let d = ok(&mut b, req(NEAREST, 8, nearest_data(50, 144, &shift(t))));
+    assert_eq!(d.len(), 10 + 7 * 144);
+    assert_eq!((le_at(&d, 0, 2), le_at(&d, 2, 2)), (50, 144));
+    let mut cost = 0;
+    for k in 0..144 {
+        let i = 50 + k;
+        assert_eq!(le_at(&d, 10 + 7 * k, 2), home(i) as u64, "point {i}");
+        assert_eq!(le_at(&d, 12 + 7 * k, 5), hand_dist(i, t), "point {i}");
+        cost += hand_dist(i, t);
+    }
+    assert_eq!(le_at(&d, 4, 6), cost);
+    // The last scan point alone; Nearest leaves the stored costs alone.
+    ok(&mut b, req(EVALUATE, 1, eval_data(FLAG_FIRST, 0, 0, 1, &[shift([0; 3])])));
+    let before = snap(&b);
+    let d = ok(&mut b, req(NEAREST, 9, nearest_data(199, 1, &shift([0; 3]))));
+    let dist = hand_dist(199, [0; 3]);
+    let mut want = u16s(199, 1);
+    want.extend((0..6).map(|k| (dist >> (8 * k)) as u8));
+    want.extend([home(199) as u8, 0]);
+    want.extend((0..5).map(|k| (dist >> (8 * k)) as u8));
+    assert_eq!(d, want);
+    assert!(snap(&b) == before);
+}
+
+#[test]
+fn unknown_commands_are_checked_first() {
+    let mut b = loaded(20);
+    for code in [0x00, 0x0a, 0x0b, 0x42, 0x7e, 0x7f, 0x80, 0x81, 0x84, 0x85, 0x86, 0x87, 0x88, 0x89, 0xff] {
+        for data in [vec![], vec![0; 4], vec![1; 31], vec![0x11; 1029]] {
+            rejects(&mut b, req(code, 0x5a, data), ErrorCode::UnknownCommand);
+        }
+    }
+}
+
+#[test]
+fn identify_checks() {
+    let mut b = BoardModel::new(BoardConfig::default());
+    for len in [1, 2, 26, 1000] {
+        rejects(&mut b, req(IDENTIFY, 3, vec![0; len]), ErrorCode::BadLength);
+    }
+}
+
+#[test]
+fn load_checks() {
+    use ErrorCode::{BadLength, OverCapacity};
+    let mut b = loaded(20);
+    for code in [LOAD_MODEL, LOAD_SCAN] {
+        let p = [[1, 2, 3]; 171];
+        let cases: Vec<(Vec<u8>, ErrorCode)> = vec![
+            (vec![], BadLength),
+            (vec![0, 0, 1], BadLength),
+            (u16s(0, 0), BadLength),
+            (load_data(0, 0, &p[..1]), BadLength),
+            (load_data(0, 171, &p), BadLength),
+            (load_data(4000, 171, &p), BadLength), // lengths before capacities
+            (load_data(0, 0xffff, &p[..1]), BadLength),
+            (load_data(0, 2, &p[..1]), BadLength),
+            (load_data(0, 2, &p[..3]), BadLength),
+            ([load_data(0, 2, &p[..2]), vec![0]].concat(), BadLength),
+            (load_data(0, 2, &p[..2])[..15].to_vec(), BadLength),
+            (load_data(4095, 2, &p[..2]), OverCapacity),
+            (load_data(4096, 1, &p[..1]), OverCapacity),
+            (load_data(3927, 170, &p[..170]), OverCapacity),
+            (load_data(0xffff, 170, &p[..170]), OverCapacity),
+        ];
+        for (data, e) in cases {
+            rejects(&mut b, req(code, 7, data), e);
+        }
+        ok(&mut b, req(code, 7, load_data(3926, 170, &p[..170])));
+        ok(&mut b, req(code, 7, load_data(4095, 1, &p[..1])));
+    }
+}
+
+#[test]
+fn set_sizes_checks() {
+    use ErrorCode::{BadLength, OverCapacity};
+    let mut b = loaded(20);
+    for (data, e) in [
+        (vec![], BadLength),
+        (vec![1, 0, 1], BadLength),
+        (vec![1, 0, 1, 0, 0], BadLength),
+        (vec![0, 0, 0, 0, 0], BadLength), // lengths before capacities
+        (u16s(0, 20), OverCapacity),
+        (u16s(64, 0), OverCapacity),
+        (u16s(0, 0), OverCapacity),
+        (u16s(4097, 1), OverCapacity),
+        (u16s(1, 4097), OverCapacity),
+        (u16s(0xffff, 0xffff), OverCapacity),
+    ] {
+        rejects(&mut b, req(SET_SIZES, 1, data), e);
+    }
+}
+
+#[test]
+fn evaluate_checks() {
+    use ErrorCode::{BadLength, OverCapacity};
+    let p = shift([0; 3]);
+    let mut fresh = BoardModel::new(BoardConfig::default());
+    let mut b = loaded(20);
+    for board in [&mut fresh, &mut b] {
+        for data in [
+            vec![],
+            vec![FLAG_FIRST | FLAG_LAST, 0, 0, 0, 0],
+            eval_data(FLAG_FIRST, 0, 0, 38, &[p; 38]),
+            eval_data(FLAG_FIRST | FLAG_LAST, 0, 0, 255, &[p; 37]),
+            eval_data(FLAG_FIRST, 0, 0, 1, &[]),
+            eval_data(FLAG_FIRST, 0, 0, 1, &[p; 2]),
+            eval_data(FLAG_FIRST, 0, 0, 2, &[p; 1]),
+            eval_data(FLAG_FIRST, 0, 0, 1, &[p])[..32].to_vec(),
+            [eval_data(FLAG_FIRST, 0, 0, 1, &[p]), vec![0]].concat(),
+            eval_data(0, 0, 0, 0, &[]),
+            eval_data(FLAG_FIRST, 0, 0, 0, &[]),
+            eval_data(FLAG_FIRST | 0xfc, 0, 0, 0, &[]),
+            eval_data(0, 0, 0, 0, &[p]),
+        ] {
+            rejects(board, req(EVALUATE, 4, data), BadLength);
+        }
+    }
+    // Sizes 0 (power-up).
+    for flags in [0, FLAG_FIRST, FLAG_LAST, FLAG_FIRST | FLAG_LAST] {
+        rejects(&mut fresh, req(EVALUATE, 4, eval_data(flags, 0, 0, 1, &[p])), OverCapacity);
+        rejects(&mut fresh, req(EVALUATE, 4, eval_data(flags | FLAG_LAST, 0, 0, 0, &[])), OverCapacity);
+    }
+    // Nothing to weigh: none stored, or FIRST forgets them all.
+    rejects(&mut b, req(EVALUATE, 4, eval_data(FLAG_LAST, 0, 0, 0, &[])), OverCapacity);
+    ok(&mut b, req(EVALUATE, 4, eval_data(FLAG_FIRST, 0, 0, 37, &[p; 37])));
+    rejects(&mut b, req(EVALUATE, 4, eval_data(FLAG_FIRST | FLAG_LAST, 0, 0, 0, &[])), OverCapacity);
+    // More than 256 stored afterwards.
+    for _ in 0..5 {
+        ok(&mut b, req(EVALUATE, 4, eval_data(0, 0, 0, 37, &[p; 37])));
+    }
+    ok(&mut b, req(EVALUATE, 4, eval_data(0, 0, 0, 28, &[p; 28])));
+    assert_eq!(b.stored_costs().len(), 250);
+    rejects(&mut b, req(EVALUATE, 4, eval_data(0, 0, 0, 7, &[p; 7])), OverCapacity);
+    rejects(&mut b, req(EVALUATE, 4, eval_data(FLAG_LAST, 0, 0, 37, &[p; 37])), OverCapacity);
+    ok(&mut b, req(EVALUATE, 4, eval_data(0, 0, 0, 6, &[p; 6])));
+    rejects(&mut b, req(EVALUATE, 4, eval_data(FLAG_LAST, 0, 0, 1, &[p])), OverCapacity);
+    ok(&mut b, req(EVALUATE, 4, eval_data(FLAG_LAST, 0, 0, 0, &[])));
+    ok(&mut b, req(EVALUATE, 4, eval_data(FLAG_FIRST, 0, 0, 37, &[p; 37])));
+    assert_eq!(b.stored_costs().len(), 37);
+}
+
+#[test]
+fn nearest_checks() {
+    use ErrorCode::{BadLength, OverCapacity};
+    let p = shift([0; 3]);
+    let mut fresh = BoardModel::new(BoardConfig::default());
+    let mut b = loaded(20);
+    for board in [&mut fresh, &mut b] {
+        for data in [
+            vec![],
+            nearest_data(0, 1, &p)[..30].to_vec(),
+            [nearest_data(0, 1, &p), vec![0]].concat(),
+            nearest_data(0, 0, &p),
+            nearest_data(0, 145, &p),
+            nearest_data(0xffff, 0xffff, &p),
+        ] {
+            rejects(board, req(NEAREST, 5, data), BadLength);
+        }
+    }
+    rejects(&mut fresh, req(NEAREST, 5, nearest_data(0, 1, &p)), OverCapacity);
+    for (first, count) in [(15, 6), (20, 1), (0, 21), (0xffff, 1), (0xffff, 144)] {
+        rejects(&mut b, req(NEAREST, 5, nearest_data(first, count, &p)), OverCapacity);
+    }
+    ok(&mut b, req(NEAREST, 5, nearest_data(15, 5, &p)));
+    ok(&mut b, req(NEAREST, 5, nearest_data(0, 20, &p)));
+}
+
+/// Bytes on the wire for a body given as is (its CRC computed).
+fn wire(body: &[u8]) -> Vec<u8> {
+    let crc = crc16(body);
+    let mut w = cobs_encode(&[body, &crc.to_le_bytes()].concat());
+    w.push(0);
+    w
+}
+
+fn identify_reply(b: &BoardModel, seq: u8) -> Vec<u8> {
+    let (m, s) = b.sizes();
+    let c = b.config();
+    let id = Identity::of_board(c.lanes as u8, c.clock_hz, c.baud, m, s, b.stored_costs().len() as u16);
+    Frame { code: 0x81, seq, data: id.encode() }.encode()
+}
+
+#[test]
+fn frame_errors_are_answered_with_sequence_and_command_0() {
+    let mut b = loaded(20);
+    let before = snap(&b);
+    let err = |e: FrameError| Frame::error(0, e.code(), 0).encode();
+    let good = wire(&[SET_SIZES, 9, 1, 0, 1, 0]);
+    let mut bad_crc = good.clone();
+    bad_crc[good.len() - 2] ^= 0x40;
+    let cases: Vec<(Vec<u8>, Vec<u8>)> = vec![
+        (vec![0, 0, 0], vec![]),
+        ([vec![1; MAX_FRAME + 1], vec![0]].concat(), err(FrameError::BadLength)),
+        ([vec![7; 5000], vec![0]].concat(), err(FrameError::BadLength)),
+        // 1,034 bytes are taken: code bytes of 1 decode to 1,033 zeros, a CRC mismatch.
+        ([vec![1; MAX_FRAME], vec![0]].concat(), err(FrameError::BadCrc)),
+        (vec![0x05, 0x01, 0x02, 0x00], err(FrameError::BadFrame)),
+        (vec![0xff, 0x00], err(FrameError::BadFrame)),
+        (vec![0x01, 0x00], err(FrameError::BadLength)),
+        (vec![0x02, 0x05, 0x00], err(FrameError::BadLength)),
+        (vec![0x04, 0x01, 0x02, 0x03, 0x00], err(FrameError::BadLength)),
+        (bad_crc, err(FrameError::BadCrc)),
+        // A flipped command byte: the CRC catches it.
+        ([vec![good[0], good[1] ^ 0x01], good[2..].to_vec()].concat(), err(FrameError::BadCrc)),
+    ];
+    for (bytes, reply) in cases {
+        assert_eq!(b.receive_all(&bytes), reply, "{:?}", &bytes[..bytes.len().min(8)]);
+        assert!(snap(&b) == before);
+        assert_eq!(b.receive_all(&wire(&[IDENTIFY, 3])), identify_reply(&b, 3), "recovers");
+    }
+    assert_eq!(b.receive_all(&good), Frame { code: 0x84, seq: 9, data: u16s(1, 1) }.encode());
+}
+
+#[test]
+fn bodies_longer_than_max_body_that_fit_max_frame_reach_the_command_checks() {
+    let mut b = loaded(20);
+    let before = snap(&b);
+    // 1,029 zero data bytes: body 1,031 bytes plus CRC, COBS adds 1 byte: 1,034 on the wire.
+    for (code, e) in
+        [(0x0a, ErrorCode::UnknownCommand), (LOAD_MODEL, ErrorCode::BadLength), (EVALUATE, ErrorCode::BadLength)]
+    {
+        let w = wire(&[vec![code, 6], vec![0; 1029]].concat());
+        assert_eq!(w.len(), MAX_FRAME + 1);
+        assert_eq!(b.receive_all(&w), Frame::error(6, e, code).encode());
+        assert!(snap(&b) == before);
+    }
+}
+
+#[test]
+fn every_error_code_but_busy_is_reachable() {
+    let mut b = BoardModel::new(BoardConfig::default());
+    let mut bad_crc = wire(&[IDENTIFY, 0]);
+    let at = bad_crc.len() - 2;
+    bad_crc[at] ^= 0x10;
+    let streams = [
+        bad_crc,
+        [vec![1; 2000], vec![0]].concat(),
+        wire(&[0x33, 0]),
+        wire(&[SET_SIZES, 0, 0, 0, 0, 0]),
+        vec![0x09, 0x01, 0x00],
+        wire(&[RESULT, 0]),
+    ];
+    let seen: Vec<u8> = streams
+        .iter()
+        .map(|s| {
+            let out = b.receive_all(s);
+            let f = Frame::decode(&out[..out.len() - 1]).unwrap();
+            assert_eq!(f.code, 0xff);
+            f.data[0]
+        })
+        .collect();
+    // BadCrc, BadLength, UnknownCommand, OverCapacity, BadFrame, NoResult; Busy needs a
+    // host that does not wait or a running filter (the RTL tests check it).
+    assert_eq!(seen, vec![1, 2, 3, 4, 6, 7]);
+    assert_eq!(ErrorCode::Busy as u8, 5);
+}
+
+/// A Run configuration for the grid: centre at the identity, a region of a few hundred
+/// LSB (the scan's offsets), `seed` given.
+fn run_cfg(particles: u16, iterations: u16, seed: u32) -> PfConfig {
+    use pficp_fpga::pf::SCALE_FRAC;
+    PfConfig {
+        particles,
+        iterations,
+        temper_exp: 10,
+        centre: [0, 0, 0, 1 << SCALE_FRAC, 0, 0, 0],
+        sigma0: [20_000, 20_000, 20_000, 1 << 13, 1 << 13, 1 << 13, 1 << 13],
+        floor: [100, 100, 100, 10, 10, 10, 10],
+        seed,
+        thr_cost: 0,
+        thr_max: 0,
+    }
+}
+
+/// The filter on `board`'s stores, run directly (not through the command).
+fn direct_run(b: &BoardModel, cfg: &PfConfig) -> PfOutcome {
+    let (m, s) = b.sizes();
+    let model = b.model_store()[..m as usize].iter().map(|&w| unpack_point(w)).collect::<Vec<FxPoint>>();
+    let scan = b.scan_store()[..s as usize].iter().map(|&w| unpack_point(w)).collect::<Vec<FxPoint>>();
+    pficp_fpga::pf::run(cfg, |pose| pficp_fpga::pf::evaluate(&model, &scan, pose))
+}
+
+#[test]
+fn run_then_status_then_result() {
+    let mut b = loaded(20);
+    // Before any run: Status says 0, no iterations, cost 2^48 - 1; Result has none.
+    let d = ok(&mut b, req(STATUS, 1, vec![]));
+    assert_eq!(d, vec![0, 0, 0, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff]);
+    rejects(&mut b, req(RESULT, 2, vec![]), ErrorCode::NoResult);
+    assert!(b.pf_outcome().is_none());
+    // Some stored costs, which Run must leave alone.
+    ok(&mut b, req(EVALUATE, 3, eval_data(FLAG_FIRST, 0, 0, 2, &[shift([0; 3]), shift([9, 9, 9])])));
+    let costs = b.stored_costs().to_vec();
+    let cfg = run_cfg(12, 6, 77);
+    let data = cfg.encode();
+    assert_eq!(data.len(), pficp_fpga::pf::RUN_BYTES);
+    let d = ok(&mut b, req(RUN, 4, data.clone()));
+    assert_eq!(d, vec![12, 0, 6, 0], "particles and iterations echoed");
+    assert_eq!(d, data[..4].to_vec());
+    let want = direct_run(&b, &cfg);
+    assert_eq!(b.pf_outcome(), Some(&want));
+    assert_eq!(b.stored_costs(), &costs[..], "Run keeps the stored costs");
+    assert!(want.best.cost <= want.start.cost);
+    // Status: done, the outcome's iterations and best cost.
+    let d = ok(&mut b, req(STATUS, 5, vec![]));
+    assert_eq!(d.len(), 9);
+    assert_eq!(d[0], 2);
+    assert_eq!(le_at(&d, 1, 2), want.iterations as u64);
+    assert_eq!(le_at(&d, 3, 6), want.best.cost);
+    // Result: iterations, cost, max_d2, the 7 parameters (3 bytes each), the pose.
+    let d = ok(&mut b, req(RESULT, 6, vec![]));
+    assert_eq!(d.len(), 61);
+    assert_eq!(le_at(&d, 0, 2), want.iterations as u64);
+    assert_eq!(le_at(&d, 2, 6), want.best.cost);
+    assert_eq!(le_at(&d, 8, 5), want.best.max_d2);
+    for k in 0..7 {
+        assert_eq!(pficp_fpga::pf::wrap24(le_at(&d, 13 + 3 * k, 3) as i64), want.params[k], "parameter {k}");
+    }
+    assert_eq!(&d[34..], &pose_bytes(&pficp_fpga::pf::pose_of(&want.params))[..]);
+    assert_eq!(ResultReply::decode(&d), Ok(ResultReply::of(&want)));
+    // Status and Result read only; Identify's stored count is unchanged.
+    let before = snap(&b);
+    ok(&mut b, req(RESULT, 7, vec![]));
+    ok(&mut b, req(STATUS, 8, vec![]));
+    let id = ok(&mut b, req(IDENTIFY, 9, vec![]));
+    assert_eq!(le_at(&id, 24, 2), 2);
+    assert!(snap(&b) == before);
+    // Another run replaces the outcome; the same request gives the same outcome again.
+    ok(&mut b, req(RUN, 10, run_cfg(12, 6, 78).encode()));
+    assert_ne!(b.pf_outcome(), Some(&want));
+    ok(&mut b, req(RUN, 11, data));
+    assert_eq!(b.pf_outcome(), Some(&want));
+    // Reset forgets it: state 0 and NoResult again; the stores stay.
+    b.reset();
+    assert_eq!(ok(&mut b, req(STATUS, 12, vec![])), StatusReply::IDLE.encode());
+    rejects(&mut b, req(RESULT, 13, vec![]), ErrorCode::NoResult);
+    assert_eq!(b.stored_costs(), &costs[..]);
+    assert_eq!(b.sizes(), (64, 20));
+}
+
+#[test]
+fn the_filter_on_the_board_finds_a_shifted_grid() {
+    // The scan is the grid shifted by (500, -400, 300) LSB; the model the grid. The
+    // filter (region +-625 LSB per axis) must bring the translation near the opposite.
+    let mut b = BoardModel::new(BoardConfig::default());
+    ok(&mut b, req(LOAD_MODEL, 1, load_data(0, 64, &grid())));
+    let t = [500i16, -400, 300];
+    let scan: Vec<FxPoint> = grid().iter().map(|p| std::array::from_fn(|a| p[a] + t[a])).collect();
+    ok(&mut b, req(LOAD_SCAN, 2, load_data(0, 64, &scan)));
+    ok(&mut b, req(SET_SIZES, 3, u16s(64, 64)));
+    ok(&mut b, req(RUN, 4, run_cfg(40, 15, 5).encode()));
+    let o = b.pf_outcome().unwrap().clone();
+    assert!(o.best.cost * 10 < o.start.cost, "{} vs {}", o.best.cost, o.start.cost);
+    for (a, &shift) in t.iter().enumerate() {
+        let got = pficp_fpga::pf::translation(o.params[a]);
+        assert!((got + shift as i32).abs() < 100, "axis {a}: {got}");
+    }
+    assert_eq!(o.iterations, 15, "no threshold: every iteration runs");
+    // A threshold the start already meets stops after the first iteration.
+    let mut cfg = run_cfg(8, 30, 5);
+    cfg.thr_cost = (1 << 48) - 1;
+    cfg.thr_max = (1 << 34) - 1;
+    ok(&mut b, req(RUN, 5, cfg.encode()));
+    assert_eq!(b.pf_outcome().unwrap().iterations, 1);
+    assert_eq!(ok(&mut b, req(STATUS, 6, vec![]))[1..3], [1, 0]);
+}
+
+#[test]
+fn run_checks() {
+    use ErrorCode::{BadLength, OverCapacity};
+    let good = run_cfg(4, 2, 1).encode();
+    let mut fresh = BoardModel::new(BoardConfig::default());
+    let mut b = loaded(20);
+    // An earlier outcome, which rejected Runs must keep.
+    ok(&mut b, req(RUN, 1, run_cfg(3, 1, 9).encode()));
+    for board in [&mut fresh, &mut b] {
+        for data in [
+            vec![],
+            good[..4].to_vec(),
+            good[..149].to_vec(),
+            [good.clone(), vec![0]].concat(),
+            vec![0; 151],
+            // Lengths before capacities: no particles, but one byte short.
+            run_cfg(0, 0, 1).encode()[..149].to_vec(),
+        ] {
+            rejects(board, req(RUN, 2, data), BadLength);
+        }
+        for (particles, iterations) in [(0, 5), (257, 5), (0xffff, 5), (4, 0), (0, 0)] {
+            rejects(board, req(RUN, 3, run_cfg(particles, iterations, 1).encode()), OverCapacity);
+        }
+    }
+    // Sizes unset (power-up).
+    rejects(&mut fresh, req(RUN, 4, good.clone()), OverCapacity);
+    // Only the model loaded is still no sizes.
+    ok(&mut fresh, req(LOAD_MODEL, 5, load_data(0, 64, &grid())));
+    rejects(&mut fresh, req(RUN, 6, good.clone()), OverCapacity);
+    // The limits themselves are accepted: 256 particles, 1 iteration; 1 particle.
+    ok(&mut b, req(RUN, 7, run_cfg(256, 1, 2).encode()));
+    assert_eq!(b.pf_outcome().unwrap().history[0].particles.len(), 256);
+    ok(&mut b, req(RUN, 8, run_cfg(1, 3, 2).encode()));
+    // The unused byte after temper_exp and the high bits of the fields are ignored,
+    // exactly as PfConfig::decode takes them.
+    let mut odd = run_cfg(5, 2, 3).encode();
+    odd[5] = 0xa5;
+    odd[4] |= 0xc0;
+    ok(&mut b, req(RUN, 9, odd.clone()));
+    let cfg = PfConfig::decode(&odd).unwrap();
+    assert_eq!(cfg, run_cfg(5, 2, 3));
+    assert_eq!(b.pf_outcome(), Some(&direct_run(&b, &cfg)));
+}
+
+#[test]
+fn status_and_result_checks() {
+    use ErrorCode::{BadLength, NoResult};
+    let mut b = loaded(20);
+    for len in [1, 4, 9, 61, 150] {
+        rejects(&mut b, req(STATUS, 1, vec![0; len]), BadLength);
+        // Lengths before NoResult.
+        rejects(&mut b, req(RESULT, 2, vec![0; len]), BadLength);
+    }
+    rejects(&mut b, req(RESULT, 3, vec![]), NoResult);
+    ok(&mut b, req(RUN, 4, run_cfg(2, 1, 1).encode()));
+    for len in [1, 61] {
+        rejects(&mut b, req(STATUS, 5, vec![0; len]), BadLength);
+        rejects(&mut b, req(RESULT, 6, vec![0; len]), BadLength);
+    }
+    assert_eq!(ok(&mut b, req(STATUS, 7, vec![]))[0], 2);
+}
+
+#[test]
+fn reset_forgets_a_partial_frame_and_keeps_the_stores() {
+    let mut b = loaded(20);
+    ok(&mut b, req(EVALUATE, 1, eval_data(FLAG_FIRST, 0, 0, 2, &[shift([0; 3]); 2])));
+    let before = snap(&b);
+    let w = wire(&[IDENTIFY, 8]);
+    assert!(b.receive_all(&w[..3]).is_empty());
+    b.reset();
+    assert_eq!(b.receive_all(&w), identify_reply(&b, 8));
+    assert!(snap(&b) == before);
+}
+
+#[test]
+fn run_status_and_result_over_the_wire() {
+    let mut b = loaded(20);
+    let out = b.receive_all(&wire(&[STATUS, 4]));
+    assert_eq!(out, Frame { code: 0x88, seq: 4, data: StatusReply::IDLE.encode() }.encode());
+    let out = b.receive_all(&wire(&[RESULT, 5]));
+    assert_eq!(out, Frame::error(5, ErrorCode::NoResult, RESULT).encode());
+    let cfg = run_cfg(6, 2, 11);
+    let out = b.receive_all(&wire(&[&[RUN, 6][..], &cfg.encode()].concat()));
+    assert_eq!(out, Frame { code: 0x87, seq: 6, data: vec![6, 0, 2, 0] }.encode());
+    let out = b.receive_all(&wire(&[RESULT, 7]));
+    let want = ResultReply::of(b.pf_outcome().unwrap());
+    assert_eq!(out, Frame { code: 0x89, seq: 7, data: want.encode() }.encode());
+}
