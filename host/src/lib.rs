@@ -9,7 +9,6 @@
 #![warn(missing_docs)]
 
 pub mod board;
-pub mod board_pf;
 pub mod cli;
 pub mod cloud;
 pub mod conclusion;
@@ -18,7 +17,6 @@ pub mod datasets;
 pub mod em_icp;
 pub mod eval;
 pub mod features;
-pub mod fixed;
 pub mod geometry;
 pub mod hessian;
 pub mod hypotheses;

@@ -408,7 +408,7 @@ fn register(a: &RegisterArgs) -> Result<()> {
     if a.host_driven && a.board_points.is_some() {
         bail!("--board-points sets the on-board filter's scan sample; --host-driven weighs the host's sample");
     }
-    let board_points = a.board_points.unwrap_or(pficp::board_pf::DEFAULT_BOARD_POINTS);
+    let board_points = a.board_points.unwrap_or(pficp::board::on_board::DEFAULT_BOARD_POINTS);
     if board_points == 0 {
         bail!("--board-points must be at least 1");
     }
@@ -428,7 +428,7 @@ fn register(a: &RegisterArgs) -> Result<()> {
         None => (methods::run(method, &nn, scan.points(), &MethodSettings { pf: settings }), None),
         Some(c) if !a.host_driven => {
             let start = Instant::now();
-            let r = pficp::board_pf::register_on_board(
+            let r = pficp::board::on_board::register_on_board(
                 c,
                 &nn,
                 scan.points(),
@@ -460,7 +460,7 @@ fn register(a: &RegisterArgs) -> Result<()> {
         }
         Some(c) => {
             let start = Instant::now();
-            let r = pficp::board_pf::register(c, &nn, scan.points(), &settings, &mut upload_progress())?;
+            let r = pficp::board::host_driven::register(c, &nn, scan.points(), &settings, &mut upload_progress())?;
             let b = &r.board;
             eprintln!(
                 "board: {} model points{}, {} scan points, {} iterations weighed, {} requests, {} resends",
@@ -513,7 +513,7 @@ fn register(a: &RegisterArgs) -> Result<()> {
 }
 
 /// Upload progress on stderr: one updating line on a terminal, one line per store otherwise.
-fn upload_progress() -> impl FnMut(pficp::board_pf::Upload, usize, usize) + Send {
+fn upload_progress() -> impl FnMut(pficp::board::Upload, usize, usize) + Send {
     let tty = std::io::stderr().is_terminal();
     move |store, done, total| {
         if tty {
@@ -530,8 +530,8 @@ fn upload_progress() -> impl FnMut(pficp::board_pf::Upload, usize, usize) + Send
 /// The on-board registration's progress on stderr: the uploads as [`upload_progress`],
 /// then the filter's iterations (one updating line on a terminal, one line at the end
 /// otherwise).
-fn on_board_progress() -> impl FnMut(pficp::board_pf::OnBoardStep, usize, usize) + Send {
-    use pficp::board_pf::OnBoardStep;
+fn on_board_progress() -> impl FnMut(pficp::board::on_board::OnBoardStep, usize, usize) + Send {
+    use pficp::board::on_board::OnBoardStep;
     let tty = std::io::stderr().is_terminal();
     let mut uploads = upload_progress();
     move |step, done, total| match step {

@@ -50,7 +50,7 @@ pub trait Objective: Sync {
     fn constrain(&self, _x: &mut [f64]) {}
     /// Costs and normalised weights (Eq. 20, 21) of one iteration's particles, `q` the
     /// filter's ICP variance. The default is [`weigh_in_software`]; an objective may get them
-    /// elsewhere (PF-ICP with the board: `crate::board_pf`). An error stops the filter
+    /// elsewhere (PF-ICP with the board: `crate::board::host_driven`). An error stops the filter
     /// ([`try_run`]).
     fn weigh(&self, particles: &[Vec<f64>], q: f64) -> Result<Weighed, WeighError> {
         Ok(weigh_in_software(self, particles, q))

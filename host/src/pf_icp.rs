@@ -21,7 +21,7 @@
 //!    hypotheses, the lowest cost wins; alternatives, covariance, fit.
 //!
 //! [`register_with`] takes the particles' costs and weights from a [`ParticleWeights`]
-//! source instead (the board: `crate::board_pf`); everything else is the same.
+//! source instead (the board: `crate::board::host_driven`); everything else is the same.
 
 use crate::conclusion::Conclusion;
 use crate::covariance::{approximate_icp_variance, IcpCovariance};
@@ -172,7 +172,7 @@ fn start_prior(pairing: Pairing, diag: f64, scale: f64) -> Params {
 }
 
 /// Where the filter's particle costs and weights come from when not from the host's
-/// k-d tree (the board: `crate::board_pf::BoardWeights`).
+/// k-d tree (the board: `crate::board::host_driven::BoardWeights`).
 pub trait ParticleWeights: Sync {
     /// Called once, before the filter, with the scan points the costs are taken over (the
     /// fixed weight sample).
@@ -288,7 +288,7 @@ pub fn weight_sample(scan: &[Point3<f64>], settings: &PfIcpSettings) -> Vec<Poin
 
 /// Everything PF-ICP computes before its filter (stages 1 and 2): the weight sample, the
 /// start, the covariance and the filter's prior in the centred frame. The on-board filter
-/// (`crate::board_pf::register_on_board`) takes it from here without running the host's.
+/// (`crate::board::on_board::register_on_board`) takes it from here without running the host's.
 #[derive(Clone, Debug)]
 pub struct Prior {
     /// The scan points the particle costs are taken over ([`weight_sample`]).

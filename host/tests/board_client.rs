@@ -5,8 +5,9 @@
 
 mod support;
 
+use pficp::board::on_board::{self, OnBoardStep};
+use pficp::board::{host_driven, Upload};
 use pficp::board::{BoardClient, BoardError, MAX_RETRIES};
-use pficp::board_pf::{self, OnBoardStep, Upload};
 use pficp::cloud::bbox_diagonal;
 use pficp::datasets::{make, ModelId, Sampling, ScanSpec};
 use pficp::methods::{PoseError, Tolerance};
@@ -280,9 +281,10 @@ fn pf_icp_with_the_board_weights_registers_a_reduced_model_1() {
     let mut client = board.client();
     let mut uploads = Vec::new();
     let start = Instant::now();
-    let r =
-        board_pf::register(&mut client, &nn, &ds.scan, &settings, &mut |u, done, total| uploads.push((u, done, total)))
-            .unwrap();
+    let r = host_driven::register(&mut client, &nn, &ds.scan, &settings, &mut |u, done, total| {
+        uploads.push((u, done, total))
+    })
+    .unwrap();
     let took = start.elapsed();
     let pose = &r.pf.registration.pose;
     let e = PoseError::between(pose, &truth, diag);
@@ -299,12 +301,12 @@ fn pf_icp_with_the_board_weights_registers_a_reduced_model_1() {
 #[test]
 fn a_model_too_big_for_the_board_is_subsampled_with_the_seed() {
     let model: Vec<_> = (0..5000).map(|i| nalgebra::Point3::new(i as f64, (i * i % 7) as f64, 0.5)).collect();
-    let a = board_pf::board_model(&model, 4096, 1);
+    let a = pficp::board::board_model(&model, 4096, 1);
     assert_eq!(a.len(), 4096);
-    assert_eq!(a, board_pf::board_model(&model, 4096, 1), "same seed, same points");
-    assert_ne!(a, board_pf::board_model(&model, 4096, 2));
+    assert_eq!(a, pficp::board::board_model(&model, 4096, 1), "same seed, same points");
+    assert_ne!(a, pficp::board::board_model(&model, 4096, 2));
     assert!(a.windows(2).all(|w| w[0].x < w[1].x), "original order kept");
-    assert_eq!(board_pf::board_model(&model[..100], 4096, 1), model[..100].to_vec());
+    assert_eq!(pficp::board::board_model(&model[..100], 4096, 1), model[..100].to_vec());
 }
 
 // ---------------------------------------------------------------------------------------
@@ -318,8 +320,8 @@ fn on_board_50(
     nn: &NearestNeighbours,
     scan: &[nalgebra::Point3<f64>],
     settings: &PfIcpSettings,
-) -> Result<board_pf::OnBoardResult, BoardError> {
-    board_pf::register_on_board(client, nn, scan, settings, 50, Duration::from_millis(20), &mut |_, _, _| {})
+) -> Result<on_board::OnBoardResult, BoardError> {
+    on_board::register_on_board(client, nn, scan, settings, 50, Duration::from_millis(20), &mut |_, _, _| {})
 }
 
 fn run_config(particles: u16, iterations: u16, seed: u32) -> PfConfig {
@@ -464,12 +466,12 @@ fn pf_icp_with_the_filter_on_the_board_registers_a_reduced_model_1() {
     let mut client = board.client();
     let mut steps = Vec::new();
     let start = Instant::now();
-    let r = board_pf::register_on_board(
+    let r = on_board::register_on_board(
         &mut client,
         &nn,
         &ds.scan,
         &settings,
-        board_pf::DEFAULT_BOARD_POINTS,
+        on_board::DEFAULT_BOARD_POINTS,
         Duration::from_millis(20),
         &mut |step, done, total| steps.push((step, done, total)),
     )
@@ -483,13 +485,13 @@ fn pf_icp_with_the_filter_on_the_board_registers_a_reduced_model_1() {
         b.result.iterations, b.cost_msd, b.polls, b.modelled, b.stats
     );
     assert!(Tolerance::SUCCESS.accepts(pose, &truth, diag), "{e:?}");
-    assert_eq!((b.model_points, b.model_subsampled, b.scan_points), (300, false, board_pf::DEFAULT_BOARD_POINTS));
+    assert_eq!((b.model_points, b.model_subsampled, b.scan_points), (300, false, on_board::DEFAULT_BOARD_POINTS));
     assert_eq!(b.result.iterations as usize, r.pf.registration.iterations);
     assert!(b.result.iterations >= 1 && b.result.iterations <= 30);
     assert!(b.polls >= 1);
     assert_eq!(b.stats.resends, 0);
     // The board's outcome is exactly the functional reference's on the planned clouds.
-    let plan = board_pf::plan(&nn, &ds.scan, &settings, board_pf::DEFAULT_BOARD_POINTS, 4096);
+    let plan = on_board::plan(&nn, &ds.scan, &settings, on_board::DEFAULT_BOARD_POINTS, 4096);
     assert_eq!(plan.config, b.config);
     let want = pf::run(&plan.config, |p| pf::evaluate(&plan.model, &plan.scan, p));
     assert_eq!(b.result, ResultReply::of(&want));
@@ -640,7 +642,7 @@ fn a_version_1_board_serves_the_host_driven_mode_only() {
     let settings = PfIcpSettings { clusters: 25, particles: 20, iterations: 8, seed: 5, ..Default::default() };
     let e = on_board_50(&mut client, &nn, &ds.scan, &settings).unwrap_err();
     assert!(matches!(&e, BoardError::Limit(m) if m.contains("version 1") && m.contains("--host-driven")), "{e}");
-    let r = board_pf::register(&mut client, &nn, &ds.scan, &settings, &mut |_, _, _| {}).unwrap();
+    let r = host_driven::register(&mut client, &nn, &ds.scan, &settings, &mut |_, _, _| {}).unwrap();
     assert_eq!(r.board.identity.version, 1);
     assert_eq!(r.board.iterations, r.pf.registration.iterations);
     let soft = pficp::pf_icp::register(&nn, &ds.scan, &settings);

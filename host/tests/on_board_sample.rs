@@ -11,7 +11,7 @@
 //! noise on every scan coordinate, default 0). The tables it prints are in
 //! docs/decisions.md.
 
-use pficp::board_pf;
+use pficp::board::on_board;
 use pficp::cloud::bbox_diagonal;
 use pficp::datasets::{make, ModelId, Sampling, ScanSpec};
 use pficp::methods::{PoseError, Tolerance};
@@ -82,9 +82,9 @@ fn scan_points_per_weight_on_the_board() {
             let trials: Vec<Trial> = sizes
                 .par_iter()
                 .map(|&s| {
-                    let plan = board_pf::plan_with_prior(prior.clone(), &nn, &ds.scan, &settings, s, 4096);
+                    let plan = on_board::plan_with_prior(prior.clone(), &nn, &ds.scan, &settings, s, 4096);
                     let out = pf::run(&plan.config, |p| pf::evaluate(&plan.model, &plan.scan, p));
-                    let r = board_pf::finish(&plan, &nn, &ds.scan, &settings, &ResultReply::of(&out), Duration::ZERO);
+                    let r = on_board::finish(&plan, &nn, &ds.scan, &settings, &ResultReply::of(&out), Duration::ZERO);
                     let pose = &r.registration.pose;
                     let clocks = pficp::board::run_clocks_bound(
                         plan.config.particles,

@@ -4,7 +4,7 @@
 //! compared with the byte-level reference, and it says so when it stops.
 
 use pficp::board::BoardClient;
-use pficp::board_pf;
+use pficp::board::{host_driven, on_board};
 use pficp::cloud::bbox_diagonal;
 use pficp::datasets::{make, ModelId, Sampling, ScanSpec};
 use pficp::methods::{PoseError, Tolerance};
@@ -57,7 +57,8 @@ fn register_both(id: ModelId, board: &SimBoard) {
     // One client per registration: the port is opened and closed each time, as `pficp` does.
     let mut client = BoardClient::open(&board.path, 921_600, Duration::from_secs(5)).expect("open the pty");
     let t = Instant::now();
-    let r = board_pf::register(&mut client, &nn, &ds.scan, &settings, &mut |_, _, _| {}).expect("board registration");
+    let r =
+        host_driven::register(&mut client, &nn, &ds.scan, &settings, &mut |_, _, _| {}).expect("board registration");
     let pose = &r.pf.registration.pose;
     let vs_truth = PoseError::between(pose, &truth, diag);
     let vs_software = PoseError::between(pose, &software.registration.pose, diag);
@@ -117,7 +118,7 @@ fn register_on_board(id: ModelId, board: &SimBoard) -> bool {
     // The simulated board runs ~30 times slower than a real one: a long timeout.
     let mut client = BoardClient::open(&board.path, 921_600, Duration::from_secs(120)).expect("open the pty");
     let t = Instant::now();
-    let r = board_pf::register_on_board(
+    let r = on_board::register_on_board(
         &mut client,
         &nn,
         &ds.scan,

@@ -3,8 +3,8 @@
 //! within the documented bound (docs/fixed-point.md).
 
 use nalgebra::Point3;
+use pficp::board::fixed::{cost_error_bound, normalised_pose, quantise_pose, Normalisation};
 use pficp::datasets::{make, ModelId, Sampling, ScanSpec};
-use pficp::fixed::{cost_error_bound, normalised_pose, quantise_pose, Normalisation};
 use pficp::geometry::Pose;
 use pficp::nn::NearestNeighbours;
 use pficp_fpga::format::dist_to_f64;

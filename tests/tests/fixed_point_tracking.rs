@@ -3,8 +3,8 @@
 //! distances) and particle weights.
 
 use nalgebra::Point3;
+use pficp::board::fixed::{cost_error_bound, normalised_pose, quantise_pose, Normalisation};
 use pficp::datasets::{make, ModelId, Sampling, ScanSpec};
-use pficp::fixed::{cost_error_bound, normalised_pose, quantise_pose, Normalisation};
 use pficp::geometry::Pose;
 use pficp::nn::NearestNeighbours;
 use pficp_fpga::format::{dist_to_f64, exp_table, WeightScale, DIST_FRAC};

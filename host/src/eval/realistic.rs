@@ -390,7 +390,7 @@ pub struct RealisticOptions {
     /// Also run PF-ICP with the filter on the board (column `pf-icp-board`): the host's
     /// prior and conclusion around `fpga::pf::run`, the bit-exact reference of the board's
     /// filter (what the Verilated board computes, byte for byte), with the default board
-    /// sample ([`crate::board_pf::DEFAULT_BOARD_POINTS`]) and at most
+    /// sample ([`crate::board::on_board::DEFAULT_BOARD_POINTS`]) and at most
     /// [`crate::board::MAX_POINTS`] model points.
     pub board: bool,
     /// Write `realistic.json` here (created if missing).
@@ -541,7 +541,7 @@ fn on_board_reference(
     scan: &[Point3<f64>],
     settings: &PfIcpSettings,
 ) -> crate::pf_icp::PfIcpResult {
-    use crate::board_pf::{finish, plan, DEFAULT_BOARD_POINTS};
+    use crate::board::on_board::{finish, plan, DEFAULT_BOARD_POINTS};
     use pficp_fpga::pf;
     let plan = plan(nn, scan, settings, DEFAULT_BOARD_POINTS, crate::board::MAX_POINTS);
     let out = pf::run(&plan.config, |p| pf::evaluate(&plan.model, &plan.scan, p));

@@ -17,8 +17,8 @@
 
 use anyhow::{Context, Result};
 use clap::Parser;
+use pficp::board::host_driven;
 use pficp::board::BoardClient;
-use pficp::board_pf;
 use pficp::cloud::bbox_diagonal;
 use pficp::datasets::{make, ModelId, Sampling, ScanSpec};
 use pficp::methods::PoseError;
@@ -108,7 +108,7 @@ fn main() -> Result<()> {
 
     let (path, stop, thread) = serve_reference(config)?;
     let mut client = BoardClient::open(&path, config.baud, Duration::from_secs(10))?;
-    let r = board_pf::register(&mut client, &nn, &ds.scan, &settings, &mut |_, _, _| {})?;
+    let r = host_driven::register(&mut client, &nn, &ds.scan, &settings, &mut |_, _, _| {})?;
     stop.store(true, Ordering::Relaxed);
     thread.join().ok();
 

@@ -16,7 +16,7 @@
 
 use anyhow::{bail, Context, Result};
 use clap::Parser;
-use pficp::board_pf;
+use pficp::board::on_board;
 use pficp::cloud::bbox_diagonal;
 use pficp::datasets::{make, ModelId, Sampling, ScanSpec};
 use pficp::methods::PoseError;
@@ -97,7 +97,7 @@ fn main() -> Result<()> {
     let soft = soft.context("no software run")?;
 
     // The board.
-    let plan = board_pf::plan(&nn, &ds.scan, &settings, a.board_points, 4096);
+    let plan = on_board::plan(&nn, &ds.scan, &settings, a.board_points, 4096);
     let config = BoardConfig::default();
     let mut b = SerialBoard::new(config).with_reference();
     b.run(100);
@@ -139,7 +139,7 @@ fn main() -> Result<()> {
     let clocks = b.clocks() - t0_clock;
     let (sent, received) = b.byte_counts();
     let (compared, _) = b.comparison();
-    let fin = board_pf::finish(&plan, &nn, &ds.scan, &settings, &result, Duration::ZERO);
+    let fin = on_board::finish(&plan, &nn, &ds.scan, &settings, &result, Duration::ZERO);
     let hz = config.clock_hz as f64;
     let board_s = clocks as f64 / hz;
     let soft_err = PoseError::between(&soft.registration.pose, &truth, diag);

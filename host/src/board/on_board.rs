@@ -1,238 +1,25 @@
-//! PF-ICP with the board: two modes.
-//!
-//! - **On-board filter** ([`register_on_board`], the default of `pficp register --board`):
-//!   the host computes the start and the covariance (PF-ICP stages 1 and 2,
-//!   [`crate::pf_icp::prior`]), uploads the model and a sample of `board_points` scan
-//!   points, sends the prior as a Run request ([`pf_config`]), polls Status, reads Result
-//!   and polishes the board's pose with ICP on the whole scan. The filter itself (steps 6
-//!   to 8 of Algorithm 6) runs on the board, bit-exact with `pficp_fpga::pf::run`; it
-//!   refines nothing with ICP between iterations.
-//! - **Host-driven** ([`register`], `--host-driven`), described below.
-//!
-//! The host-driven pipeline is [`crate::pf_icp::register_with`]'s: k-means start, covariance, particle
-//! filter, ICP refinement every iteration and the polish all run on the host in f64; only
-//! step 2 of each filter iteration (costs and weights, Eq. 20, 21) runs on the board:
-//!
-//! 1. Both clouds are normalised by their own similarity ([`Normalisation::of`]) and
-//!    quantised to Q3.13. The model goes to the model store (at most 4,096 points: a larger
-//!    model is subsampled, the same points for the same seed), the weight sample (the scan
-//!    points the software filter takes its costs over) to the scan store.
-//! 2. Each iteration the particles' poses are normalised and quantised
-//!    ([`normalised_pose`], [`quantise_pose`]) and sent in Evaluate frames without LAST; the
-//!    board returns each cost (a sum of squared distances in Q8.26 units, normalised frame).
-//! 3. The host turns the costs into the software filter's units (MSD of the sample in the
-//!    clouds' units: `cost * r_model^2 / (n * 2^26)`), takes the tempered
-//!    `Q_k = max(Q, median excess / 6)` from them ([`crate::particle_filter::tempered_q`])
-//!    and weighs the stored costs on the board with
-//!    [`WeightScale::for_two_q`]`(2 Q_k` in cost LSBs`)`.
-//! 4. The board's weights, normalised to sum 1, drive the estimate and the resampling.
-//!
-//! The poses the filter carries, refines and reports are in the clouds' own frame, so
-//! nothing has to be un-normalised at the end but the costs.
+//! PF-ICP with the particle filter on the board (`pficp register --board`, the default):
+//! the host computes the start and the covariance (PF-ICP stages 1 and 2,
+//! [`crate::pf_icp::prior`]), uploads the model and a sample of `board_points` scan
+//! points, sends the prior as a Run request ([`pf_config`]), polls Status, reads Result and
+//! polishes the board's pose with ICP on the whole scan. The filter itself (steps 6 to 8
+//! of Algorithm 6) runs on the board, bit-exact with `pficp_fpga::pf::run`; it refines
+//! nothing with ICP between iterations.
 
-use crate::board::{BoardClient, BoardError, ClientStats, MAX_PARTICLES, MAX_POINTS};
-use crate::fixed::{normalised_pose, original_pose, quantise_pose, Normalisation};
+use super::fixed::{original_pose, Normalisation};
+use super::{board_model, BoardClient, BoardError, ClientStats, Upload, MAX_PARTICLES, MAX_POINTS};
 use crate::geometry::Pose;
 use crate::icp::Registration;
 use crate::nn::NearestNeighbours;
-use crate::particle_filter::{tempered_q, WeighError, Weighed};
-use crate::pf_icp::{
-    prior, register_with, weight_sample, ParticleWeights, PfIcpResult, PfIcpSettings, Prior, StageTimes,
-};
+use crate::pf_icp::{prior, weight_sample, PfIcpResult, PfIcpSettings, Prior, StageTimes};
 use nalgebra::Point3;
-use pficp_fpga::format::{FxPoint, FxPose, WeightScale, DIST_FRAC};
+use pficp_fpga::format::{FxPoint, DIST_FRAC};
 use pficp_fpga::messages::{Identity, ResultReply, RunState, MAX_D2_MASK, NO_COST};
 use pficp_fpga::pf::{
     wrap24, Particle, PfConfig, PARAMS, PARAM_BITS, PARAM_TRANSLATION_FRAC, SCALE, SCALE_FRAC, SIGMA_BITS,
 };
 use pficp_fpga::protocol::{Command, ErrorCode, VERSION};
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
-use std::sync::Mutex;
 use std::time::{Duration, Instant};
-
-/// Which store an upload fills.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Upload {
-    /// The model store.
-    Model,
-    /// The scan store (the weight sample).
-    Scan,
-}
-
-impl Upload {
-    /// Its name in messages.
-    pub fn name(self) -> &'static str {
-        match self {
-            Upload::Model => "model",
-            Upload::Scan => "scan",
-        }
-    }
-}
-
-/// What the board did during one registration.
-#[derive(Clone, Debug)]
-pub struct BoardReport {
-    /// The board's Identify reply before the run.
-    pub identity: Identity,
-    /// Model points in the board's model store.
-    pub model_points: usize,
-    /// Whether the model was subsampled to fit.
-    pub model_subsampled: bool,
-    /// Scan points the costs are taken over (the weight sample).
-    pub scan_points: usize,
-    /// Filter iterations weighed on the board.
-    pub iterations: usize,
-    /// The client's traffic counters.
-    pub stats: ClientStats,
-}
-
-/// PF-ICP's result and the board's part in it.
-#[derive(Clone, Debug)]
-pub struct BoardPfResult {
-    /// As [`crate::pf_icp::register`] returns.
-    pub pf: PfIcpResult,
-    /// The board's part.
-    pub board: BoardReport,
-}
-
-/// The model points that go to the board: all of them when they fit, else `max` of them
-/// drawn without replacement with the seed, in their original order.
-pub fn board_model(model: &[Point3<f64>], max: usize, seed: u64) -> Vec<Point3<f64>> {
-    if model.len() <= max {
-        return model.to_vec();
-    }
-    // A stream of its own, so the draw does not shift any other random choice.
-    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x626f_6172_645f_6d64);
-    let mut picks = rand::seq::index::sample(&mut rng, model.len(), max).into_vec();
-    picks.sort_unstable();
-    picks.into_iter().map(|i| model[i]).collect()
-}
-
-/// The board as the filter's [`ParticleWeights`] source.
-struct BoardWeights<'a> {
-    client: Mutex<&'a mut BoardClient>,
-    progress: Mutex<&'a mut (dyn FnMut(Upload, usize, usize) + Send)>,
-    model_norm: Normalisation,
-    scan_norm: Normalisation,
-    model: Vec<FxPoint>,
-    /// Points in the scan store (set by `prepare`).
-    sample: Mutex<usize>,
-    iterations: Mutex<usize>,
-}
-
-impl BoardWeights<'_> {
-    /// Cost LSBs to the software filter's units (MSD of the sample, clouds' units squared).
-    fn to_msd(&self) -> f64 {
-        let n = (*self.sample.lock().expect("not poisoned")).max(1) as f64;
-        self.model_norm.radius * self.model_norm.radius / (n * (1u64 << DIST_FRAC) as f64)
-    }
-}
-
-impl ParticleWeights for BoardWeights<'_> {
-    fn prepare(&self, sample: &[Point3<f64>]) -> Result<(), WeighError> {
-        let mut client = self.client.lock().expect("not poisoned");
-        let mut progress = self.progress.lock().expect("not poisoned");
-        let max_scan = client.identity().map_or(MAX_POINTS, |i| i.max_scan as usize);
-        if sample.len() > max_scan {
-            return Err(Box::new(BoardError::Limit(format!(
-                "the weight sample has {} scan points; the board holds at most {max_scan}",
-                sample.len()
-            ))));
-        }
-        let scan = self.scan_norm.quantise(sample);
-        client.load_model(&self.model, |done, total| progress(Upload::Model, done, total))?;
-        client.load_scan(&scan, |done, total| progress(Upload::Scan, done, total))?;
-        client.set_sizes(self.model.len(), scan.len())?;
-        *self.sample.lock().expect("not poisoned") = scan.len();
-        Ok(())
-    }
-
-    fn weigh(&self, poses: &[Pose], q: f64) -> Result<Weighed, WeighError> {
-        let fx: Vec<FxPose> =
-            poses.iter().map(|p| quantise_pose(&normalised_pose(p, &self.scan_norm, &self.model_norm))).collect();
-        let to_msd = self.to_msd();
-        let mut client = self.client.lock().expect("not poisoned");
-        let (raw, summary) = client.costs_and_weights(&fx, |raw| {
-            let costs: Vec<f64> = raw.iter().map(|&c| c as f64 * to_msd).collect();
-            WeightScale::for_two_q(2.0 * tempered_q(&costs, q) / to_msd)
-        })?;
-        *self.iterations.lock().expect("not poisoned") += 1;
-        let total = summary.w_sum as f64;
-        Ok(Weighed {
-            costs: raw.iter().map(|&c| c as f64 * to_msd).collect(),
-            weights: summary.weights.iter().map(|&w| w as f64 / total).collect(),
-        })
-    }
-}
-
-/// Register `scan` to the model behind `nn` with PF-ICP, the particle weights on the board
-/// behind `client`. `progress(store, done, total)` reports the uploads.
-pub fn register(
-    client: &mut BoardClient,
-    nn: &NearestNeighbours,
-    scan: &[Point3<f64>],
-    settings: &PfIcpSettings,
-    progress: &mut (dyn FnMut(Upload, usize, usize) + Send),
-) -> Result<BoardPfResult, BoardError> {
-    let identity = client.identify()?;
-    // Version 2 only added Run, Status and Result: the host-driven commands are version 1's.
-    if identity.version != VERSION && identity.version != 1 {
-        return Err(BoardError::Limit(format!(
-            "the board speaks protocol version {}, this host {VERSION} (and 1 for the host-driven mode)",
-            identity.version
-        )));
-    }
-    let max_particles = (identity.max_particles as usize).min(MAX_PARTICLES);
-    let most = settings.adaptive.map_or(settings.particles, |a| a.max.max(settings.particles));
-    if most == 0 || most > max_particles {
-        return Err(BoardError::Limit(format!(
-            "{most} particles: the board weighs 1 to {max_particles} per iteration"
-        )));
-    }
-    let max_scan = (identity.max_scan as usize).min(MAX_POINTS);
-    let sample_len = scan.len().min(settings.weight_points);
-    if sample_len > max_scan {
-        return Err(BoardError::Limit(format!(
-            "the weight sample has {sample_len} scan points; the board holds at most {max_scan} (lower weight_points)"
-        )));
-    }
-    let model = nn.points();
-    let max_model = (identity.max_model as usize).min(MAX_POINTS);
-    let board_points = board_model(model, max_model, settings.seed);
-    let model_norm = Normalisation::of(model);
-    let scan_norm = Normalisation::of(scan);
-    let source = BoardWeights {
-        model: model_norm.quantise(&board_points),
-        client: Mutex::new(client),
-        progress: Mutex::new(progress),
-        model_norm,
-        scan_norm,
-        sample: Mutex::new(0),
-        iterations: Mutex::new(0),
-    };
-    let pf = register_with(nn, scan, settings, Some(&source)).map_err(|e| match e.downcast::<BoardError>() {
-        Ok(b) => *b,
-        Err(other) => BoardError::Filter(other.to_string()),
-    })?;
-    let BoardWeights { client, sample, iterations, .. } = source;
-    let client = client.into_inner().expect("not poisoned");
-    Ok(BoardPfResult {
-        pf,
-        board: BoardReport {
-            identity,
-            model_points: board_points.len(),
-            model_subsampled: board_points.len() < model.len(),
-            scan_points: sample.into_inner().expect("not poisoned"),
-            iterations: iterations.into_inner().expect("not poisoned"),
-            stats: client.stats(),
-        },
-    })
-}
-
-// ---------------------------------------------------------------------------------------
-// The on-board filter: the whole particle filter runs on the board (Run, Status, Result).
-// ---------------------------------------------------------------------------------------
 
 /// The default number of scan points the on-board filter weighs each particle over
 /// (docs/decisions.md, "The on-board filter: scan points per weight").

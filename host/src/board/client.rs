@@ -1,0 +1,507 @@
+//! The board client: the wire protocol of docs/protocol.md over a serial port
+//! (`serialport`), one request at a time.
+//!
+//! Every request waits for its reply before the next is sent (so the board never answers
+//! `Busy` in normal use). The rules:
+//! - **Sequence numbers** run 1, 2, ..., 255, 1, ... (0 is skipped: the board answers a frame
+//!   it cannot trust, a frame error, with sequence 0 and command 0).
+//! - Each request is sent after a lone delimiter, which ends any partial frame left in the
+//!   board's receiver (an empty frame is ignored by the board).
+//! - **A reply** is the frame that echoes the sequence with `command | 0x80`; any other frame
+//!   (a stale reply, a duplicate) is skipped. Bytes left from an earlier exchange (a reply
+//!   that came too late, half a frame) are dropped before each request is sent.
+//! - **Every read is bounded**: each reply must arrive within the timeout (default 2 s, at
+//!   most [`MAX_TIMEOUT`]) plus the time the board needs for it, modelled from the bytes at
+//!   the baud rate ([`MIN_BAUD`] to [`MAX_BAUD`]) and, for Evaluate and Nearest, the
+//!   pipeline's clocks ([`pficp_fpga::pipeline::clocks_per_particle`]) on the board's
+//!   lanes at its clock, never taken as slower than [`MIN_CLOCK_HZ`] whatever Identify says.
+//!   A silent board is a [`BoardError::Timeout`] (saying how many bytes came that were no
+//!   reply: a babbling line or a wrong baud rate), a port that goes away a
+//!   [`BoardError::Io`], a board that only answers with another sequence number or for
+//!   another command a [`BoardError::Unexpected`] at the same deadline, a port that sends
+//!   back the request itself (a loopback adapter, a tty in echo mode) a
+//!   [`BoardError::Echo`] at once.
+//! - **Replies are checked**, not trusted: lengths and fields on decoding; acknowledged
+//!   offsets, counts and sizes; Nearest's indices within the model and its cost the sum of
+//!   its distances; the weights equal to [`pficp_fpga::weights::weights`] of the board's own
+//!   costs (so weights that are all 0 or do not sum to `w_sum` are caught); a Status count
+//!   that only rises and stays within the Run's; a Result whose pose is
+//!   [`pficp_fpga::pf::pose_of`] its parameters. A failed check is a [`BoardError::Reply`]
+//!   or [`BoardError::Filter`] naming the field.
+//! - **Resends**: an error reply `BadCrc` or `Busy` for this request, a frame error (sequence
+//!   0) or a reply frame that does not decode (bad CRC, bad COBS) sends the same request
+//!   again with the same sequence, at most [`MAX_RETRIES`] times. A reply to an earlier copy
+//!   is as good as one to the last. An Evaluate that appends to the stored costs (no FIRST,
+//!   some poses) is not repeatable when the board may have executed it (a lost reply):
+//!   then [`BoardError::ReplyLost`], and [`BoardClient::costs_and_weights`] starts the
+//!   iteration over from its FIRST batch.
+//! - Any other error reply is a [`BoardError::Board`] naming the code. `Busy` for Run or
+//!   Result means the board is running a filter (docs/protocol.md, Running): it is not
+//!   resent but reported as [`BoardError::Board`].
+//! - **The on-board filter** ([`BoardClient::run`], [`BoardClient::status`],
+//!   [`BoardClient::result`], [`BoardClient::wait_for_run`]): Run is answered at once, but
+//!   a board that computes the whole filter before answering (the byte-level reference on
+//!   a pseudo-terminal) is allowed the modelled run time ([`BoardClient::run_allowance`])
+//!   for that answer too; the wait for the run's end is capped twice: no new iteration for
+//!   the allowance, or more than the allowance times (iterations + 1) in all, is a
+//!   [`BoardError::RunTimeout`]. A Run whose reply was lost is not simply sent again: Status
+//!   tells whether the first copy is running; if not, Run is sent again (the filter is
+//!   deterministic, so a repeated run gives the same result).
+
+use super::BoardError;
+use pficp_fpga::format::{FxPoint, FxPose, WeightScale};
+use pficp_fpga::messages::{
+    load_request, parse_two_u16, two_u16, EvaluateReply, EvaluateRequest, Identity, MessageError, NearestReply,
+    NearestRequest, WeightSummary, IDENTITY_BYTES, MAX_LOAD_POINTS, MAX_NEAREST, MAX_POSES,
+};
+use pficp_fpga::pipeline::{clocks_per_particle, COST_MASK};
+use pficp_fpga::protocol::{Command, Deframer, VERSION};
+use serialport::SerialPort;
+use std::time::Duration;
+
+/// The board's nominal baud rate.
+pub const DEFAULT_BAUD: u32 = 921_600;
+/// The slowest baud rate the client opens a port at (below it a request takes minutes).
+pub const MIN_BAUD: u32 = 9_600;
+/// The fastest baud rate the client opens a port at (above any USB-serial bridge's).
+pub const MAX_BAUD: u32 = 12_000_000;
+/// Time allowed for each reply on top of the modelled transfer and compute time.
+pub const DEFAULT_TIMEOUT: Duration = Duration::from_secs(2);
+/// The longest time per reply the client accepts (`--timeout-ms`).
+pub const MAX_TIMEOUT: Duration = Duration::from_secs(600);
+/// The slowest clock the deadlines assume, whatever the board's Identify says (the design
+/// runs at 50 MHz): a board that claims 1 Hz does not buy itself hours.
+pub const MIN_CLOCK_HZ: u32 = 10_000_000;
+/// Resends of one request after a corrupted exchange (so at most 3 attempts).
+pub const MAX_RETRIES: usize = 2;
+/// Largest model and scan the protocol addresses (12-bit indices).
+pub const MAX_POINTS: usize = pficp_fpga::format::MAX_POINTS;
+/// Most particles the board stores.
+pub const MAX_PARTICLES: usize = pficp_fpga::weights::MAX_PARTICLES;
+/// The modelled board time of a run is multiplied by this for the run's time limit.
+pub const RUN_SAFETY: u32 = 4;
+/// Time between two Status requests while a filter runs.
+pub const DEFAULT_POLL: Duration = Duration::from_millis(50);
+
+/// Counters of one client's traffic.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ClientStats {
+    /// Requests answered.
+    pub requests: usize,
+    /// Resends after a corrupted exchange.
+    pub resends: usize,
+    /// Evaluate sequences started over after a lost reply.
+    pub restarts: usize,
+    /// Bytes written.
+    pub bytes_sent: usize,
+    /// Bytes read.
+    pub bytes_received: usize,
+}
+
+mod filter;
+mod link;
+
+pub use filter::run_clocks_bound;
+
+/// A client of one board on one serial port.
+pub struct BoardClient {
+    port: Box<dyn SerialPort>,
+    name: String,
+    baud: u32,
+    timeout: Duration,
+    seq: u8,
+    deframer: Deframer,
+    /// Bytes read but not yet given to the deframer, from `rx_at` on.
+    rx: Vec<u8>,
+    rx_at: usize,
+    identity: Option<Identity>,
+    sizes: (u16, u16),
+    stored: usize,
+    stats: ClientStats,
+    /// The iteration cap of the last Run sent (a Status beyond it is a broken board).
+    run_iterations: Option<u16>,
+}
+
+impl std::fmt::Debug for BoardClient {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("BoardClient")
+            .field("port", &self.name)
+            .field("baud", &self.baud)
+            .field("timeout", &self.timeout)
+            .field("identity", &self.identity)
+            .finish()
+    }
+}
+
+impl BoardClient {
+    /// Open the serial port at `path` (8N1, no flow control) and drop whatever it had
+    /// buffered. `timeout` is the time allowed per reply (plus the modelled board time).
+    pub fn open(path: &str, baud: u32, timeout: Duration) -> Result<Self, BoardError> {
+        let open_error = |reason: String| BoardError::Open { path: path.to_string(), reason };
+        if !(MIN_BAUD..=MAX_BAUD).contains(&baud) {
+            return Err(open_error(format!("baud rate {baud}: the client runs {MIN_BAUD} to {MAX_BAUD} baud")));
+        }
+        if timeout.is_zero() || timeout > MAX_TIMEOUT {
+            return Err(open_error(format!(
+                "a timeout of {} ms per reply: the client allows 1 to {} ms",
+                timeout.as_millis(),
+                MAX_TIMEOUT.as_millis()
+            )));
+        }
+        if !std::path::Path::new(path).exists() {
+            return Err(open_error("no such device (is the board plugged in? check the path)".into()));
+        }
+        let port = serialport::new(path, baud)
+            .timeout(timeout)
+            .data_bits(serialport::DataBits::Eight)
+            .parity(serialport::Parity::None)
+            .stop_bits(serialport::StopBits::One)
+            .flow_control(serialport::FlowControl::None)
+            .open()
+            .map_err(|e| open_error(e.to_string()))?;
+        // Stale bytes from before (a previous run cut short) would only be skipped later.
+        let _ = port.clear(serialport::ClearBuffer::All);
+        let mut client = Self::from_port(port);
+        client.name = path.to_string();
+        client.baud = baud;
+        client.timeout = timeout;
+        Ok(client)
+    }
+
+    /// A client on a port opened elsewhere (e.g. one end of a pseudo-terminal), with the
+    /// default timeout.
+    pub fn from_port(port: Box<dyn SerialPort>) -> Self {
+        let name = port.name().unwrap_or_else(|| "(unnamed port)".to_string());
+        let baud = port.baud_rate().ok().filter(|&b| b > 0).unwrap_or(DEFAULT_BAUD);
+        BoardClient {
+            port,
+            name,
+            baud,
+            timeout: DEFAULT_TIMEOUT,
+            seq: 0,
+            deframer: Deframer::default(),
+            rx: Vec::new(),
+            rx_at: 0,
+            identity: None,
+            sizes: (0, 0),
+            stored: 0,
+            stats: ClientStats::default(),
+            run_iterations: None,
+        }
+    }
+
+    /// Set the time allowed per reply (on top of the modelled board time; at most
+    /// [`MAX_TIMEOUT`]).
+    pub fn set_timeout(&mut self, timeout: Duration) {
+        self.timeout = timeout.min(MAX_TIMEOUT);
+    }
+
+    /// The time allowed per reply (on top of the modelled board time).
+    pub fn timeout(&self) -> Duration {
+        self.timeout
+    }
+
+    /// The port's name.
+    pub fn port_name(&self) -> &str {
+        &self.name
+    }
+
+    /// The last identity read ([`Self::identify`]).
+    pub fn identity(&self) -> Option<Identity> {
+        self.identity
+    }
+
+    /// Traffic counters.
+    pub fn stats(&self) -> ClientStats {
+        self.stats
+    }
+
+    /// Version, limits, clock, baud and the current sizes.
+    pub fn identify(&mut self) -> Result<Identity, BoardError> {
+        let reply = self.transact(Command::Identify, Vec::new(), IDENTITY_BYTES, 0, true)?;
+        let id = Identity::decode(&reply.data)
+            .map_err(|problem| BoardError::Reply { command: Command::Identify, problem })?;
+        self.identity = Some(id);
+        self.sizes = (id.model_count, id.scan_count);
+        self.stored = id.stored as usize;
+        Ok(id)
+    }
+
+    /// Write the model store from point 0, in frames of [`MAX_LOAD_POINTS`], each
+    /// acknowledged; `progress(done, total)` after each. Sizes are not changed.
+    pub fn load_model(&mut self, points: &[FxPoint], progress: impl FnMut(usize, usize)) -> Result<(), BoardError> {
+        self.load(Command::LoadModel, points, progress)
+    }
+
+    /// Write the scan store from point 0, as [`Self::load_model`].
+    pub fn load_scan(&mut self, points: &[FxPoint], progress: impl FnMut(usize, usize)) -> Result<(), BoardError> {
+        self.load(Command::LoadScan, points, progress)
+    }
+
+    fn load(
+        &mut self,
+        command: Command,
+        points: &[FxPoint],
+        mut progress: impl FnMut(usize, usize),
+    ) -> Result<(), BoardError> {
+        let what = if command == Command::LoadModel { "model" } else { "scan" };
+        let max = self.max_points(command);
+        if points.is_empty() || points.len() > max {
+            return Err(BoardError::Limit(format!(
+                "the {what} has {} points; the board holds 1 to {max}",
+                points.len()
+            )));
+        }
+        progress(0, points.len());
+        let mut offset = 0;
+        for chunk in points.chunks(MAX_LOAD_POINTS) {
+            let reply = self.transact(command, load_request(offset as u16, chunk), 4, 0, true)?;
+            let ack = parse_two_u16(&reply.data).map_err(|problem| BoardError::Reply { command, problem })?;
+            if ack != (offset as u16, chunk.len() as u16) {
+                return Err(BoardError::Reply {
+                    command,
+                    problem: MessageError::Field {
+                        field: "offset, count",
+                        got: ((ack.0 as u64) << 16) | ack.1 as u64,
+                        expected: ((offset as u64) << 16) | chunk.len() as u64,
+                    },
+                });
+            }
+            offset += chunk.len();
+            progress(offset, points.len());
+        }
+        Ok(())
+    }
+
+    fn max_points(&self, command: Command) -> usize {
+        let id = self.identity;
+        match command {
+            Command::LoadModel => id.map_or(MAX_POINTS, |i| i.max_model as usize),
+            _ => id.map_or(MAX_POINTS, |i| i.max_scan as usize),
+        }
+        .min(MAX_POINTS)
+    }
+
+    /// Set the numbers of model and scan points in use (1 to 4,096 each).
+    pub fn set_sizes(&mut self, model: usize, scan: usize) -> Result<(), BoardError> {
+        for (what, n, command) in [("model", model, Command::LoadModel), ("scan", scan, Command::LoadScan)] {
+            if n == 0 || n > self.max_points(command) {
+                return Err(BoardError::Limit(format!(
+                    "{what} size {n}: the board holds 1 to {}",
+                    self.max_points(command)
+                )));
+            }
+        }
+        let data = two_u16(model as u16, scan as u16);
+        let reply = self.transact(Command::SetSizes, data.clone(), 4, 0, true)?;
+        if reply.data != data {
+            let got = parse_two_u16(&reply.data)
+                .map_err(|problem| BoardError::Reply { command: Command::SetSizes, problem })?;
+            return Err(BoardError::Reply {
+                command: Command::SetSizes,
+                problem: MessageError::Field {
+                    field: "sizes",
+                    got: ((got.0 as u64) << 16) | got.1 as u64,
+                    expected: ((model as u64) << 16) | scan as u64,
+                },
+            });
+        }
+        self.sizes = (model as u16, scan as u16);
+        Ok(())
+    }
+
+    /// One Evaluate frame: `poses` (at most [`MAX_POSES`]; none only with `last`) evaluated
+    /// over the scan in use; with `first` the stored costs are forgotten first; with `last`
+    /// every stored cost is weighed with `scale` afterwards.
+    pub fn evaluate(
+        &mut self,
+        first: bool,
+        last: bool,
+        scale: WeightScale,
+        poses: &[FxPose],
+    ) -> Result<EvaluateReply, BoardError> {
+        let n = poses.len();
+        if n > MAX_POSES || (n == 0 && !last) {
+            return Err(BoardError::Limit(format!(
+                "an Evaluate frame carries 1 to {MAX_POSES} poses (or none to weigh), not {n}"
+            )));
+        }
+        let after = if first { n } else { self.stored + n };
+        if after == 0 || after > self.max_particles() {
+            return Err(BoardError::Limit(format!(
+                "{after} particle costs would be stored; the board holds 1 to {}",
+                self.max_particles()
+            )));
+        }
+        let request = EvaluateRequest { first, last, scale, poses: poses.to_vec() };
+        let reply_bytes = 6 * n + if last { 11 + 2 * after } else { 0 };
+        let clocks = n as u64 * clocks_per_particle(self.sizes.1 as usize, self.sizes.0 as usize, self.lanes())
+            + if last { after as u64 + 16 } else { 0 };
+        // Appending costs twice would corrupt the iteration: only FIRST or weigh-only repeat.
+        let repeatable = first || n == 0;
+        let reply = self.transact(Command::Evaluate, request.encode(), reply_bytes, clocks, repeatable)?;
+        let r = EvaluateReply::decode(&reply.data, n, last)
+            .map_err(|problem| BoardError::Reply { command: Command::Evaluate, problem })?;
+        self.stored = after;
+        if let Some(s) = &r.summary {
+            if s.weights.len() != after {
+                return Err(BoardError::Reply {
+                    command: Command::Evaluate,
+                    problem: MessageError::Field {
+                        field: "stored",
+                        got: s.weights.len() as u64,
+                        expected: after as u64,
+                    },
+                });
+            }
+        }
+        Ok(r)
+    }
+
+    /// Weigh the stored costs with `scale` (Evaluate with no poses and LAST).
+    pub fn weigh(&mut self, scale: WeightScale) -> Result<WeightSummary, BoardError> {
+        let r = self.evaluate(false, true, scale, &[])?;
+        Ok(r.summary.expect("decoded with LAST"))
+    }
+
+    /// The costs of `poses` (1 to 256), in frames of [`MAX_POSES`] without LAST (the first
+    /// with FIRST): they become the stored costs. Started over (at most [`MAX_RETRIES`]
+    /// times) when a reply is lost.
+    pub fn costs(&mut self, poses: &[FxPose]) -> Result<Vec<u64>, BoardError> {
+        if poses.is_empty() || poses.len() > self.max_particles() {
+            return Err(BoardError::Limit(format!(
+                "{} particles: the board weighs 1 to {}",
+                poses.len(),
+                self.max_particles()
+            )));
+        }
+        let mut restarts = 0;
+        'again: loop {
+            let mut costs = Vec::with_capacity(poses.len());
+            for (k, batch) in poses.chunks(MAX_POSES).enumerate() {
+                match self.evaluate(k == 0, false, WeightScale::default(), batch) {
+                    Ok(r) => costs.extend(r.costs),
+                    Err(BoardError::ReplyLost { .. }) if restarts < MAX_RETRIES => {
+                        restarts += 1;
+                        self.stats.restarts += 1;
+                        continue 'again;
+                    }
+                    Err(e) => return Err(e),
+                }
+            }
+            return Ok(costs);
+        }
+    }
+
+    /// One filter iteration on the board: the costs of `poses` ([`Self::costs`]), then
+    /// `scale_fn(costs)` chooses the weight scale and the stored costs are weighed
+    /// ([`Self::weigh`]). Returns the costs and the weights (checked: one per pose, `w_sum`
+    /// their sum).
+    pub fn costs_and_weights(
+        &mut self,
+        poses: &[FxPose],
+        scale_fn: impl FnOnce(&[u64]) -> WeightScale,
+    ) -> Result<(Vec<u64>, WeightSummary), BoardError> {
+        let costs = self.costs(poses)?;
+        let scale = scale_fn(&costs);
+        let summary = self.weigh(scale)?;
+        let sum: u64 = summary.weights.iter().map(|&w| w as u64).sum();
+        if sum == 0 {
+            // Normalising would divide by zero: every weight NaN.
+            return Err(BoardError::Filter(format!(
+                "the board on {} returned {} weights that are all 0 (the best particle always weighs 1)",
+                self.name,
+                summary.weights.len()
+            )));
+        }
+        if sum != summary.w_sum as u64 {
+            return Err(BoardError::Reply {
+                command: Command::Evaluate,
+                problem: MessageError::Field { field: "w_sum", got: summary.w_sum as u64, expected: sum },
+            });
+        }
+        let min = costs.iter().copied().min().unwrap_or(0);
+        if summary.min_cost != min {
+            return Err(BoardError::Reply {
+                command: Command::Evaluate,
+                problem: MessageError::Field { field: "min_cost", got: summary.min_cost, expected: min },
+            });
+        }
+        if summary.weights != pficp_fpga::weights::weights(&costs, &scale) {
+            return Err(BoardError::Filter(format!(
+                "the board on {} returned weights that are not the exp table's for its own costs",
+                self.name
+            )));
+        }
+        Ok((costs, summary))
+    }
+
+    /// Nearest model point and squared distance of scan points `first .. first + count` at
+    /// `pose`, in frames of [`MAX_NEAREST`]; `cost` is their sum.
+    pub fn nearest(&mut self, first: usize, count: usize, pose: &FxPose) -> Result<NearestReply, BoardError> {
+        if count == 0 || first + count > MAX_POINTS {
+            return Err(BoardError::Limit(format!(
+                "scan points {first}..{}: the board holds points 0..{MAX_POINTS}",
+                first + count
+            )));
+        }
+        let mut out = NearestReply { first: first as u16, cost: 0, results: Vec::with_capacity(count) };
+        let mut at = first;
+        while at < first + count {
+            let n = (first + count - at).min(MAX_NEAREST);
+            let request = NearestRequest { first: at as u16, count: n as u16, pose: *pose };
+            let clocks = clocks_per_particle(n, self.sizes.0 as usize, self.lanes());
+            let reply = self.transact(Command::Nearest, request.encode(), 10 + 7 * n, clocks, true)?;
+            let bad = |problem| BoardError::Reply { command: Command::Nearest, problem };
+            let r = NearestReply::decode(&reply.data, &request).map_err(bad)?;
+            if let Some(&(i, _)) = r.results.iter().find(|&&(i, _)| i >= self.sizes.0) {
+                return Err(bad(MessageError::Field {
+                    field: "model index",
+                    got: i as u64,
+                    expected: self.sizes.0 as u64,
+                }));
+            }
+            let sum = r.results.iter().fold(0u64, |c, n| (c + n.1) & COST_MASK);
+            if r.cost != sum {
+                return Err(bad(MessageError::Field { field: "cost", got: r.cost, expected: sum }));
+            }
+            out.cost += r.cost;
+            out.results.extend(r.results);
+            at += n;
+        }
+        Ok(out)
+    }
+
+    fn max_particles(&self) -> usize {
+        self.identity.map_or(MAX_PARTICLES, |i| i.max_particles as usize).min(MAX_PARTICLES)
+    }
+
+    /// Lanes for the compute-time model: the board's once identified, else 1 (the slowest).
+    fn lanes(&self) -> usize {
+        self.identity.map_or(1, |i| i.lanes.max(1) as usize)
+    }
+}
+
+/// The Identify fields, one per line (`pficp board info`).
+pub fn identity_text(port: &str, id: &Identity) -> String {
+    let mut s = String::new();
+    s += &format!("port              {port}\n");
+    s += &format!(
+        "protocol version  {}{}\n",
+        id.version,
+        if id.version == VERSION { String::new() } else { format!(" (this host speaks {VERSION})") }
+    );
+    s += &format!("lanes             {}\n", id.lanes);
+    s += &format!("max model points  {}\n", id.max_model);
+    s += &format!("max scan points   {}\n", id.max_scan);
+    s += &format!("max particles     {}\n", id.max_particles);
+    s += &format!("poses per frame   {}\n", id.max_poses);
+    s += &format!("points per load   {}\n", id.max_load);
+    s += &format!("nearest per frame {}\n", id.max_nearest);
+    s += &format!("clock             {} Hz\n", id.clock_hz);
+    s += &format!("baud              {}\n", id.baud);
+    s += &format!("model points      {}\n", id.model_count);
+    s += &format!("scan points       {}\n", id.scan_count);
+    s += &format!("stored costs      {}\n", id.stored);
+    s
+}

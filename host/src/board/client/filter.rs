@@ -1,0 +1,225 @@
+//! The on-board filter's requests (protocol 2: Run, Status, Result) and the time a run may
+//! take: the modelled board time from the sequencer's clock count, the allowance, the wait.
+
+use super::{BoardClient, BoardError, MAX_RETRIES, MIN_CLOCK_HZ, RUN_SAFETY};
+use pficp_fpga::messages::{
+    parse_two_u16, MessageError, ResultReply, RunState, StatusReply, RESULT_BYTES, RUN_REPLY_BYTES, STATUS_BYTES,
+};
+use pficp_fpga::pf::PfConfig;
+use pficp_fpga::pipeline::clocks_per_particle;
+use pficp_fpga::protocol::Command;
+use std::time::{Duration, Instant};
+
+impl BoardClient {
+    /// The board's clocks for the on-board filter of `cfg` over the sizes in use: the
+    /// bound of [`run_clocks_bound`] with the board's lanes (1 before Identify).
+    pub fn run_clocks(&self, cfg: &PfConfig) -> u64 {
+        run_clocks_bound(cfg.particles, cfg.iterations, self.sizes.1 as usize, self.sizes.0 as usize, self.lanes())
+    }
+
+    /// The modelled board time of the on-board filter of `cfg` ([`Self::run_clocks`] at the
+    /// board's clock; 100 MHz before Identify).
+    pub fn modelled_run_time(&self, cfg: &PfConfig) -> Duration {
+        Duration::from_secs_f64(self.run_clocks(cfg) as f64 / self.clock_hz())
+    }
+
+    /// The clock the deadlines assume: the board's (100 MHz before Identify), never below
+    /// [`MIN_CLOCK_HZ`].
+    pub(super) fn clock_hz(&self) -> f64 {
+        self.identity.map_or(100e6, |i| i.clock_hz.max(MIN_CLOCK_HZ) as f64)
+    }
+
+    /// How long a run of `cfg` may take before it is an error: [`RUN_SAFETY`] times the
+    /// modelled board time plus the timeout per reply.
+    pub fn run_allowance(&self, cfg: &PfConfig) -> Duration {
+        self.modelled_run_time(cfg) * RUN_SAFETY + self.timeout
+    }
+
+    /// Start the on-board filter (Run) over the model and scan in use; it runs in the
+    /// background. Particles (1 to the board's most) and iterations (at least 1) are checked
+    /// here; the board checks the sizes. A board already running a filter answers `Busy`:
+    /// [`BoardError::Board`].
+    pub fn run(&mut self, cfg: &PfConfig) -> Result<(), BoardError> {
+        let (n, k) = (cfg.particles as usize, cfg.iterations);
+        if n == 0 || n > self.max_particles() || k == 0 {
+            return Err(BoardError::Limit(format!(
+                "{n} particles and {k} iterations: the board runs 1 to {} particles, at least 1 iteration",
+                self.max_particles()
+            )));
+        }
+        self.run_iterations = Some(cfg.iterations);
+        let data = cfg.encode();
+        // A board that computes before it answers (the timeless reference) needs the run's time.
+        let extra = self.run_allowance(cfg).saturating_sub(self.timeout);
+        let mut lost = 0;
+        loop {
+            match self.transact_with(Command::Run, data.clone(), RUN_REPLY_BYTES, extra, 0, false) {
+                Ok(reply) => {
+                    if reply.data != data[..RUN_REPLY_BYTES] {
+                        let (p, i) = parse_two_u16(&reply.data)
+                            .map_err(|problem| BoardError::Reply { command: Command::Run, problem })?;
+                        return Err(BoardError::Reply {
+                            command: Command::Run,
+                            problem: MessageError::Field {
+                                field: "particles, iterations",
+                                got: ((p as u64) << 16) | i as u64,
+                                expected: ((cfg.particles as u64) << 16) | cfg.iterations as u64,
+                            },
+                        });
+                    }
+                    return Ok(());
+                }
+                Err(BoardError::ReplyLost { command, reason }) => {
+                    // The board may have started it: then it is running now.
+                    if self.status()?.state == RunState::Running {
+                        self.stats.restarts += 1;
+                        return Ok(());
+                    }
+                    lost += 1;
+                    if lost > MAX_RETRIES {
+                        return Err(BoardError::ReplyLost { command, reason });
+                    }
+                    self.stats.resends += 1;
+                }
+                Err(e) => return Err(e),
+            }
+        }
+    }
+
+    /// The on-board filter's state, iterations done and best cost so far (Status).
+    pub fn status(&mut self) -> Result<StatusReply, BoardError> {
+        let reply = self.transact(Command::Status, Vec::new(), STATUS_BYTES, 0, true)?;
+        StatusReply::decode(&reply.data).map_err(|problem| BoardError::Reply { command: Command::Status, problem })
+    }
+
+    /// The finished filter's best particle, cost and pose (Result). A board still running
+    /// answers `Busy`, one that has run no filter since power-up or reset `NoResult`: both
+    /// [`BoardError::Board`].
+    ///
+    /// The reply is checked: at least 1 iteration and no more than the last Run asked for,
+    /// the largest point distance within the cost, the pose the one
+    /// [`pficp_fpga::pf::pose_of`] builds from the parameters.
+    pub fn result(&mut self) -> Result<ResultReply, BoardError> {
+        let reply = self.transact(Command::Result, Vec::new(), RESULT_BYTES, 0, true)?;
+        let bad = |problem| BoardError::Reply { command: Command::Result, problem };
+        let r = ResultReply::decode(&reply.data).map_err(bad)?;
+        let cap = self.run_iterations.unwrap_or(u16::MAX);
+        if r.iterations == 0 || r.iterations > cap {
+            return Err(bad(MessageError::Field {
+                field: "iterations",
+                got: r.iterations as u64,
+                expected: cap as u64,
+            }));
+        }
+        if r.max_d2 > r.cost {
+            return Err(bad(MessageError::Field { field: "max_d2 (above the cost)", got: r.max_d2, expected: r.cost }));
+        }
+        if r.pose != pficp_fpga::pf::pose_of(&r.params) {
+            return Err(BoardError::Filter(format!(
+                "the board on {} returned a pose that is not the one its parameters {:?} give",
+                self.name, r.params
+            )));
+        }
+        Ok(r)
+    }
+
+    /// Poll Status every `every` until the filter is done (state 2); `progress` gets each
+    /// reply. Returns the last reply and the number of polls. A board still running whose
+    /// iteration count has not changed for `limit` (counted from the call, then from each
+    /// change) is a [`BoardError::RunTimeout`] naming `modelled`: a hung board is caught
+    /// after `limit`, while a slow one that keeps making progress (the simulated board runs
+    /// about 40 times slower than real time) is waited for, up to `limit` times (the Run's
+    /// iterations + 1) in all, since the count must rise and stay within the Run's (a count
+    /// that goes back or passes it is a [`BoardError::Filter`] at once). One that reports no
+    /// run (state 0: reset?) is a [`BoardError::Filter`]; one that stops answering a
+    /// [`BoardError::Timeout`] within the timeout per reply.
+    pub fn wait_for_run(
+        &mut self,
+        limit: Duration,
+        modelled: Duration,
+        every: Duration,
+        mut progress: impl FnMut(&StatusReply),
+    ) -> Result<(StatusReply, usize), BoardError> {
+        let start = Instant::now();
+        let mut since = start;
+        let mut last_iterations = None;
+        let mut polls = 0;
+        let overall = limit * (self.run_iterations.map_or(1, |k| k as u32) + 1);
+        loop {
+            let s = self.status()?;
+            polls += 1;
+            progress(&s);
+            // The count only rises and stays within the Run's cap; otherwise the time limit,
+            // restarted at every new count, would never end for a board whose counter
+            // oscillates or wraps.
+            if let Some(last) = last_iterations {
+                if s.iterations < last {
+                    return Err(BoardError::Filter(format!(
+                        "the board on {} reports {} iterations after {last}: its iteration count went back",
+                        self.name, s.iterations
+                    )));
+                }
+            }
+            if let Some(cap) = self.run_iterations {
+                if s.iterations > cap {
+                    return Err(BoardError::Filter(format!(
+                        "the board on {} reports {} iterations, more than the {cap} it was asked for",
+                        self.name, s.iterations
+                    )));
+                }
+            }
+            if last_iterations != Some(s.iterations) {
+                if last_iterations.is_some() {
+                    since = Instant::now();
+                }
+                last_iterations = Some(s.iterations);
+            }
+            match s.state {
+                RunState::Done => return Ok((s, polls)),
+                RunState::Idle => {
+                    return Err(BoardError::Filter(format!(
+                        "the board on {} reports no filter run (was it reset?)",
+                        self.name
+                    )))
+                }
+                RunState::Running => {}
+            }
+            let waited = since.elapsed();
+            if waited >= limit || start.elapsed() >= overall {
+                return Err(BoardError::RunTimeout {
+                    port: self.name.clone(),
+                    stall_limit: limit,
+                    overall_limit: overall,
+                    waited,
+                    total: start.elapsed(),
+                    modelled,
+                    state: s.state,
+                    iterations: s.iterations,
+                });
+            }
+            std::thread::sleep(every.min(limit - waited).min(overall.saturating_sub(start.elapsed())));
+        }
+    }
+}
+
+/// An upper bound on the on-board filter's clocks for `particles` and all `iterations` over
+/// `scan_points` and `model_points` on `lanes` lanes: the sequencer's exact count
+/// ([`pficp_fpga::sequencer::run_clocks`]) with every data-dependent part at its largest
+/// (49 temperature passes, a new best every iteration, the resampling pointer advancing
+/// through every particle) and each evaluation taking the pipeline's
+/// [`clocks_per_particle`] plus one clock: `particles x iterations + iterations + 1` poses.
+pub fn run_clocks_bound(particles: u16, iterations: u16, scan_points: usize, model_points: usize, lanes: usize) -> u64 {
+    use pficp_fpga::sequencer::{run_clocks, IterationShape};
+    let n = particles as u64;
+    let eval = 1 + clocks_per_particle(scan_points, model_points, lanes.max(1));
+    let shape = |last: bool| IterationShape {
+        particles: n,
+        eval_clocks: (n + 1) * eval,
+        temper_passes: 49,
+        best_copied: true,
+        resample_advances: (!last).then_some(n.saturating_sub(1)),
+    };
+    let k = iterations as usize;
+    let shapes: Vec<IterationShape> = (0..k).map(|i| shape(i + 1 == k)).collect();
+    run_clocks(eval, &shapes)
+}
