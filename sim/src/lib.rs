@@ -5,12 +5,19 @@
 //! | `pipeline_verilog(P)` (docs/pipeline.md), P in [`verilated_lanes`] | [`VerilatedPipeline`] | [`PipelineModel`] | [`Lockstep`] |
 //! | `particle_weights_verilog(P)`, the same P | [`VerilatedParticleWeights`] | [`ParticleWeightModel`] | [`PwLockstep`] |
 //! | `weight_stage_verilog()` (docs/weights.md) | [`VerilatedWeightStage`] | [`WeightModel`] | [`WeightLockstep`] |
+//! | the sequencer `PfSequencer` alone (docs/sequencer.md) | [`VerilatedSequencer`] | [`SequencerModel`] | [`SeqLockstep`] |
+//! | `board_verilog` (the whole board top, default and fast builds) | [`VerilatedBoard`] | `BoardModel` (byte level) | [`serial::SerialBoard`] |
 //!
 //! - The wrappers run the Verilated RTL one clock at a time, with an optional VCD.
-//! - [`LockstepOf`] (the three lockstep types are its instances) drives the RTL and the
+//! - [`LockstepOf`] (the four lockstep types are its instances) drives the RTL and the
 //!   reference with the same inputs and compares every output port after reset and after
-//!   every rising edge; the first difference is a [`Mismatch`] that names the cycle, the
-//!   signal, both values and a VCD of the RTL run. The designs plug in through [`Rtl`].
+//!   every rising edge; a difference is a [`Mismatch`] that names the cycle, the signal,
+//!   both values and a VCD of the RTL run. By default the first one stops the run;
+//!   [`LockstepOf::collect_all`] keeps going and keeps every one. The designs plug in
+//!   through [`Rtl`].
+//! - The board is compared at its pins instead: [`serial::SerialBoard`] drives its UART at
+//!   the real bit timing and checks every byte, Status reply and LED against the byte-level
+//!   reference; [`fuzz`] draws the frames for its fuzz test.
 //!
 //! Time in the VCDs: clock period 10; the state after reset is at time 0, the rising edge of
 //! cycle `c` (`c` = 1, 2, ...) at time `10 c`, the falling edge before it (where the inputs
@@ -24,7 +31,7 @@ use pficp_fpga::board::BoardConfig;
 use pficp_fpga::format::{pack_point, FxPoint, FxPose, WeightScale, MAX_POINTS};
 use pficp_fpga::particle_weights::{ParticleWeightModel, PwInputs, PwOutputs};
 use pficp_fpga::pipeline::{Evaluation, Inputs, Outputs, PipelineModel};
-use pficp_fpga::sequencer::{SeqInputs, SeqOutputs};
+use pficp_fpga::sequencer::{SeqInputs, SeqOutputs, SequencerModel};
 use pficp_fpga::weights::{WeightInputs, WeightModel, WeightOutputs, MAX_PARTICLES};
 use std::ffi::CString;
 use std::fmt;
@@ -569,7 +576,8 @@ fn weight_port_values(o: &WeightOutputs) -> [u64; 8] {
 }
 
 /// A Verilated design and its reference, as [`LockstepOf`] runs them (implemented by
-/// [`VerilatedPipeline`], [`VerilatedParticleWeights`] and [`VerilatedWeightStage`]).
+/// [`VerilatedPipeline`], [`VerilatedParticleWeights`], [`VerilatedWeightStage`] and
+/// [`VerilatedSequencer`]).
 pub trait Rtl: Sized {
     /// The input ports.
     type Inputs: Copy + PartialEq + fmt::Debug;
@@ -682,6 +690,54 @@ impl Rtl for VerilatedParticleWeights {
     rtl_common!(PwInputs);
 }
 
+/// The sequencer's output words as [`Rtl::OUTPUT_PORTS`] (a wide port's words numbered).
+pub const SEQUENCER_OUTPUT_PORTS: [&str; 16] = [
+    "start",
+    "pose.0",
+    "pose.1",
+    "pose.2",
+    "pose.3",
+    "running",
+    "finished",
+    "iterations",
+    "best_cost",
+    "best_max",
+    "params.0",
+    "params.1",
+    "params.2",
+    "p_we",
+    "p_waddr",
+    "p_wdata",
+];
+
+impl Rtl for VerilatedSequencer {
+    type Inputs = SeqInputs;
+    type Outputs = SeqOutputs;
+    type Reference = SequencerModel;
+    const OUTPUT_PORTS: &'static [&'static str] = &SEQUENCER_OUTPUT_PORTS;
+    fn port_values(o: &SeqOutputs) -> Vec<u64> {
+        let mut v = vec![o.start as u64];
+        v.extend(o.pose);
+        v.extend([o.running as u64, o.finished as u64, o.iterations as u64, o.best_cost, o.best_max]);
+        v.extend(o.params);
+        v.extend([o.p_we as u64, o.p_waddr as u64, o.p_wdata as u64]);
+        v
+    }
+    fn new_reference(&self) -> SequencerModel {
+        SequencerModel::new()
+    }
+    fn reference_outputs(r: &SequencerModel) -> SeqOutputs {
+        r.outputs()
+    }
+    fn reference_step(r: &mut SequencerModel, i: &SeqInputs) {
+        r.step(i)
+    }
+    fn fresh(&self) -> Self {
+        Self::new()
+    }
+    rtl_common!(SeqInputs);
+}
+
 impl Rtl for VerilatedWeightStage {
     type Inputs = WeightInputs;
     type Outputs = WeightOutputs;
@@ -789,7 +845,15 @@ pub struct LockstepOf<R: Rtl> {
     reset_checked: bool,
     compared: u64,
     failed: Option<Mismatch>,
+    /// Keep going after a mismatch ([`collect_all`](Self::collect_all)).
+    keep_going: bool,
+    /// Mismatching clocks recorded (at most [`MAX_RECORDED_MISMATCHES`]) and counted.
+    mismatches: Vec<Mismatch>,
+    mismatch_count: u64,
 }
+
+/// Mismatches a [`LockstepOf::collect_all`] run records (later ones are only counted).
+pub const MAX_RECORDED_MISMATCHES: usize = 1_000;
 
 /// The nearest-neighbour pipeline in lockstep with [`PipelineModel`].
 pub type Lockstep = LockstepOf<VerilatedPipeline>;
@@ -797,6 +861,8 @@ pub type Lockstep = LockstepOf<VerilatedPipeline>;
 pub type PwLockstep = LockstepOf<VerilatedParticleWeights>;
 /// The weight stage in lockstep with [`WeightModel`].
 pub type WeightLockstep = LockstepOf<VerilatedWeightStage>;
+/// The particle-filter sequencer in lockstep with [`SequencerModel`].
+pub type SeqLockstep = LockstepOf<VerilatedSequencer>;
 
 impl<R: Rtl> LockstepOf<R> {
     /// `rtl` (which must not have been clocked) against its reference after reset; VCD (on
@@ -819,6 +885,9 @@ impl<R: Rtl> LockstepOf<R> {
             reset_checked: false,
             compared: 0,
             failed: None,
+            keep_going: false,
+            mismatches: Vec::new(),
+            mismatch_count: 0,
         }
     }
 
@@ -855,6 +924,36 @@ impl<R: Rtl> LockstepOf<R> {
         self
     }
 
+    /// Keep going after a mismatch: every clock on which a port differs is a [`Mismatch`]
+    /// (cycle, first differing port, expected, actual, the other differing ports), recorded
+    /// up to [`MAX_RECORDED_MISMATCHES`] and counted beyond; the VCD is written at the
+    /// first. [`step`](Self::step) still returns each clock's mismatch; [`finish`](Self::finish)
+    /// returns them all.
+    pub fn collect_all(mut self) -> Self {
+        self.assert_fresh("collect_all");
+        self.keep_going = true;
+        self
+    }
+
+    /// The mismatches recorded so far (all of them up to [`MAX_RECORDED_MISMATCHES`]).
+    pub fn mismatches(&self) -> &[Mismatch] {
+        &self.mismatches
+    }
+
+    /// Clocks on which some port differed.
+    pub fn mismatch_count(&self) -> u64 {
+        self.mismatch_count
+    }
+
+    /// The clocks compared, or every recorded mismatch.
+    pub fn finish(&self) -> Result<u64, Vec<Mismatch>> {
+        if self.mismatch_count == 0 {
+            Ok(self.compared)
+        } else {
+            Err(self.mismatches.clone())
+        }
+    }
+
     /// The VCD path.
     pub fn vcd_path(&self) -> &Path {
         &self.vcd
@@ -889,7 +988,12 @@ impl<R: Rtl> LockstepOf<R> {
         let (ev, av) = (R::port_values(&e), R::port_values(&a));
         let differ: Vec<usize> = (0..R::OUTPUT_PORTS.len()).filter(|&k| ev[k] != av[k]).collect();
         let k = *differ.first().expect("outputs differ but no port value does");
-        let (vcd, vcd_from) = self.finish_vcd();
+        let first = self.mismatch_count == 0;
+        self.mismatch_count += 1;
+        let (vcd, vcd_from) = match self.mismatches.first() {
+            Some(m0) if !first => (m0.vcd.clone(), m0.vcd_from),
+            _ => self.finish_vcd(),
+        };
         let m = Mismatch {
             cycle: self.rtl.cycle(),
             signal: R::OUTPUT_PORTS[k],
@@ -901,7 +1005,12 @@ impl<R: Rtl> LockstepOf<R> {
             vcd,
             vcd_from,
         };
-        self.failed = Some(m.clone());
+        if self.mismatches.len() < MAX_RECORDED_MISMATCHES {
+            self.mismatches.push(m.clone());
+        }
+        if !self.keep_going {
+            self.failed = Some(m.clone());
+        }
         Err(m)
     }
 
@@ -957,7 +1066,10 @@ impl<R: Rtl> LockstepOf<R> {
                     eprintln!("pficp-sim: cannot write the VCD {}: {e}", self.vcd.display());
                 }
             }
-            self.compare()?;
+            let r = self.compare();
+            if !self.keep_going {
+                r?;
+            }
         }
         Ok(())
     }
@@ -970,15 +1082,17 @@ impl<R: Rtl> LockstepOf<R> {
         self.rtl.set_inputs(i);
         self.rtl.tick();
         R::reference_step(&mut self.reference, i);
-        if self.mode == TraceMode::OnMismatch {
+        if self.mode == TraceMode::OnMismatch && self.mismatch_count == 0 {
             match self.history.last_mut() {
                 Some((last, n)) if last == i => *n += 1,
                 _ => self.history.push((*i, 1)),
             }
         }
-        self.compare()?;
-        self.compared += 1;
-        Ok(())
+        let r = self.compare();
+        if r.is_ok() || self.keep_going {
+            self.compared += 1;
+        }
+        r
     }
 }
 

@@ -7,27 +7,30 @@
 use pficp_fpga::format::FxPoint;
 use pficp_fpga::pf::{self, example_cloud, example_config, PfConfig, SCALE_FRAC};
 use pficp_fpga::sequencer::{config_writes, unpack_pose, PipelineStandIn, SeqInputs, SequencerModel};
-use pficp_sim::VerilatedSequencer;
+use pficp_sim::{SeqLockstep, VerilatedSequencer};
 
+/// The RTL and the model through the common lockstep harness (every port after reset and
+/// every clock; a VCD of the last clocks on a mismatch).
 struct Both {
-    rtl: VerilatedSequencer,
-    m: SequencerModel,
-    n: u64,
+    ls: SeqLockstep,
 }
 impl Both {
+    fn new() -> Both {
+        Both { ls: SeqLockstep::from_rtl(VerilatedSequencer::new()) }
+    }
     fn step(&mut self, i: &SeqInputs) {
-        let before = self.m.state_name();
-        self.rtl.step(i);
-        self.m.step(i);
-        self.n += 1;
-        let (a, b) = (self.rtl.outputs(), self.m.outputs());
-        assert_eq!(a, b, "clock {} (model was in {before}, now {}), inputs {i:?}", self.n, self.m.state_name());
+        let before = self.ls.reference().state_name();
+        if let Err(m) = self.ls.step(i) {
+            panic!("{m} (model was in {before}, now {}), inputs {i:?}", self.ls.reference().state_name());
+        }
+    }
+    fn m(&self) -> &SequencerModel {
+        self.ls.reference()
     }
 }
 
 fn realistic(cfg: &PfConfig, model: &[FxPoint], scan: &[FxPoint], seed: u32, reset_at: Option<u64>) -> u64 {
-    let mut b = Both { rtl: VerilatedSequencer::new(), m: SequencerModel::new(), n: 0 };
-    assert_eq!(b.rtl.outputs(), b.m.outputs());
+    let mut b = Both::new();
     let mut rng = pf::Xorshift32::new(seed);
     for (a, w) in config_writes(cfg) {
         b.step(&SeqInputs { cfg_we: true, cfg_addr: a, cfg_data: w, ..Default::default() });
@@ -37,7 +40,7 @@ fn realistic(cfg: &PfConfig, model: &[FxPoint], scan: &[FxPoint], seed: u32, res
     let mut ready_at = 0;
     let mut now = 0u64;
     loop {
-        let o = b.m.outputs();
+        let o = b.m().outputs();
         let mut i = SeqInputs { nn_ready: !pipeline.busy() && now >= ready_at && !o.start, ..Default::default() };
         if o.start {
             pipeline.start(now, (rng.next() % 40) as u64, model, scan, &unpack_pose(&o.pose));
@@ -51,7 +54,7 @@ fn realistic(cfg: &PfConfig, model: &[FxPoint], scan: &[FxPoint], seed: u32, res
         }
         b.step(&i);
         now += 1;
-        if b.m.outputs().finished {
+        if b.m().outputs().finished {
             return now;
         }
         if reset_at.is_some() && now > reset_at.unwrap() + 50 {
@@ -91,13 +94,13 @@ fn lockstep_random_inputs() {
     for seed in 1..=10u32 {
         let mut rng = pf::Xorshift32::new(seed.wrapping_mul(2654435761));
         let mut r = || rng.next() as u64;
-        let mut b = Both { rtl: VerilatedSequencer::new(), m: SequencerModel::new(), n: 0 };
+        let mut b = Both::new();
         let clocks = 200_000;
         let mut hist = std::collections::HashMap::new();
         let mut fins = 0u64;
         for c in 0..clocks {
             let x = r() | r() << 32;
-            let cfg_we = c < 30 || (b.m.state_name() == "Idle" && x % 16 == 0) || x % 7000 == 0;
+            let cfg_we = c < 30 || (b.m().state_name() == "Idle" && x % 16 == 0) || x % 7000 == 0;
             let mut cfg_addr = (r() % 32) as u8;
             let mut cfg_data = r() | r() << 32;
             if c < 30 {
@@ -120,14 +123,39 @@ fn lockstep_random_inputs() {
                 reset: (x >> 32) % 20_000 == 0,
             };
             b.step(&i);
-            *hist.entry(b.m.state_name()).or_insert(0u64) += 1;
-            all_states.insert(b.m.state_name());
-            if b.m.outputs().finished {
+            *hist.entry(b.m().state_name()).or_insert(0u64) += 1;
+            all_states.insert(b.m().state_name());
+            if b.m().outputs().finished {
                 fins += 1;
             }
         }
         println!("{} states visited, finished clocks {fins}", hist.len());
-        println!("seed {seed}: state {} iterations {}", b.m.state_name(), b.m.outputs().iterations);
+        println!("seed {seed}: state {} iterations {}", b.m().state_name(), b.m().outputs().iterations);
     } // The random inputs reach (nearly) every state of the sequencer.
     assert!(all_states.len() >= 55, "{} states visited: {all_states:?}", all_states.len());
+}
+
+/// The harness can fail, and in `collect_all` mode keeps every mismatch: a reference that
+/// was started (`go`) while the RTL was not differs on `running` from the first clock on;
+/// each clock is named with its cycle, port, expected and actual, and the first has a VCD.
+#[test]
+fn a_diverging_sequencer_is_caught_with_every_mismatch_and_a_vcd() {
+    let mut started = SequencerModel::new();
+    for (a, w) in config_writes(&example_config(4, 2, 3)) {
+        started.step(&SeqInputs { cfg_we: true, cfg_addr: a, cfg_data: w, ..Default::default() });
+    }
+    started.step(&SeqInputs { go: true, ..Default::default() });
+    let mut ls = SeqLockstep::from_rtl(VerilatedSequencer::new()).with_reference(started).collect_all();
+    for _ in 0..50 {
+        let _ = ls.step(&SeqInputs::default());
+    }
+    let all = ls.finish().unwrap_err();
+    assert!(all.len() >= 50 && ls.mismatch_count() as usize == all.len(), "{} of {}", all.len(), ls.mismatch_count());
+    let first = &all[0];
+    assert_eq!(first.cycle, 0, "{first}");
+    assert!(all.iter().all(|m| m.signal == "running" || m.also.contains(&"running")), "{first}");
+    assert_eq!((all[1].expected, all[1].actual), (1, 0), "{}", all[1]);
+    let vcd = first.vcd.as_ref().expect("a VCD");
+    assert!(std::fs::metadata(vcd).is_ok_and(|m| m.len() > 0), "{}", vcd.display());
+    assert_eq!(ls.clocks_compared(), 50);
 }
