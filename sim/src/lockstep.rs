@@ -1,0 +1,737 @@
+//! [`Rtl`], what a Verilated design and its reference share, and [`LockstepOf`], the one
+//! harness that runs both clock for clock and compares every output port.
+
+use crate::wrappers::*;
+use pficp_fpga::format::{pack_point, FxPoint, FxPose, WeightScale, MAX_POINTS};
+use pficp_fpga::particle_weights::PwInputs;
+use pficp_fpga::pipeline::{Evaluation, Inputs, Outputs};
+use pficp_fpga::weights::{WeightInputs, WeightOutputs, MAX_PARTICLES};
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// A Verilated design and its reference, as [`LockstepOf`] runs them (implemented by
+/// [`VerilatedPipeline`], [`VerilatedParticleWeights`], [`VerilatedWeightStage`] and
+/// [`VerilatedSequencer`]).
+pub trait Rtl: Sized {
+    /// The input ports.
+    type Inputs: Copy + PartialEq + fmt::Debug;
+    /// The output ports.
+    type Outputs: Copy + PartialEq + fmt::Debug;
+    /// The cycle-accurate reference.
+    type Reference: Clone;
+    /// Output port names, in the order they are compared.
+    const OUTPUT_PORTS: &'static [&'static str];
+    /// The output port values in [`OUTPUT_PORTS`](Self::OUTPUT_PORTS) order.
+    fn port_values(o: &Self::Outputs) -> Vec<u64>;
+    /// The reference after reset for this RTL.
+    fn new_reference(&self) -> Self::Reference;
+    /// The reference's outputs now.
+    fn reference_outputs(r: &Self::Reference) -> Self::Outputs;
+    /// One rising edge of the reference.
+    fn reference_step(r: &mut Self::Reference, i: &Self::Inputs);
+    /// A fresh instance of the same model, after reset.
+    fn fresh(&self) -> Self;
+    /// Drive the input ports.
+    fn set_inputs(&mut self, i: &Self::Inputs);
+    /// The output ports now.
+    fn outputs(&self) -> Self::Outputs;
+    /// One clock.
+    fn tick(&mut self);
+    /// Rising edges so far.
+    fn cycle(&self) -> u64;
+    /// Lanes (0 for the weight stage).
+    fn lanes(&self) -> usize;
+    /// The Verilator prefix.
+    fn prefix(&self) -> &'static str;
+    /// Trace to a VCD from now on.
+    fn trace_to(&mut self, path: &Path) -> std::io::Result<()>;
+    /// Flush the VCD.
+    fn flush_trace(&mut self);
+}
+
+/// The first difference between the RTL and the reference.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Mismatch {
+    /// Rising edges before the comparison (0: after reset); VCD time `10 * cycle`.
+    pub cycle: u64,
+    /// The first differing output port (in the design's output port order:
+    /// [`OUTPUT_PORTS`], [`PW_OUTPUT_PORTS`] or [`WEIGHT_OUTPUT_PORTS`]).
+    pub signal: &'static str,
+    /// The reference's value.
+    pub expected: u64,
+    /// The RTL's value.
+    pub actual: u64,
+    /// Other ports that differ at the same cycle.
+    pub also: Vec<&'static str>,
+    /// Lanes of the RTL (0 for the weight stage).
+    pub lanes: usize,
+    /// The Verilator prefix of the RTL (`Vpipe4`, `Vpw16`, `Vweights`).
+    pub prefix: &'static str,
+    /// The VCD of the RTL run up to and including this cycle (`None` if it could not be
+    /// written; the reason went to stderr).
+    pub vcd: Option<PathBuf>,
+    /// The first cycle in the VCD (see [`LockstepOf::vcd_window`]).
+    pub vcd_from: u64,
+}
+
+impl fmt::Display for Mismatch {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "RTL {}", self.prefix)?;
+        if self.lanes > 0 {
+            write!(f, " (P = {})", self.lanes)?;
+        }
+        write!(
+            f,
+            " differs from the reference at cycle {} (VCD time {}): {} expected {} (0x{:x}), actual {} (0x{:x})",
+            self.cycle,
+            10 * self.cycle,
+            self.signal,
+            self.expected,
+            self.expected,
+            self.actual,
+            self.actual
+        )?;
+        if !self.also.is_empty() {
+            write!(f, "; also differing: {}", self.also.join(", "))?;
+        }
+        match &self.vcd {
+            Some(p) => write!(f, "; VCD (cycles {}..={}): {}", self.vcd_from, self.cycle, p.display()),
+            None => write!(f, "; no VCD"),
+        }
+    }
+}
+
+impl std::error::Error for Mismatch {}
+
+/// How a [`LockstepOf`] keeps its VCD.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TraceMode {
+    /// Trace only when needed: the inputs are recorded (run-length encoded) and, on a
+    /// mismatch, replayed into a fresh RTL that is traced over the last
+    /// [`vcd_window`](LockstepOf::vcd_window) cycles up to the mismatch. Full speed.
+    OnMismatch,
+    /// Trace the run as it goes (slower; the VCD covers the whole run).
+    Always,
+}
+
+/// Cycles before a mismatch that [`TraceMode::OnMismatch`] puts in the VCD by default (a
+/// 16-lane VCD takes about 12 kB a clock).
+pub const DEFAULT_VCD_WINDOW: u64 = 5_000;
+
+static RUN_COUNTER: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
+/// A Verilated design ([`Rtl`]) and its reference, clock for clock: every output port is
+/// compared after reset and after every rising edge.
+pub struct LockstepOf<R: Rtl> {
+    rtl: R,
+    reference: R::Reference,
+    mode: TraceMode,
+    vcd: PathBuf,
+    vcd_window: Option<u64>,
+    /// Inputs applied so far, run-length encoded (for the replay in [`TraceMode::OnMismatch`]).
+    history: Vec<(R::Inputs, u64)>,
+    reset_checked: bool,
+    compared: u64,
+    failed: Option<Mismatch>,
+    /// Keep going after a mismatch ([`collect_all`](Self::collect_all)).
+    keep_going: bool,
+    /// Mismatching clocks recorded (at most [`MAX_RECORDED_MISMATCHES`]) and counted.
+    mismatches: Vec<Mismatch>,
+    mismatch_count: u64,
+}
+
+/// Mismatches a [`LockstepOf::collect_all`] run records (later ones are only counted).
+pub const MAX_RECORDED_MISMATCHES: usize = 1_000;
+
+/// The nearest-neighbour pipeline in lockstep with [`PipelineModel`].
+pub type Lockstep = LockstepOf<VerilatedPipeline>;
+/// The particle-weight pipeline in lockstep with [`ParticleWeightModel`].
+pub type PwLockstep = LockstepOf<VerilatedParticleWeights>;
+/// The weight stage in lockstep with [`WeightModel`].
+pub type WeightLockstep = LockstepOf<VerilatedWeightStage>;
+/// The particle-filter sequencer in lockstep with [`SequencerModel`].
+pub type SeqLockstep = LockstepOf<VerilatedSequencer>;
+
+impl<R: Rtl> LockstepOf<R> {
+    /// `rtl` (which must not have been clocked) against its reference after reset; VCD (on
+    /// mismatch) under the system temp directory; see [`vcd`](Self::vcd).
+    pub fn from_rtl(rtl: R) -> Self {
+        assert_eq!(rtl.cycle(), 0, "LockstepOf::from_rtl needs an RTL that was not clocked");
+        let n = RUN_COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let vcd = std::env::temp_dir().join(format!(
+            "pficp-sim-{}-{}-{n}.vcd",
+            rtl.prefix().to_lowercase(),
+            std::process::id()
+        ));
+        LockstepOf {
+            reference: rtl.new_reference(),
+            rtl,
+            mode: TraceMode::OnMismatch,
+            vcd,
+            vcd_window: Some(DEFAULT_VCD_WINDOW),
+            history: Vec::new(),
+            reset_checked: false,
+            compared: 0,
+            failed: None,
+            keep_going: false,
+            mismatches: Vec::new(),
+            mismatch_count: 0,
+        }
+    }
+
+    fn assert_fresh(&self, what: &str) {
+        assert!(self.rtl.cycle() == 0 && !self.reset_checked, "Lockstep::{what} must be called before the first step");
+    }
+
+    /// Where the VCD goes.
+    pub fn vcd(mut self, path: impl Into<PathBuf>) -> Self {
+        self.assert_fresh("vcd");
+        self.vcd = path.into();
+        self
+    }
+
+    /// How the VCD is kept (default [`TraceMode::OnMismatch`]).
+    pub fn trace_mode(mut self, mode: TraceMode) -> Self {
+        self.assert_fresh("trace_mode");
+        self.mode = mode;
+        self
+    }
+
+    /// With [`TraceMode::OnMismatch`]: the VCD starts this many cycles before the mismatch
+    /// (`None`: at reset). Default [`DEFAULT_VCD_WINDOW`].
+    pub fn vcd_window(mut self, cycles: Option<u64>) -> Self {
+        self.vcd_window = cycles;
+        self
+    }
+
+    /// Compare against this reference instead of the one after reset (it may have a
+    /// different configuration or state: a way to check that the checker catches errors).
+    pub fn with_reference(mut self, reference: R::Reference) -> Self {
+        self.assert_fresh("with_reference");
+        self.reference = reference;
+        self
+    }
+
+    /// Keep going after a mismatch: every clock on which a port differs is a [`Mismatch`]
+    /// (cycle, first differing port, expected, actual, the other differing ports), recorded
+    /// up to [`MAX_RECORDED_MISMATCHES`] and counted beyond; the VCD is written at the
+    /// first. [`step`](Self::step) still returns each clock's mismatch; [`finish`](Self::finish)
+    /// returns them all.
+    pub fn collect_all(mut self) -> Self {
+        self.assert_fresh("collect_all");
+        self.keep_going = true;
+        self
+    }
+
+    /// The mismatches recorded so far (all of them up to [`MAX_RECORDED_MISMATCHES`]).
+    pub fn mismatches(&self) -> &[Mismatch] {
+        &self.mismatches
+    }
+
+    /// Clocks on which some port differed.
+    pub fn mismatch_count(&self) -> u64 {
+        self.mismatch_count
+    }
+
+    /// The clocks compared, or every recorded mismatch.
+    pub fn finish(&self) -> Result<u64, Vec<Mismatch>> {
+        if self.mismatch_count == 0 {
+            Ok(self.compared)
+        } else {
+            Err(self.mismatches.clone())
+        }
+    }
+
+    /// The VCD path.
+    pub fn vcd_path(&self) -> &Path {
+        &self.vcd
+    }
+
+    /// The RTL.
+    pub fn rtl(&self) -> &R {
+        &self.rtl
+    }
+
+    /// The reference.
+    pub fn reference(&self) -> &R::Reference {
+        &self.reference
+    }
+
+    /// Rising edges after which every output port was compared (the reset comparison is
+    /// not counted).
+    pub fn clocks_compared(&self) -> u64 {
+        self.compared
+    }
+
+    /// The output ports (equal on both sides while no mismatch was found).
+    pub fn outputs(&self) -> R::Outputs {
+        self.rtl.outputs()
+    }
+
+    fn compare(&mut self) -> Result<(), Mismatch> {
+        let (e, a) = (R::reference_outputs(&self.reference), self.rtl.outputs());
+        if e == a {
+            return Ok(());
+        }
+        let (ev, av) = (R::port_values(&e), R::port_values(&a));
+        let differ: Vec<usize> = (0..R::OUTPUT_PORTS.len()).filter(|&k| ev[k] != av[k]).collect();
+        let k = *differ.first().expect("outputs differ but no port value does");
+        let first = self.mismatch_count == 0;
+        self.mismatch_count += 1;
+        let (vcd, vcd_from) = match self.mismatches.first() {
+            Some(m0) if !first => (m0.vcd.clone(), m0.vcd_from),
+            _ => self.finish_vcd(),
+        };
+        let m = Mismatch {
+            cycle: self.rtl.cycle(),
+            signal: R::OUTPUT_PORTS[k],
+            expected: ev[k],
+            actual: av[k],
+            also: differ[1..].iter().map(|&j| R::OUTPUT_PORTS[j]).collect(),
+            lanes: self.rtl.lanes(),
+            prefix: self.rtl.prefix(),
+            vcd,
+            vcd_from,
+        };
+        if self.mismatches.len() < MAX_RECORDED_MISMATCHES {
+            self.mismatches.push(m.clone());
+        }
+        if !self.keep_going {
+            self.failed = Some(m.clone());
+        }
+        Err(m)
+    }
+
+    /// Leave a VCD of the RTL run up to now; returns it and its first cycle.
+    fn finish_vcd(&mut self) -> (Option<PathBuf>, u64) {
+        let (r, from) = match self.mode {
+            TraceMode::Always => {
+                self.rtl.flush_trace();
+                (Ok(()), 0)
+            }
+            TraceMode::OnMismatch => {
+                let from = self.vcd_window.map_or(0, |w| self.rtl.cycle().saturating_sub(w));
+                (self.replay(from), from)
+            }
+        };
+        match r {
+            Ok(()) => (Some(self.vcd.clone()), from),
+            Err(e) => {
+                eprintln!("pficp-sim: cannot write the VCD {}: {e}", self.vcd.display());
+                (None, from)
+            }
+        }
+    }
+
+    /// Replay the recorded inputs into a fresh RTL, traced from cycle `from`.
+    fn replay(&self, from: u64) -> std::io::Result<()> {
+        let mut replay = self.rtl.fresh();
+        for (i, n) in &self.history {
+            for _ in 0..*n {
+                if replay.cycle() == from {
+                    replay.trace_to(&self.vcd)?;
+                }
+                replay.set_inputs(i);
+                replay.tick();
+            }
+        }
+        if replay.cycle() == from {
+            replay.trace_to(&self.vcd)?;
+        }
+        debug_assert_eq!(replay.cycle(), self.rtl.cycle());
+        debug_assert_eq!(replay.outputs(), self.rtl.outputs());
+        Ok(())
+    }
+
+    fn check_reset(&mut self) -> Result<(), Mismatch> {
+        if let Some(m) = &self.failed {
+            return Err(m.clone());
+        }
+        if !self.reset_checked {
+            self.reset_checked = true;
+            if self.mode == TraceMode::Always {
+                if let Err(e) = self.rtl.trace_to(&self.vcd) {
+                    eprintln!("pficp-sim: cannot write the VCD {}: {e}", self.vcd.display());
+                }
+            }
+            let r = self.compare();
+            if !self.keep_going {
+                r?;
+            }
+        }
+        Ok(())
+    }
+
+    /// One clock in lockstep: the same inputs to both, one rising edge each, every output
+    /// port compared (the outputs after reset are compared before the first edge). After a
+    /// mismatch every call returns it again.
+    pub fn step(&mut self, i: &R::Inputs) -> Result<(), Mismatch> {
+        self.check_reset()?;
+        self.rtl.set_inputs(i);
+        self.rtl.tick();
+        R::reference_step(&mut self.reference, i);
+        if self.mode == TraceMode::OnMismatch && self.mismatch_count == 0 {
+            match self.history.last_mut() {
+                Some((last, n)) if last == i => *n += 1,
+                _ => self.history.push((*i, 1)),
+            }
+        }
+        let r = self.compare();
+        if r.is_ok() || self.keep_going {
+            self.compared += 1;
+        }
+        r
+    }
+}
+
+impl LockstepOf<VerilatedPipeline> {
+    /// The `lanes`-lane RTL and `PipelineModel::new(lanes)`, both after reset; VCD (on
+    /// mismatch) under the system temp directory; see [`vcd`](Self::vcd).
+    pub fn new(lanes: usize) -> Self {
+        Self::from_rtl(VerilatedPipeline::new(lanes))
+    }
+
+    /// Write the model RAM, one point a clock from address 0.
+    pub fn load_model(&mut self, model: &[FxPoint]) -> Result<(), Mismatch> {
+        load_model(|i| self.step(i), model)
+    }
+
+    /// One particle on the loaded model of `model_count` points: wait for `busy` to drop,
+    /// `start` with `pose`, then stream `scan`, offering a point on the clocks (counted from
+    /// the start edge = 1) where `gap(clock)` is false (the pipeline's `scan_ready` is the
+    /// back-pressure); collect the results until `cost_valid`. Returns the evaluation and the
+    /// clocks from `start` to `cost_valid` (as `pficp_fpga::pipeline::run_particle`).
+    pub fn particle(
+        &mut self,
+        model_count: usize,
+        scan: &[FxPoint],
+        pose: &FxPose,
+        gap: impl FnMut(u64) -> bool,
+    ) -> Result<(Evaluation, u64), Mismatch> {
+        self.check_reset()?;
+        let now = self.outputs();
+        drive_particle(
+            |i| {
+                self.step(i)?;
+                Ok(self.outputs())
+            },
+            now,
+            model_count,
+            scan,
+            pose,
+            gap,
+        )
+    }
+
+    /// [`load_model`](Self::load_model) then [`particle`](Self::particle), all in lockstep.
+    pub fn run_particle(
+        &mut self,
+        model: &[FxPoint],
+        scan: &[FxPoint],
+        pose: &FxPose,
+        gap: impl FnMut(u64) -> bool,
+    ) -> Result<(Evaluation, u64), Mismatch> {
+        self.load_model(model)?;
+        self.particle(model.len(), scan, pose, gap)
+    }
+}
+
+/// The weights of one weight pass, as [`PwLockstep::weigh`] and [`WeightLockstep::weigh`]
+/// collect them.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct WeightPass {
+    /// `w_index` of every `w_valid`, in order.
+    pub indices: Vec<u8>,
+    /// `weight` of every `w_valid`, in order.
+    pub weights: Vec<u16>,
+    /// `w_sum` at `w_done`.
+    pub sum: u32,
+    /// Rising edges after the edge that started the pass (the first with `busy`) up to and
+    /// including the `w_done` edge.
+    pub clocks: u64,
+}
+
+impl LockstepOf<VerilatedParticleWeights> {
+    /// The `lanes`-lane particle-weight RTL and `ParticleWeightModel::new(lanes)`, both after
+    /// reset; VCD (on mismatch) under the system temp directory; see [`vcd`](Self::vcd).
+    pub fn new(lanes: usize) -> Self {
+        Self::from_rtl(VerilatedParticleWeights::new(lanes))
+    }
+
+    /// Write the model RAM, one point a clock from address 0 (weight controls low).
+    pub fn load_model(&mut self, model: &[FxPoint]) -> Result<(), Mismatch> {
+        load_model(|i| self.step(&PwInputs { nn: *i, ..Default::default() }), model)
+    }
+
+    /// [`Lockstep::particle`] with the weight controls low: the particle's cost goes into
+    /// the weight stage at the edge after `cost_valid` (if the stage is idle and not full).
+    pub fn particle(
+        &mut self,
+        model_count: usize,
+        scan: &[FxPoint],
+        pose: &FxPose,
+        gap: impl FnMut(u64) -> bool,
+    ) -> Result<(Evaluation, u64), Mismatch> {
+        self.check_reset()?;
+        let now = self.outputs().nn;
+        drive_particle(
+            |i| {
+                self.step(&PwInputs { nn: *i, ..Default::default() })?;
+                Ok(self.outputs().nn)
+            },
+            now,
+            model_count,
+            scan,
+            pose,
+            gap,
+        )
+    }
+
+    /// Wait for the weight stage to be idle, then `clear` for one clock.
+    pub fn clear(&mut self) -> Result<(), Mismatch> {
+        self.check_reset()?;
+        let now = self.outputs().w;
+        drive_clear(
+            |i| {
+                self.step(&PwInputs { clear: i.clear, ..Default::default() })?;
+                Ok(self.outputs().w)
+            },
+            now,
+        )
+    }
+
+    /// Wait for the weight stage to be idle, hold `weigh` with `scale` until the pass starts
+    /// (a cost stored at the same edge has priority), and collect the weights until
+    /// `w_done`. Panics if the pass does not start (no cost stored).
+    pub fn weigh(&mut self, scale: &WeightScale) -> Result<WeightPass, Mismatch> {
+        self.check_reset()?;
+        let now = self.outputs().w;
+        drive_weigh(
+            |i| {
+                self.step(&PwInputs { weigh: i.weigh, pre_shift: i.pre_shift, q_mul: i.q_mul, ..Default::default() })?;
+                Ok(self.outputs().w)
+            },
+            now,
+            scale,
+        )
+    }
+}
+
+impl LockstepOf<VerilatedWeightStage> {
+    /// The weight-stage RTL and `WeightModel::new()`, both after reset; VCD (on mismatch)
+    /// under the system temp directory; see [`vcd`](Self::vcd).
+    pub fn new() -> Self {
+        Self::from_rtl(VerilatedWeightStage::new())
+    }
+
+    /// Wait for the stage to be idle, then `clear` for one clock.
+    pub fn clear(&mut self) -> Result<(), Mismatch> {
+        self.check_reset()?;
+        let now = self.outputs();
+        drive_clear(
+            |i| {
+                self.step(i)?;
+                Ok(self.outputs())
+            },
+            now,
+        )
+    }
+
+    /// Wait for the stage to be idle, then offer `cost` for one clock (stored unless 256
+    /// costs are stored).
+    pub fn push_cost(&mut self, cost: u64) -> Result<(), Mismatch> {
+        self.check_reset()?;
+        let now = self.outputs();
+        let mut step = |i: &WeightInputs| {
+            self.step(i)?;
+            Ok(self.outputs())
+        };
+        wait_weight_idle(&mut step, now)?;
+        step(&WeightInputs { cost_valid: true, cost, ..Default::default() })?;
+        Ok(())
+    }
+
+    /// As [`PwLockstep::weigh`].
+    pub fn weigh(&mut self, scale: &WeightScale) -> Result<WeightPass, Mismatch> {
+        self.check_reset()?;
+        let now = self.outputs();
+        drive_weigh(
+            |i| {
+                self.step(i)?;
+                Ok(self.outputs())
+            },
+            now,
+            scale,
+        )
+    }
+}
+
+impl Default for LockstepOf<VerilatedWeightStage> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Step with no inputs while `busy`, then once with `clear` (`step` as in [`drive_weigh`]).
+pub(crate) fn drive_clear<E>(
+    mut step: impl FnMut(&WeightInputs) -> Result<WeightOutputs, E>,
+    now: WeightOutputs,
+) -> Result<(), E> {
+    wait_weight_idle(&mut step, now)?;
+    step(&WeightInputs { clear: true, ..Default::default() })?;
+    Ok(())
+}
+
+/// Step with no inputs while `busy`; returns the outputs then.
+pub(crate) fn wait_weight_idle<E>(
+    step: &mut impl FnMut(&WeightInputs) -> Result<WeightOutputs, E>,
+    mut now: WeightOutputs,
+) -> Result<WeightOutputs, E> {
+    let mut wait = 0;
+    while now.busy {
+        now = step(&WeightInputs::default())?;
+        wait += 1;
+        assert!(wait <= MAX_PARTICLES + 16, "the weight stage never became idle");
+    }
+    Ok(now)
+}
+
+/// The weight-pass driver: `step` applies the weight stage's controls (`weigh`,
+/// `pre_shift`, `q_mul` of the argument) for one edge and returns the stage's outputs after
+/// it; `now` are the outputs before.
+pub(crate) fn drive_weigh<E>(
+    mut step: impl FnMut(&WeightInputs) -> Result<WeightOutputs, E>,
+    mut now: WeightOutputs,
+    scale: &WeightScale,
+) -> Result<WeightPass, E> {
+    now = wait_weight_idle(&mut step, now)?;
+    let weigh =
+        WeightInputs { weigh: true, pre_shift: scale.pre_shift as u8, q_mul: scale.q_mul, ..Default::default() };
+    let mut tries = 0;
+    while !now.busy {
+        // A cost arriving at the same edge has priority over `weigh`: hold it.
+        assert!(tries < 4, "weigh did not start the pass (no cost stored?)");
+        now = step(&weigh)?;
+        tries += 1;
+    }
+    let mut pass = WeightPass { indices: vec![], weights: vec![], sum: 0, clocks: 0 };
+    loop {
+        now = step(&WeightInputs::default())?;
+        pass.clocks += 1;
+        if now.w_valid {
+            pass.indices.push(now.w_index);
+            pass.weights.push(now.weight);
+        }
+        if now.w_done {
+            pass.sum = now.w_sum;
+            return Ok(pass);
+        }
+        assert!(pass.clocks <= MAX_PARTICLES as u64 + 16, "no w_done after {} clocks", pass.clocks);
+    }
+}
+
+impl VerilatedPipeline {
+    /// Write the model RAM, one point a clock from address 0 (RTL only, no reference).
+    pub fn load_model(&mut self, model: &[FxPoint]) {
+        let r: Result<(), std::convert::Infallible> = load_model(
+            |i| {
+                self.step(i);
+                Ok(())
+            },
+            model,
+        );
+        r.unwrap()
+    }
+
+    /// [`Lockstep::particle`] on the RTL alone (no reference; for speed measurements and
+    /// long runs checked against `pficp_fpga::pipeline::evaluate`).
+    pub fn particle(
+        &mut self,
+        model_count: usize,
+        scan: &[FxPoint],
+        pose: &FxPose,
+        gap: impl FnMut(u64) -> bool,
+    ) -> (Evaluation, u64) {
+        let now = self.outputs();
+        let r: Result<_, std::convert::Infallible> = drive_particle(
+            |i| {
+                self.step(i);
+                Ok(self.outputs())
+            },
+            now,
+            model_count,
+            scan,
+            pose,
+            gap,
+        );
+        r.unwrap()
+    }
+}
+
+pub(crate) fn load_model<E>(mut step: impl FnMut(&Inputs) -> Result<(), E>, model: &[FxPoint]) -> Result<(), E> {
+    assert!(model.len() <= MAX_POINTS);
+    for (a, &p) in model.iter().enumerate() {
+        step(&Inputs { model_we: true, model_waddr: a as u16, model_wdata: pack_point(p), ..Default::default() })?;
+    }
+    Ok(())
+}
+
+/// The particle driver shared by the lockstep types and [`VerilatedPipeline`]: `step`
+/// applies inputs for one edge and returns the outputs after it; `now` are the outputs
+/// before.
+pub(crate) fn drive_particle<E>(
+    mut step: impl FnMut(&Inputs) -> Result<Outputs, E>,
+    mut now: Outputs,
+    model_count: usize,
+    scan: &[FxPoint],
+    pose: &FxPose,
+    mut gap: impl FnMut(u64) -> bool,
+) -> Result<(Evaluation, u64), E> {
+    assert!(!scan.is_empty() && (1..=MAX_POINTS).contains(&model_count));
+    let mut wait = 0u64;
+    while now.busy {
+        now = step(&Inputs::default())?;
+        wait += 1;
+        assert!(wait < 1 << 32, "the pipeline never became idle");
+    }
+    now = step(&Inputs { start: true, pose: *pose, model_count: model_count as u16, ..Default::default() })?;
+    let mut next = 0;
+    let mut nearest = Vec::with_capacity(scan.len());
+    let mut clocks = 1u64;
+    // Generous bound: every batch sweeps the model once.
+    let limit = 1000 + (scan.len() as u64 + 1) * (model_count as u64 + 100) * 4;
+    loop {
+        let offer = next < scan.len() && !gap(clocks);
+        let inputs = Inputs {
+            scan_valid: offer,
+            scan_data: if offer { pack_point(scan[next]) } else { 0 },
+            scan_last: offer && next + 1 == scan.len(),
+            ..Default::default()
+        };
+        let took = offer && now.scan_ready;
+        now = step(&inputs)?;
+        clocks += 1;
+        if took {
+            next += 1;
+        }
+        if now.nn_valid {
+            nearest.push((now.nn_index, now.nn_dist));
+        }
+        if now.cost_valid {
+            return Ok((Evaluation { cost: now.cost, nearest }, clocks));
+        }
+        assert!(clocks < limit, "no cost_valid after {clocks} clocks ({next} of {} points taken)", scan.len());
+    }
+}
+
+impl<R: Rtl + fmt::Debug> fmt::Debug for LockstepOf<R> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Lockstep")
+            .field("rtl", &self.rtl)
+            .field("mode", &self.mode)
+            .field("vcd", &self.vcd)
+            .field("clocks_compared", &self.compared)
+            .field("failed", &self.failed)
+            .finish()
+    }
+}

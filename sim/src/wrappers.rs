@@ -1,0 +1,493 @@
+//! One typed wrapper a Verilated design: its ports as the reference's input and output
+//! structs, packed to and from the shim's words.
+
+use crate::core::*;
+use crate::lockstep::Rtl;
+use pficp_fpga::board::BoardConfig;
+use pficp_fpga::particle_weights::ParticleWeightModel;
+use pficp_fpga::particle_weights::{PwInputs, PwOutputs};
+use pficp_fpga::pipeline::PipelineModel;
+use pficp_fpga::pipeline::{Inputs, Outputs};
+use pficp_fpga::sequencer::SequencerModel;
+use pficp_fpga::sequencer::{SeqInputs, SeqOutputs};
+use pficp_fpga::weights::WeightModel;
+use pficp_fpga::weights::{WeightInputs, WeightOutputs};
+use std::fmt;
+use std::path::Path;
+
+/// The Verilated pipeline with its own `VerilatedContext` (instances are independent and
+/// may live on different threads).
+pub struct VerilatedPipeline {
+    pub(crate) core: Core,
+}
+
+verilated_common!(VerilatedPipeline, Inputs);
+
+pub(crate) fn pipeline_input_words(i: &Inputs) -> [u64; 12] {
+    let pose = i.pose.pack();
+    [
+        i.model_we as u64,
+        i.model_waddr as u64,
+        i.model_wdata,
+        i.model_count as u64,
+        i.start as u64,
+        pose[0],
+        pose[1],
+        pose[2],
+        pose[3],
+        i.scan_valid as u64,
+        i.scan_data,
+        i.scan_last as u64,
+    ]
+}
+
+pub(crate) fn pipeline_outputs(o: &[u64]) -> Outputs {
+    Outputs {
+        scan_ready: o[0] != 0,
+        busy: o[1] != 0,
+        nn_valid: o[2] != 0,
+        nn_index: o[3] as u16,
+        nn_dist: o[4],
+        cost_valid: o[5] != 0,
+        cost: o[6],
+    }
+}
+
+impl VerilatedPipeline {
+    /// A pipeline with `lanes` lanes after reset (all inputs low, evaluated once).
+    ///
+    /// Panics if no model was verilated for `lanes` (see [`verilated_lanes`]).
+    pub fn new(lanes: usize) -> Self {
+        VerilatedPipeline { core: Core::new(PIPELINE, lanes, 12, &OUTPUT_PORTS) }
+    }
+
+    /// Number of lanes.
+    pub fn lanes(&self) -> usize {
+        self.core.model.lanes
+    }
+
+    /// Drive the input ports (sampled at the next [`tick`](Self::tick)'s rising edge).
+    /// Values are masked to the port widths.
+    pub fn set_inputs(&mut self, i: &Inputs) {
+        self.core.set_inputs(&pipeline_input_words(i))
+    }
+
+    /// The output ports now.
+    pub fn outputs(&self) -> Outputs {
+        pipeline_outputs(&self.core.outputs::<7>())
+    }
+}
+
+/// The Verilated particle-weight pipeline (`ParticleWeightPipeline<P>`: the nearest-neighbour
+/// pipeline whose costs feed the weight stage).
+pub struct VerilatedParticleWeights {
+    pub(crate) core: Core,
+}
+
+verilated_common!(VerilatedParticleWeights, PwInputs);
+
+impl VerilatedParticleWeights {
+    /// The `lanes`-lane particle-weight pipeline after reset.
+    ///
+    /// Panics if no model was verilated for `lanes` (see [`verilated_lanes`]).
+    pub fn new(lanes: usize) -> Self {
+        VerilatedParticleWeights { core: Core::new(PARTICLE_WEIGHTS, lanes, 16, &PW_OUTPUT_PORTS) }
+    }
+
+    /// Number of lanes.
+    pub fn lanes(&self) -> usize {
+        self.core.model.lanes
+    }
+
+    /// Drive the input ports (masked to the port widths).
+    pub fn set_inputs(&mut self, i: &PwInputs) {
+        let nn = pipeline_input_words(&i.nn);
+        let mut w = [0u64; 16];
+        w[..12].copy_from_slice(&nn);
+        w[12..].copy_from_slice(&[i.clear as u64, i.weigh as u64, i.pre_shift as u64, i.q_mul as u64]);
+        self.core.set_inputs(&w)
+    }
+
+    /// The output ports now.
+    pub fn outputs(&self) -> PwOutputs {
+        let o = self.core.outputs::<15>();
+        PwOutputs { nn: pipeline_outputs(&o[..7]), w: weight_outputs(&o[7..]) }
+    }
+}
+
+/// The Verilated board top (`BoardTop`, `fpga/src/rtl/board/top.rs`): pins only.
+pub struct VerilatedBoard {
+    pub(crate) core: Core,
+}
+
+/// The board's pins after an edge.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BoardPins {
+    /// The serial line to the host.
+    pub uart_tx: bool,
+    /// The LEDs (0 heartbeat, 1 receive activity, 2 busy, 3 error).
+    pub leds: u8,
+}
+
+/// The input pins of the board.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BoardInputs {
+    /// Reset, active low.
+    pub reset_n: bool,
+    /// The serial line from the host (high when idle).
+    pub uart_rx: bool,
+}
+
+impl Default for BoardInputs {
+    fn default() -> Self {
+        BoardInputs { reset_n: true, uart_rx: true }
+    }
+}
+
+verilated_common!(VerilatedBoard, BoardInputs);
+
+impl VerilatedBoard {
+    /// The board generated as `config` says: [`BoardConfig::default`] (the real board) or
+    /// [`BoardConfig::FAST_SIM`] (the fast UART the fault tests use); pins idle.
+    ///
+    /// Panics for any other configuration (only those two are verilated).
+    pub fn new(config: &BoardConfig) -> Self {
+        let design = if *config == BoardConfig::default() {
+            BOARD
+        } else if *config == BoardConfig::FAST_SIM {
+            BOARD_FAST
+        } else {
+            panic!("no Verilated board for {config:?}: only BoardConfig::default() and BoardConfig::FAST_SIM are built")
+        };
+        let mut b = VerilatedBoard { core: Core::new(design, 0, 2, &["uart_tx", "leds"]) };
+        b.set_inputs(&BoardInputs::default());
+        b
+    }
+
+    /// Drive the input pins.
+    pub fn set_inputs(&mut self, i: &BoardInputs) {
+        self.core.set_inputs(&[i.reset_n as u64, i.uart_rx as u64])
+    }
+
+    /// The output pins now.
+    pub fn pins(&self) -> BoardPins {
+        let o = self.core.outputs::<2>();
+        BoardPins { uart_tx: o[0] != 0, leds: o[1] as u8 }
+    }
+}
+
+/// The Verilated particle-filter sequencer alone (`PfSequencer`, docs/sequencer.md).
+pub struct VerilatedSequencer {
+    pub(crate) core: Core,
+}
+
+verilated_common!(VerilatedSequencer, SeqInputs);
+
+/// Output words of the sequencer, one name per `u64` (wide ports repeat).
+pub(crate) const SEQUENCER_OUTPUT_WORDS: [&str; 16] = [
+    "start",
+    "pose",
+    "pose",
+    "pose",
+    "pose",
+    "running",
+    "finished",
+    "iterations",
+    "best_cost",
+    "best_max",
+    "params",
+    "params",
+    "params",
+    "p_we",
+    "p_waddr",
+    "p_wdata",
+];
+
+impl VerilatedSequencer {
+    /// The sequencer after power-up (idle, no result).
+    pub fn new() -> Self {
+        VerilatedSequencer { core: Core::new(SEQUENCER, 0, 10, &SEQUENCER_OUTPUT_WORDS) }
+    }
+
+    /// Drive the input ports (masked to the port widths).
+    pub fn set_inputs(&mut self, i: &SeqInputs) {
+        self.core.set_inputs(&[
+            i.reset as u64,
+            i.cfg_we as u64,
+            i.cfg_addr as u64,
+            i.cfg_data,
+            i.go as u64,
+            i.nn_ready as u64,
+            i.cost_valid as u64,
+            i.cost,
+            i.nn_valid as u64,
+            i.nn_dist,
+        ])
+    }
+
+    /// The output ports now.
+    pub fn outputs(&self) -> SeqOutputs {
+        let o = self.core.outputs::<16>();
+        SeqOutputs {
+            start: o[0] != 0,
+            pose: [o[1], o[2], o[3], o[4]],
+            running: o[5] != 0,
+            finished: o[6] != 0,
+            iterations: o[7] as u16,
+            best_cost: o[8],
+            best_max: o[9],
+            params: [o[10], o[11], o[12]],
+            p_we: o[13] != 0,
+            p_waddr: o[14] as u16,
+            p_wdata: o[15] as u32,
+        }
+    }
+}
+
+impl Default for VerilatedSequencer {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// The Verilated weight stage alone (docs/weights.md).
+pub struct VerilatedWeightStage {
+    pub(crate) core: Core,
+}
+
+verilated_common!(VerilatedWeightStage, WeightInputs);
+
+pub(crate) fn weight_outputs(o: &[u64]) -> WeightOutputs {
+    WeightOutputs {
+        busy: o[0] != 0,
+        count: o[1] as u16,
+        min_cost: o[2],
+        w_valid: o[3] != 0,
+        w_index: o[4] as u8,
+        weight: o[5] as u16,
+        w_done: o[6] != 0,
+        w_sum: o[7] as u32,
+    }
+}
+
+impl VerilatedWeightStage {
+    /// The weight stage after reset.
+    pub fn new() -> Self {
+        VerilatedWeightStage { core: Core::new(WEIGHT_STAGE, 0, 6, &WEIGHT_OUTPUT_PORTS) }
+    }
+
+    /// Drive the input ports (masked to the port widths).
+    pub fn set_inputs(&mut self, i: &WeightInputs) {
+        self.core.set_inputs(&[
+            i.clear as u64,
+            i.cost_valid as u64,
+            i.cost,
+            i.weigh as u64,
+            i.pre_shift as u64,
+            i.q_mul as u64,
+        ])
+    }
+
+    /// The output ports now.
+    pub fn outputs(&self) -> WeightOutputs {
+        weight_outputs(&self.core.outputs::<8>())
+    }
+}
+
+impl Default for VerilatedWeightStage {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Output port names of the pipeline in the order [`Lockstep`] compares them.
+pub const OUTPUT_PORTS: [&str; 7] = ["scan_ready", "busy", "nn_valid", "nn_index", "nn_dist", "cost_valid", "cost"];
+
+/// Output port names of the particle-weight pipeline in the order [`PwLockstep`] compares
+/// them (the pipeline's, then the weight stage's).
+pub const PW_OUTPUT_PORTS: [&str; 15] = [
+    "scan_ready",
+    "busy",
+    "nn_valid",
+    "nn_index",
+    "nn_dist",
+    "cost_valid",
+    "cost",
+    "w_busy",
+    "w_count",
+    "min_cost",
+    "w_valid",
+    "w_index",
+    "weight",
+    "w_done",
+    "w_sum",
+];
+
+/// Output port names of the weight stage in the order [`WeightLockstep`] compares them.
+pub const WEIGHT_OUTPUT_PORTS: [&str; 8] =
+    ["busy", "count", "min_cost", "w_valid", "w_index", "weight", "w_done", "w_sum"];
+
+pub(crate) fn port_values(o: &Outputs) -> [u64; 7] {
+    [o.scan_ready as u64, o.busy as u64, o.nn_valid as u64, o.nn_index as u64, o.nn_dist, o.cost_valid as u64, o.cost]
+}
+
+pub(crate) fn weight_port_values(o: &WeightOutputs) -> [u64; 8] {
+    [
+        o.busy as u64,
+        o.count as u64,
+        o.min_cost,
+        o.w_valid as u64,
+        o.w_index as u64,
+        o.weight as u64,
+        o.w_done as u64,
+        o.w_sum as u64,
+    ]
+}
+
+// Each wrapper as an `Rtl`: its reference and its compared ports.
+
+macro_rules! rtl_common {
+    ($inputs:ty) => {
+        fn set_inputs(&mut self, i: &$inputs) {
+            Self::set_inputs(self, i)
+        }
+        fn outputs(&self) -> Self::Outputs {
+            Self::outputs(self)
+        }
+        fn tick(&mut self) {
+            self.core.tick()
+        }
+        fn cycle(&self) -> u64 {
+            self.core.cycle
+        }
+        fn lanes(&self) -> usize {
+            self.core.model.lanes
+        }
+        fn prefix(&self) -> &'static str {
+            self.core.model.prefix
+        }
+        fn trace_to(&mut self, path: &Path) -> std::io::Result<()> {
+            self.core.trace_to(path)
+        }
+        fn flush_trace(&mut self) {
+            self.core.flush_trace()
+        }
+    };
+}
+
+impl Rtl for VerilatedPipeline {
+    type Inputs = Inputs;
+    type Outputs = Outputs;
+    type Reference = PipelineModel;
+    const OUTPUT_PORTS: &'static [&'static str] = &OUTPUT_PORTS;
+    fn port_values(o: &Outputs) -> Vec<u64> {
+        port_values(o).to_vec()
+    }
+    fn new_reference(&self) -> PipelineModel {
+        PipelineModel::new(self.lanes())
+    }
+    fn reference_outputs(r: &PipelineModel) -> Outputs {
+        r.outputs()
+    }
+    fn reference_step(r: &mut PipelineModel, i: &Inputs) {
+        r.step(i)
+    }
+    fn fresh(&self) -> Self {
+        Self::new(self.lanes())
+    }
+    rtl_common!(Inputs);
+}
+
+impl Rtl for VerilatedParticleWeights {
+    type Inputs = PwInputs;
+    type Outputs = PwOutputs;
+    type Reference = ParticleWeightModel;
+    const OUTPUT_PORTS: &'static [&'static str] = &PW_OUTPUT_PORTS;
+    fn port_values(o: &PwOutputs) -> Vec<u64> {
+        port_values(&o.nn).into_iter().chain(weight_port_values(&o.w)).collect()
+    }
+    fn new_reference(&self) -> ParticleWeightModel {
+        ParticleWeightModel::new(self.lanes())
+    }
+    fn reference_outputs(r: &ParticleWeightModel) -> PwOutputs {
+        r.outputs()
+    }
+    fn reference_step(r: &mut ParticleWeightModel, i: &PwInputs) {
+        r.step(i)
+    }
+    fn fresh(&self) -> Self {
+        Self::new(self.lanes())
+    }
+    rtl_common!(PwInputs);
+}
+
+/// The sequencer's output words as [`Rtl::OUTPUT_PORTS`] (a wide port's words numbered).
+pub const SEQUENCER_OUTPUT_PORTS: [&str; 16] = [
+    "start",
+    "pose.0",
+    "pose.1",
+    "pose.2",
+    "pose.3",
+    "running",
+    "finished",
+    "iterations",
+    "best_cost",
+    "best_max",
+    "params.0",
+    "params.1",
+    "params.2",
+    "p_we",
+    "p_waddr",
+    "p_wdata",
+];
+
+impl Rtl for VerilatedSequencer {
+    type Inputs = SeqInputs;
+    type Outputs = SeqOutputs;
+    type Reference = SequencerModel;
+    const OUTPUT_PORTS: &'static [&'static str] = &SEQUENCER_OUTPUT_PORTS;
+    fn port_values(o: &SeqOutputs) -> Vec<u64> {
+        let mut v = vec![o.start as u64];
+        v.extend(o.pose);
+        v.extend([o.running as u64, o.finished as u64, o.iterations as u64, o.best_cost, o.best_max]);
+        v.extend(o.params);
+        v.extend([o.p_we as u64, o.p_waddr as u64, o.p_wdata as u64]);
+        v
+    }
+    fn new_reference(&self) -> SequencerModel {
+        SequencerModel::new()
+    }
+    fn reference_outputs(r: &SequencerModel) -> SeqOutputs {
+        r.outputs()
+    }
+    fn reference_step(r: &mut SequencerModel, i: &SeqInputs) {
+        r.step(i)
+    }
+    fn fresh(&self) -> Self {
+        Self::new()
+    }
+    rtl_common!(SeqInputs);
+}
+
+impl Rtl for VerilatedWeightStage {
+    type Inputs = WeightInputs;
+    type Outputs = WeightOutputs;
+    type Reference = WeightModel;
+    const OUTPUT_PORTS: &'static [&'static str] = &WEIGHT_OUTPUT_PORTS;
+    fn port_values(o: &WeightOutputs) -> Vec<u64> {
+        weight_port_values(o).to_vec()
+    }
+    fn new_reference(&self) -> WeightModel {
+        WeightModel::new()
+    }
+    fn reference_outputs(r: &WeightModel) -> WeightOutputs {
+        r.outputs()
+    }
+    fn reference_step(r: &mut WeightModel, i: &WeightInputs) {
+        r.step(i)
+    }
+    fn fresh(&self) -> Self {
+        Self::new()
+    }
+    rtl_common!(WeightInputs);
+}
