@@ -143,13 +143,15 @@ pub struct LockstepOf<R: Rtl> {
 /// Mismatches a [`LockstepOf::collect_all`] run records (later ones are only counted).
 pub const MAX_RECORDED_MISMATCHES: usize = 1_000;
 
-/// The nearest-neighbour pipeline in lockstep with [`PipelineModel`].
+/// The nearest-neighbour pipeline in lockstep with [`PipelineModel`](pficp_fpga::pipeline::PipelineModel).
 pub type Lockstep = LockstepOf<VerilatedPipeline>;
-/// The particle-weight pipeline in lockstep with [`ParticleWeightModel`].
+/// The particle-weight pipeline in lockstep with
+/// [`ParticleWeightModel`](pficp_fpga::particle_weights::ParticleWeightModel).
 pub type PwLockstep = LockstepOf<VerilatedParticleWeights>;
-/// The weight stage in lockstep with [`WeightModel`].
+/// The weight stage in lockstep with [`WeightModel`](pficp_fpga::weights::WeightModel).
 pub type WeightLockstep = LockstepOf<VerilatedWeightStage>;
-/// The particle-filter sequencer in lockstep with [`SequencerModel`].
+/// The particle-filter sequencer in lockstep with
+/// [`SequencerModel`](pficp_fpga::sequencer::SequencerModel).
 pub type SeqLockstep = LockstepOf<VerilatedSequencer>;
 
 impl<R: Rtl> LockstepOf<R> {

@@ -300,10 +300,10 @@ impl Default for VerilatedWeightStage {
     }
 }
 
-/// Output port names of the pipeline in the order [`Lockstep`] compares them.
+/// Output port names of the pipeline in the order [`Lockstep`](crate::Lockstep) compares them.
 pub const OUTPUT_PORTS: [&str; 7] = ["scan_ready", "busy", "nn_valid", "nn_index", "nn_dist", "cost_valid", "cost"];
 
-/// Output port names of the particle-weight pipeline in the order [`PwLockstep`] compares
+/// Output port names of the particle-weight pipeline in the order [`PwLockstep`](crate::PwLockstep) compares
 /// them (the pipeline's, then the weight stage's).
 pub const PW_OUTPUT_PORTS: [&str; 15] = [
     "scan_ready",
@@ -323,7 +323,7 @@ pub const PW_OUTPUT_PORTS: [&str; 15] = [
     "w_sum",
 ];
 
-/// Output port names of the weight stage in the order [`WeightLockstep`] compares them.
+/// Output port names of the weight stage in the order [`WeightLockstep`](crate::WeightLockstep) compares them.
 pub const WEIGHT_OUTPUT_PORTS: [&str; 8] =
     ["busy", "count", "min_cost", "w_valid", "w_index", "weight", "w_done", "w_sum"];
 
