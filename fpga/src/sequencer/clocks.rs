@@ -1,0 +1,68 @@
+//! The sequencer's clock formulas, phase by phase (measured on the model;
+//! `tests/sequencer_model.rs` checks them exactly): what the host's run-time bound and the
+//! benches count with.
+
+/// Clocks of one pose (`cur` to `pose`: three CORDICs, the scale, the 28-step program, the
+/// translations), from entering `CorInit` to leaving the last `PoseT`.
+pub const POSE_CLOCKS: u64 = 3 * (1 + 18 + 2) + 1 + 23 * MUL_OP_CLOCKS + 5 * 3 + 3;
+/// Clocks of a multiply step of the pose program (fetch, two operands, 19 in `OpMul`).
+const MUL_OP_CLOCKS: u64 = 3 + SERIAL_MUL_WAIT;
+/// Clocks a state waiting for the serial multiplier spends in it (18 steps and the clock
+/// that takes the product).
+const SERIAL_MUL_WAIT: u64 = 19;
+/// Clocks a state waiting for the serial divider spends in it.
+const SERIAL_DIV_WAIT: u64 = 49;
+/// Clocks of the propagation of one parameter of one particle.
+pub const PROPAGATE_CLOCKS: u64 = 4 + SERIAL_MUL_WAIT;
+
+/// Clocks of one temperature pass over `n` costs (`TPass`, three per cost, `TCheck`).
+pub const fn temper_pass_clocks(n: u64) -> u64 {
+    3 * n + 2
+}
+
+/// Clocks of one parameter of the estimate or of the spread over `n` particles.
+pub const fn sum_clocks(n: u64) -> u64 {
+    n * (4 + SERIAL_MUL_WAIT) + 2 + SERIAL_DIV_WAIT
+}
+
+/// What the clocks of an iteration depend on besides the particle count.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct IterationShape {
+    /// Particles.
+    pub particles: u64,
+    /// Clocks in `EvStart` and `EvWait` over the iteration's `particles + 1` evaluations
+    /// (the pipeline's time: `1 +` clocks from `start` to `cost_valid` each, when ready).
+    pub eval_clocks: u64,
+    /// Temperature passes: the bit length of the median excess, plus one (1 to 49).
+    pub temper_passes: u64,
+    /// The best particle beat the best so far (its record and parameters are copied).
+    pub best_copied: bool,
+    /// `None` after the last iteration, else the resampling pointer's advances (the index
+    /// of the last survivor).
+    pub resample_advances: Option<u64>,
+}
+
+/// Clocks of one iteration, from entering `IterBegin` to entering the next `IterBegin`
+/// (or `Fin`).
+pub fn clocks_per_iteration(s: &IterationShape) -> u64 {
+    let n = s.particles;
+    let p = crate::pf::PARAMS as u64;
+    let propagate = 1 + n * (p * PROPAGATE_CLOCKS + POSE_CLOCKS + 1);
+    let temper = s.temper_passes * temper_pass_clocks(n) + 1;
+    let weights = 4 * n + 1 + if s.best_copied { 2 + 2 * p } else { 0 };
+    let sums = 2 * p * sum_clocks(n);
+    let estimate = 1 + POSE_CLOCKS + 3;
+    // RsBegin, RsL, RsWData and RsWMul for w_0, RsDone; an advance: RsLoop, RsWAddr,
+    // RsWWait, RsWData, RsWMul; a copy: RsLoop, CpWait and CpData per parameter, CpNext.
+    let resample = s
+        .resample_advances
+        .map_or(0, |a| (1 + SERIAL_MUL_WAIT + 1 + SERIAL_MUL_WAIT + 1) + (4 + SERIAL_MUL_WAIT) * a + (2 + 2 * p) * n);
+    propagate + s.eval_clocks + temper + weights + sums + estimate + resample
+}
+
+/// Clocks of a run, from the clock `go` is taken to the edge `finished` rises: the start's
+/// pose and evaluation (`start_eval_clocks` in `EvStart` and `EvWait`), the iterations, the
+/// best's pose.
+pub fn run_clocks(start_eval_clocks: u64, iterations: &[IterationShape]) -> u64 {
+    1 + POSE_CLOCKS + start_eval_clocks + 1 + iterations.iter().map(clocks_per_iteration).sum::<u64>() + 2 + POSE_CLOCKS
+}
