@@ -5,7 +5,7 @@
 mod support;
 
 use pficp::board::{BoardClient, BoardError, MAX_RETRIES};
-use pficp_fpga::format::{point, FxPoint, FxPose, WeightScale};
+use pficp_fpga::format::{FxPose, WeightScale};
 use pficp_fpga::messages::{
     EvaluateReply, NearestReply, NearestRequest, ResultReply, RunState, StatusReply, FLAG_LAST,
 };
@@ -14,14 +14,9 @@ use pficp_fpga::protocol::{Command, Frame};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::time::{Duration, Instant};
-use support::{intercepting_handler, PtyBoard};
+use support::{cloud, intercepting_handler, PtyBoard};
 
 const TIMEOUT: Duration = Duration::from_millis(300);
-
-fn cloud(n: usize, seed: u64) -> Vec<FxPoint> {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    (0..n).map(|_| point([rng.gen_range(-0.9..0.9), rng.gen_range(-0.9..0.9), rng.gen_range(-0.9..0.9)])).collect()
-}
 
 fn pose(angle: f64) -> FxPose {
     let (c, s) = (angle.cos(), angle.sin());

@@ -126,3 +126,43 @@ pub fn intercepting_handler(
         Some(out)
     })
 }
+
+// ---- Clouds, poses and an uploaded board, for the client's tests.
+
+use pficp::board::BoardClient;
+use pficp_fpga::format::{point, FxPoint, FxPose};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+pub fn cloud(n: usize, seed: u64) -> Vec<FxPoint> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    (0..n).map(|_| point([rng.gen_range(-0.9..0.9), rng.gen_range(-0.9..0.9), rng.gen_range(-0.9..0.9)])).collect()
+}
+
+pub fn poses(n: usize, seed: u64) -> Vec<FxPose> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    (0..n)
+        .map(|_| {
+            let (a, s) = (rng.gen_range(-0.3..0.3f64), rng.gen_range(0.9..1.1));
+            let t = [rng.gen_range(-0.1..0.1), rng.gen_range(-0.1..0.1), rng.gen_range(-0.1..0.1)];
+            let (c, si) = (a.cos() * s, a.sin() * s);
+            FxPose::from_f64(&[c, -si, 0.0, si, c, 0.0, 0.0, 0.0, s], &t)
+        })
+        .collect()
+}
+
+/// A client on the reference with the model and scan loaded and sized.
+pub fn loaded(model: &[FxPoint], scan: &[FxPoint]) -> (PtyBoard, BoardClient) {
+    let mut board = PtyBoard::reference();
+    let mut client = board.client();
+    upload(&mut client, model, scan);
+    (board, client)
+}
+
+/// Identify, load the model and the scan, set the sizes.
+pub fn upload(client: &mut BoardClient, model: &[FxPoint], scan: &[FxPoint]) {
+    client.identify().unwrap();
+    client.load_model(model, |_, _| {}).unwrap();
+    client.load_scan(scan, |_, _| {}).unwrap();
+    client.set_sizes(model.len(), scan.len()).unwrap();
+}
