@@ -1,0 +1,248 @@
+//! The benchmark's cases: families, splits, shapes, and each case as a function of the
+//! seed, the split, the family and its index (the parent module's documentation says what
+//! each family is).
+
+use crate::cloud::{bbox_diagonal, centroid};
+use crate::geometry::Pose;
+use crate::parts::Part;
+use crate::real_shapes::RealShape;
+use nalgebra::{Matrix3, Point3, UnitQuaternion, Vector3};
+use rand::seq::SliceRandom;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+use serde::Serialize;
+
+/// Model points per case.
+pub const MODEL_POINTS: usize = 2000;
+/// Scan points per case (after the cut; the view is drawn from `SCAN_POINTS / visible`).
+pub const SCAN_POINTS: usize = 1000;
+/// Noise standard deviation per coordinate, as a fraction of the model's diagonal.
+pub const NOISE_FRACTION: f64 = 0.005;
+/// Outliers of the `real-outliers` family, as a fraction of the scan's points.
+pub const OUTLIER_FRACTION: f64 = 0.05;
+/// Visible fraction of a partial view.
+pub const VISIBLE_RANGE: (f64, f64) = (0.6, 0.8);
+/// Largest angle per axis of the `real` and `parts` families [deg].
+pub const MAX_ANGLE_DEG: f64 = 60.0;
+/// Scale range of the truths.
+pub const SCALE_RANGE: (f64, f64) = (0.7, 1.3);
+
+/// A case family.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum Family {
+    /// Real shapes, partial views, noise.
+    #[serde(rename = "real")]
+    Real,
+    /// The same with outliers.
+    #[serde(rename = "real-outliers")]
+    RealOutliers,
+    /// Synthetic (near-)symmetric parts, whole surface, noise.
+    #[serde(rename = "parts")]
+    Parts,
+    /// Any rotation, real shapes and parts.
+    #[serde(rename = "hard-180")]
+    Hard180,
+}
+
+impl Family {
+    /// Every family, in report order.
+    pub const ALL: [Family; 4] = [Family::Real, Family::RealOutliers, Family::Parts, Family::Hard180];
+
+    /// Name in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Family::Real => "real",
+            Family::RealOutliers => "real-outliers",
+            Family::Parts => "parts",
+            Family::Hard180 => "hard-180",
+        }
+    }
+}
+
+/// Which shapes and seeds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Split {
+    /// Development shapes only, development seeds: what tuning may look at.
+    Dev,
+    /// Every shape (held-out ones included), other seeds: what is reported.
+    Test,
+}
+
+impl Split {
+    /// `dev` or `test`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Split::Dev => "dev",
+            Split::Test => "test",
+        }
+    }
+}
+
+/// A shape of the benchmark.
+#[derive(Clone, Copy, Debug)]
+pub enum Shape {
+    /// A real shape shipped by a public package.
+    Real(&'static RealShape),
+    /// A synthetic part.
+    Part(Part),
+}
+
+impl Shape {
+    /// Name in reports.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Shape::Real(s) => s.name,
+            Shape::Part(p) => p.name(),
+        }
+    }
+
+    /// Held out of tuning.
+    pub fn held_out(&self) -> bool {
+        match self {
+            Shape::Real(s) => s.held_out,
+            Shape::Part(p) => matches!(p, Part::FlangeKey | Part::ShaftFlat | Part::Plate),
+        }
+    }
+
+    /// Rotations about [`Shape::centre`] mapping the shape onto itself, identity first.
+    pub fn symmetries(&self) -> Vec<Matrix3<f64>> {
+        match self {
+            Shape::Real(s) => s.symmetries(),
+            Shape::Part(p) => p.symmetries(),
+        }
+    }
+
+    /// The centre of the symmetries (the origin of the shape's frame).
+    pub fn centre(&self) -> Point3<f64> {
+        Point3::origin()
+    }
+
+    /// `model` points and `scan` points of the surface, drawn independently of each other.
+    fn draw(&self, model: usize, scan: usize, rng: &mut ChaCha8Rng) -> (Vec<Point3<f64>>, Vec<Point3<f64>>) {
+        match self {
+            Shape::Real(s) => {
+                let pts = s.points();
+                let mut idx: Vec<usize> = (0..pts.len()).collect();
+                idx.shuffle(rng);
+                let m = idx[..model].iter().map(|&i| pts[i]).collect();
+                let d = idx[model..(model + scan).min(idx.len())].iter().map(|&i| pts[i]).collect();
+                (m, d)
+            }
+            Shape::Part(p) => {
+                let m = p.sample_surface(model, rng);
+                (m, p.sample_surface(scan, rng))
+            }
+        }
+    }
+}
+
+/// The shapes of a family in a split.
+pub fn shapes(family: Family, split: Split) -> Vec<Shape> {
+    let real = crate::real_shapes::all().iter().map(Shape::Real);
+    let parts = Part::ALL.iter().map(|&p| Shape::Part(p));
+    let all: Vec<Shape> = match family {
+        Family::Real | Family::RealOutliers => real.collect(),
+        Family::Parts => parts.collect(),
+        Family::Hard180 => real.chain(parts).collect(),
+    };
+    all.into_iter().filter(|s| split == Split::Test || !s.held_out()).collect()
+}
+
+/// One benchmark case.
+#[derive(Clone, Debug)]
+pub struct Case {
+    /// `family/shape/index`.
+    pub id: String,
+    /// Its family.
+    pub family: Family,
+    /// Its shape.
+    pub shape: Shape,
+    /// Seed of the case (and of the method run on it).
+    pub seed: u64,
+    /// Model cloud.
+    pub model: Vec<Point3<f64>>,
+    /// Scan cloud.
+    pub scan: Vec<Point3<f64>>,
+    /// Scan to model.
+    pub truth: Pose,
+    /// The model's bounding-box diagonal.
+    pub diag: f64,
+    /// Visible fraction of the surface (1 for a whole view).
+    pub visible: f64,
+    /// Outlier points in the scan.
+    pub outliers: usize,
+}
+
+fn uniform_rotation(rng: &mut impl Rng) -> Matrix3<f64> {
+    let n = Normal::new(0.0, 1.0).expect("unit normal");
+    let q = nalgebra::Quaternion::new(n.sample(rng), n.sample(rng), n.sample(rng), n.sample(rng));
+    UnitQuaternion::from_quaternion(q).to_rotation_matrix().into_inner()
+}
+
+fn unit_vector(rng: &mut impl Rng) -> Vector3<f64> {
+    let n = Normal::new(0.0, 1.0).expect("unit normal");
+    loop {
+        let v = Vector3::new(n.sample(rng), n.sample(rng), n.sample(rng));
+        if v.norm() > 1e-6 {
+            return v.normalize();
+        }
+    }
+}
+
+/// Make case `index` of `family` on `shape`, seeded by `seed`.
+pub fn make_case(family: Family, shape: Shape, index: usize, seed: u64) -> Case {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let partial = matches!(shape, Shape::Real(_));
+    let visible = if partial { rng.gen_range(VISIBLE_RANGE.0..VISIBLE_RANGE.1) } else { 1.0 };
+    let drawn = (SCAN_POINTS as f64 / visible).ceil() as usize;
+    let (model, surface) = shape.draw(MODEL_POINTS, drawn, &mut rng);
+    let diag = bbox_diagonal(&model);
+    // The partial view: keep the `visible` fraction of points lowest along a random direction.
+    let mut view = surface;
+    if partial {
+        let dir = unit_vector(&mut rng);
+        let c = centroid(&view);
+        view.sort_by(|a, b| (a - c).dot(&dir).total_cmp(&(b - c).dot(&dir)));
+        view.truncate(((view.len() as f64) * visible).round() as usize);
+        view.shuffle(&mut rng);
+    }
+    let noise = Normal::new(0.0, NOISE_FRACTION * diag).expect("positive sigma");
+    for p in view.iter_mut() {
+        for c in p.coords.iter_mut() {
+            *c += noise.sample(&mut rng);
+        }
+    }
+    let outliers =
+        if family == Family::RealOutliers { (OUTLIER_FRACTION * view.len() as f64).round() as usize } else { 0 };
+    if outliers > 0 {
+        let grow = 0.1 * diag;
+        let lo = view.iter().fold(Vector3::repeat(f64::INFINITY), |a, p| a.inf(&p.coords)).add_scalar(-grow);
+        let hi = view.iter().fold(Vector3::repeat(f64::NEG_INFINITY), |a, p| a.sup(&p.coords)).add_scalar(grow);
+        for _ in 0..outliers {
+            view.push(Point3::new(rng.gen_range(lo.x..hi.x), rng.gen_range(lo.y..hi.y), rng.gen_range(lo.z..hi.z)));
+        }
+        view.shuffle(&mut rng);
+    }
+    let truth = if family == Family::Hard180 {
+        let t = crate::datasets::random_truth(&mut rng, 1.0, SCALE_RANGE, diag / 2.0);
+        Pose { rotation: uniform_rotation(&mut rng), ..t }
+    } else {
+        crate::datasets::random_truth(&mut rng, MAX_ANGLE_DEG, SCALE_RANGE, diag / 2.0)
+    };
+    let inv = truth.inverse();
+    let scan = view.iter().map(|p| inv.apply(p)).collect();
+    Case {
+        id: format!("{}/{}/{index:04}", family.name(), shape.name()),
+        family,
+        shape,
+        seed,
+        model,
+        scan,
+        truth,
+        diag,
+        visible,
+        outliers,
+    }
+}

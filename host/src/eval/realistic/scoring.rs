@@ -1,0 +1,96 @@
+//! Scoring a case: the tolerance, the distance to the nearest symmetric copy of the truth,
+//! and the calibration of the reported covariance (Mahalanobis distance, chi-square).
+
+use super::cases::Case;
+use crate::cloud::centroid;
+use crate::geometry::Pose;
+use nalgebra::{Matrix3, Point3};
+use serde::Serialize;
+
+/// Success tolerance of the benchmark.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Tolerance {
+    /// Relative rotation [deg].
+    pub rotation_deg: f64,
+    /// Error at the scan's centroid over the model's diagonal.
+    pub translation_frac: f64,
+    /// Relative scale error.
+    pub scale_frac: f64,
+}
+
+/// 2 deg, 2% of the diagonal, 1% scale.
+pub const TOLERANCE: Tolerance = Tolerance { rotation_deg: 2.0, translation_frac: 0.02, scale_frac: 0.01 };
+
+/// How far an estimate is from the nearest symmetric copy of the truth.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Score {
+    /// Relative rotation [deg].
+    pub rotation_deg: f64,
+    /// Distance of the scan centroid's images over the diagonal.
+    pub translation_frac: f64,
+    /// `|s / s_true - 1|`.
+    pub scale_frac: f64,
+    /// Index of the symmetry (0: the identity) the errors are taken against.
+    pub symmetry: usize,
+    /// Within [`TOLERANCE`] of some symmetric copy.
+    pub success: bool,
+}
+
+/// The truth composed with symmetry `g` (a rotation about `centre` in the model frame).
+pub fn symmetric_truth(truth: &Pose, g: &Matrix3<f64>, centre: &Point3<f64>) -> Pose {
+    let about = Pose { scale: 1.0, rotation: *g, translation: centre.coords - g * centre.coords };
+    about.compose(truth)
+}
+
+/// Score `estimate` on `case` (the rule of the module's doc).
+pub fn score(estimate: &Pose, case: &Case) -> Score {
+    let p = centroid(&case.scan);
+    let errors = |truth: &Pose| {
+        (
+            estimate.rotation_angle_to(truth).to_degrees(),
+            (estimate.apply(&p) - truth.apply(&p)).norm() / case.diag,
+            (estimate.scale / truth.scale - 1.0).abs(),
+        )
+    };
+    let within = |(r, t, s): (f64, f64, f64)| {
+        r <= TOLERANCE.rotation_deg && t <= TOLERANCE.translation_frac && s <= TOLERANCE.scale_frac
+    };
+    let mut best: Option<Score> = None;
+    for (i, g) in case.shape.symmetries().iter().enumerate() {
+        let e = errors(&symmetric_truth(&case.truth, g, &case.shape.centre()));
+        let s = Score { rotation_deg: e.0, translation_frac: e.1, scale_frac: e.2, symmetry: i, success: within(e) };
+        let better = match &best {
+            None => true,
+            Some(b) => (s.success && !b.success) || (s.success == b.success && s.rotation_deg < b.rotation_deg),
+        };
+        if better {
+            best = Some(s);
+        }
+    }
+    best.expect("the identity is always a symmetry")
+}
+
+/// 95% quantile of the chi-square distribution with 7 degrees of freedom.
+pub const CHI2_7_95: f64 = 14.067;
+/// 95% quantiles of the chi-square distribution with 1 to 7 degrees of freedom.
+pub const CHI2_95: [f64; 7] = [3.841, 5.991, 7.815, 9.488, 11.070, 12.592, CHI2_7_95];
+/// Most cases a family.
+pub const MAX_CASES: usize = 100_000;
+
+/// Whether a squared Mahalanobis distance over `dof` parameters lies inside the 95% region.
+pub fn inside_95(d2: f64, dof: usize) -> bool {
+    dof > 0 && d2 <= CHI2_95[dof.min(7) - 1]
+}
+
+/// Squared Mahalanobis distance of `truth` from the conclusion's pose under its covariance,
+/// over the determined parameters, and their number (`None` if the covariance is not
+/// positive definite).
+pub fn mahalanobis2(c: &crate::conclusion::Conclusion, truth: &Pose, at: &Point3<f64>) -> Option<(f64, usize)> {
+    let e = crate::conclusion::local_error(&c.pose, truth, at);
+    let k: Vec<usize> = (0..7).filter(|&i| c.uncertainty.sigma[i].is_some()).collect();
+    let n = k.len();
+    let m = nalgebra::DMatrix::from_fn(n, n, |a, b| c.uncertainty.covariance[k[a]][k[b]].unwrap_or(0.0));
+    let v = nalgebra::DVector::from_fn(n, |a, _| e[k[a]]);
+    let inv = m.cholesky()?.inverse();
+    Some(((v.transpose() * inv * v)[(0, 0)], n))
+}
