@@ -302,7 +302,7 @@ pub const POSE_PROGRAM: [Op; 28] = {
 
 impl Op {
     /// The ROM word: kind (2 bits: Mul16, MulM, Add, Sub) | dst << 2 | a << 7 | b << 12.
-    pub fn encode(self) -> u32 {
+    pub const fn encode(self) -> u32 {
         let (kind, dst, a, b) = match self {
             Op::Mul16 { dst, a, b } => (0, dst, a, b),
             Op::MulM { dst, a, b } => (1, dst, a, b),
