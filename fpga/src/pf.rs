@@ -441,6 +441,40 @@ pub fn div_signed(s: i64, w: u32) -> i64 {
     }
 }
 
+/// A particle's parameter after propagation: `x` moved by `sigma u` (`u` a signed 16-bit
+/// draw, Q1.15; doubled on the first iteration, where the particles start at the centre)
+/// around `centre`, clamped to `+-2 sigma` of it; a scale is kept positive.
+pub fn propagate(x: i32, centre: i32, sigma: u32, u: i64, first: bool, scale: bool) -> i32 {
+    let prod = sigma as i64 * u;
+    let step = if first { prod >> 14 } else { prod >> 15 };
+    let base = if first { 0 } else { wrap24(x as i64 - centre as i64) as i64 };
+    let lim = 2 * sigma as i64;
+    let off = (base + step).clamp(-lim, lim);
+    positive_scale(wrap24(centre as i64 + off), scale)
+}
+
+/// A parameter's estimate: `centre + S / W` (`S` the weighted sum of the particles' offsets
+/// from the centre); a scale is kept positive.
+pub fn estimate_param(centre: i32, s: i64, w_sum: u32, scale: bool) -> i32 {
+    positive_scale(wrap24(centre as i64 + div_signed(s, w_sum)), scale)
+}
+
+/// A parameter's next spread: `1.25 D / W` (`D` the weighted sum of the particles' distances
+/// from the estimate) within `[floor, cap]`.
+pub fn spread(dsum: u64, w_sum: u32, floor: u32, cap: u32) -> u32 {
+    let dev = dsum / w_sum as u64;
+    (dev + (dev >> 2)).clamp(floor as u64, cap as u64) as u32
+}
+
+/// A scale of zero or below becomes the smallest positive one.
+fn positive_scale(v: i32, scale: bool) -> i32 {
+    if scale && v <= 0 {
+        1
+    } else {
+        v
+    }
+}
+
 /// Systematic resampling on integer weights: pointer `j` is `(u0 + j 2^16) W`, compared
 /// with `n 2^16 CDF_i`; `i` advances while the pointer is strictly beyond.
 pub fn resample(weights: &[u16], w_sum: u32, u0: u32) -> Vec<usize> {
@@ -483,16 +517,7 @@ pub fn run(cfg: &PfConfig, mut eval: impl FnMut(&FxPose) -> Evaluated) -> PfOutc
         for x in particles.iter_mut() {
             for d in 0..PARAMS {
                 let u = rng.signed16() as i64;
-                let prod = sigma[d] as i64 * u;
-                let step = if first { prod >> 14 } else { prod >> 15 };
-                let base = if first { 0 } else { wrap24(x[d] as i64 - centre[d] as i64) as i64 };
-                let lim = 2 * sigma[d] as i64;
-                let off = (base + step).clamp(-lim, lim);
-                let mut v = wrap24(centre[d] as i64 + off);
-                if d == SCALE && v <= 0 {
-                    v = 1;
-                }
-                x[d] = v;
+                x[d] = propagate(x[d], centre[d], sigma[d], u, first, d == SCALE);
             }
             let e = eval(&pose_of(x));
             costs.push(e.cost);
@@ -514,11 +539,7 @@ pub fn run(cfg: &PfConfig, mut eval: impl FnMut(&FxPose) -> Evaluated) -> PfOutc
                 .zip(&weights)
                 .map(|(x, &w)| w as i64 * wrap24(x[d] as i64 - centre[d] as i64) as i64)
                 .sum();
-            let mut v = wrap24(centre[d] as i64 + div_signed(s, w_sum));
-            if d == SCALE && v <= 0 {
-                v = 1;
-            }
-            estimate[d] = v;
+            estimate[d] = estimate_param(centre[d], s, w_sum, d == SCALE);
         }
         for d in 0..PARAMS {
             let dsum: u64 = particles
@@ -526,9 +547,7 @@ pub fn run(cfg: &PfConfig, mut eval: impl FnMut(&FxPose) -> Evaluated) -> PfOutc
                 .zip(&weights)
                 .map(|(x, &w)| w as u64 * (wrap24(x[d] as i64 - estimate[d] as i64) as i64).unsigned_abs())
                 .sum();
-            let dev = dsum / w_sum as u64;
-            let s = dev + (dev >> 2);
-            sigma[d] = s.clamp(floor[d] as u64, cap[d] as u64) as u32;
+            sigma[d] = spread(dsum, w_sum, floor[d], cap[d]);
         }
         let estimate_eval = eval(&pose_of(&estimate));
         if estimate_eval.cost < best.0.cost {

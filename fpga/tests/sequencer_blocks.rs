@@ -1,12 +1,20 @@
-//! The sequencer's arithmetic blocks, each alone in rust_hdl's simulator against the
+//! The sequencer's blocks, each alone in rust_hdl's simulator against the
 //! [`pficp_fpga::pf`] function it implements: the serial multiplier against `i64`
 //! products, the divider against `pf::div_signed`, the PRNG step against
 //! `pf::Xorshift32`, the CORDIC against `pf::cordic`, the pose program against
-//! `pf::run_program`. The whole sequencer is checked clock by clock in the sim crate.
+//! `pf::run_program`, the propagation against `pf::propagate`, the estimate and spread
+//! against `pf::estimate_param` and `pf::spread`, the translation against
+//! `pf::translation`, the weight against `pf::weight` and `pf::temper`'s exponent, the
+//! resampling sums against `pf::resample`, the parameter bank against plain arrays. The
+//! whole sequencer is checked clock by clock in the sim crate.
 #![cfg(feature = "rtl")]
 
+use pficp_fpga::format::exp_table;
 use pficp_fpga::pf::{self, CORDIC_STEPS, POSE_PROGRAM};
-use pficp_fpga::rtl::board::sequencer::{Cordic, PoseProgram, SerialDiv, SerialMul, Xorshift32};
+use pficp_fpga::rtl::board::sequencer::{
+    Cordic, Estimate, ParamBank, PoseProgram, Propagate, Resample, SerialDiv, SerialMul, Translation, Weight,
+    Xorshift32,
+};
 use rust_hdl::prelude::*;
 use std::sync::{Arc, Mutex};
 
@@ -28,7 +36,7 @@ fn signed<const N: usize>(b: Bits<N>) -> i64 {
 
 /// Run `bench` on `uut` with a clock; the failures it reports (or a simulator error) fail
 /// the test. Returns the count of checks the bench made.
-fn run_clocked<U: Block>(
+fn run_clocked<U: Block + Send + 'static>(
     mut uut: U,
     clock: fn(&mut Box<U>),
     bench: impl Fn(&mut Sim<U>, Box<U>, &mut Vec<String>) -> Result<(Box<U>, usize), SimError>
@@ -36,10 +44,7 @@ fn run_clocked<U: Block>(
         + std::panic::RefUnwindSafe
         + std::panic::UnwindSafe
         + 'static,
-) -> usize
-where
-    U: Send + 'static,
-{
+) -> usize {
     let found = Arc::new(Mutex::new((Vec::<String>::new(), 0usize)));
     let out = found.clone();
     uut.connect_all();
@@ -53,6 +58,33 @@ where
         sim.done(x)
     });
     let run = sim.run(Box::new(uut), 10_000_000);
+    let (errors, checks) = found.lock().unwrap().clone();
+    assert!(errors.is_empty(), "{} mismatches, the first: {}", errors.len(), errors[0]);
+    run.expect("simulation");
+    checks
+}
+
+/// Run `bench` on a combinational `uut` (no clock; `sim.wait(1, x)` settles it).
+fn run_comb<U: Block + Send + 'static>(
+    mut uut: U,
+    bench: impl Fn(&mut Sim<U>, Box<U>, &mut Vec<String>) -> Result<(Box<U>, usize), SimError>
+        + Send
+        + std::panic::RefUnwindSafe
+        + std::panic::UnwindSafe
+        + 'static,
+) -> usize {
+    let found = Arc::new(Mutex::new((Vec::<String>::new(), 0usize)));
+    let out = found.clone();
+    uut.connect_all();
+    let mut sim = Simulation::new();
+    sim.add_testbench(move |mut sim: Sim<U>| {
+        let x = sim.init()?;
+        let mut errors = Vec::new();
+        let (x, checks) = bench(&mut sim, x, &mut errors)?;
+        *out.lock().unwrap() = (errors, checks);
+        sim.done(x)
+    });
+    let run = sim.run(Box::new(uut), 100_000_000);
     let (errors, checks) = found.lock().unwrap().clone();
     assert!(errors.is_empty(), "{} mismatches, the first: {}", errors.len(), errors[0]);
     run.expect("simulation");
@@ -145,7 +177,7 @@ fn serial_div_matches_div_signed_in_48_clocks() {
                     wait_clock_cycle!(sim, clock, x);
                     clocks += 1;
                 }
-                let want = pf::div_signed(n as i64, d) as u64;
+                let want = pf::div_signed(n as i64, d) as u64 & ((1 << 26) - 1);
                 let got = x.quotient.val().to_u64();
                 if got != want || clocks != 48 {
                     errors.push(format!("case {k}: {n} / {d} = {want}, rtl {got} after {clocks} clocks"));
@@ -228,10 +260,10 @@ fn cordic_matches_the_reference_at_every_angle_class() {
                 x.step.next = false;
                 x.sin.next = false;
                 x = sim.wait(1, x)?;
-                let cos = signed::<20>(x.value.val()) as i32;
+                let cos = signed::<26>(x.value.val()) as i32;
                 x.sin.next = true;
                 x = sim.wait(1, x)?;
-                let sin = signed::<20>(x.value.val()) as i32;
+                let sin = signed::<26>(x.value.val()) as i32;
                 x.sin.next = false;
                 let want = pf::cordic(angle);
                 if (cos, sin) != want || steps != CORDIC_STEPS {
@@ -312,4 +344,320 @@ fn pose_program_matches_run_program() {
         },
     );
     assert_eq!(checks, 40);
+}
+
+#[test]
+fn propagate_matches_pf_propagate() {
+    let checks = run_comb(Propagate::new(), |sim, mut x, errors| {
+        let mut seed = 13u64;
+        let mut n = 0;
+        for case in 0..3000 {
+            let xv = signed::<24>(word::<24>(lcg(&mut seed) as i64)) as i32;
+            let centre = signed::<24>(word::<24>(lcg(&mut seed) as i64)) as i32;
+            // Spreads from tiny to the 22-bit maximum, draws over the whole 16-bit range.
+            let sigma = ((lcg(&mut seed) as u32) & ((1 << 22) - 1)) >> (lcg(&mut seed) % 22);
+            let u = signed::<16>(word::<16>(lcg(&mut seed) as i64));
+            let (first, scale) = (case % 3 == 0, case % 7 == 3);
+            x.x.next = word::<24>(xv as i64);
+            x.centre.next = word::<24>(centre as i64);
+            x.reference.next = word::<24>(centre as i64);
+            x.sigma.next = Bits::<22>::from(sigma as u64);
+            x.product.next = word::<27>((sigma as i64 * u) >> 14);
+            x.first.next = first;
+            x.scale.next = scale;
+            x = sim.wait(1, x)?;
+            x.off.next = x.step.val();
+            x = sim.wait(1, x)?;
+            x.off.next = x.clamped.val();
+            x = sim.wait(1, x)?;
+            let got = signed::<24>(x.value.val()) as i32;
+            let want = pf::propagate(xv, centre, sigma, u, first, scale);
+            let diff = pf::wrap24(xv as i64 - centre as i64) as i64;
+            if got != want || signed::<26>(x.diff.val()) != diff || signed::<26>(x.abs_diff.val()) != diff.abs() {
+                errors.push(format!(
+                    "case {case}: propagate({xv}, {centre}, {sigma}, {u}, {first}, {scale}) = {want}, rtl {got}"
+                ));
+            }
+            n += 1;
+        }
+        Ok((x, n))
+    });
+    assert_eq!(checks, 3000);
+}
+
+#[test]
+fn estimate_matches_pf_estimate_and_spread() {
+    let checks = run_comb(Estimate::new(), |sim, mut x, errors| {
+        let mut seed = 17u64;
+        let mut n = 0;
+        for case in 0..3000 {
+            // Sums of up to 256 particles' 24-bit offsets times 16-bit weights.
+            let w_sum = ((lcg(&mut seed) % (1 << 24)) as u32).max(1);
+            let s = (signed::<48>(word::<48>(lcg(&mut seed) as i64)) >> 1) / (1 + (lcg(&mut seed) % (1 << 20)) as i64);
+            let s = s.clamp(-((w_sum as i64) << 23), (w_sum as i64) << 23);
+            let centre = signed::<24>(word::<24>(lcg(&mut seed) as i64)) as i32;
+            let floor = (lcg(&mut seed) as u32) & ((1 << 20) - 1);
+            let cap = floor.max((lcg(&mut seed) as u32) & ((1 << 22) - 1));
+            let scale = case % 5 == 2;
+            x.acc.next = word::<48>(s);
+            x.centre.next = word::<24>(centre as i64);
+            x.floor.next = Bits::<22>::from(floor as u64);
+            x.cap.next = Bits::<22>::from(cap as u64);
+            x.scale.next = scale;
+            x = sim.wait(1, x)?;
+            let magnitude = x.magnitude.val().to_u64();
+            x.quotient.next = word::<26>((magnitude / w_sum as u64) as i64);
+            x = sim.wait(1, x)?;
+            let (est, spread) = (signed::<24>(x.value.val()) as i32, x.spread.val().to_u64() as u32);
+            let want_est = pf::estimate_param(centre, s, w_sum, scale);
+            let want_spread = pf::spread(s.unsigned_abs(), w_sum, floor, cap);
+            if magnitude != s.unsigned_abs() || est != want_est || spread != want_spread {
+                errors.push(format!(
+                    "case {case}: S {s}, W {w_sum}: estimate {want_est}, spread {want_spread}; rtl {est}, {spread} (|S| {magnitude})"
+                ));
+            }
+            n += 1;
+        }
+        Ok((x, n))
+    });
+    assert_eq!(checks, 3000);
+}
+
+#[test]
+fn translation_matches_pf_translation() {
+    let checks = run_comb(Translation::new(), |sim, mut x, errors| {
+        let mut seed = 19u64;
+        let mut values: Vec<i32> = vec![
+            0,
+            -1,
+            31,
+            32,
+            -32,
+            -33,
+            (1 << 23) - 1,
+            -(1 << 23),
+            131071 << 6,
+            (131071 << 6) + 31,
+            (131071 << 6) + 32,
+        ];
+        values.extend((0..3000).map(|_| signed::<24>(word::<24>(lcg(&mut seed) as i64)) as i32));
+        for &v in &values {
+            x.x.next = word::<24>(v as i64);
+            x = sim.wait(1, x)?;
+            let got = signed::<18>(x.t.val()) as i32;
+            if got != pf::translation(v) {
+                errors.push(format!("translation({v}) = {}, rtl {got}", pf::translation(v)));
+            }
+        }
+        Ok((x, values.len()))
+    });
+    assert_eq!(checks, 3011);
+}
+
+#[test]
+fn weight_matches_pf_weight_at_the_temper_exponent() {
+    let checks = run_clocked(
+        Weight::new(),
+        |x| x.clock.next = !x.clock.val(),
+        |sim, mut x, errors| {
+            let table = exp_table();
+            let mut seed = 23u64;
+            x.temper.next = false;
+            x.latch.next = false;
+            wait_clock_true!(sim, clock, x);
+            let mut n = 0;
+            for case in 0..1500 {
+                let (p, tq) = ((lcg(&mut seed) % 49) as u32, (lcg(&mut seed) % 64) as u32);
+                // The exponent rule of pf::temper, given the bit length p it found.
+                let e = tq.max(p.saturating_sub(2)).max(pf::MIN_TEMPER_EXP);
+                x.p.next = Bits::<6>::from(p as u64);
+                x.tq.next = Bits::<6>::from(tq as u64);
+                x.temper.next = true;
+                wait_clock_cycle!(sim, clock, x);
+                x.temper.next = false;
+                for _ in 0..4 {
+                    let excess = (lcg(&mut seed) & ((1 << 48) - 1)) >> (lcg(&mut seed) % 48);
+                    x.excess.next = Bits::<48>::from(excess);
+                    x.latch.next = true;
+                    wait_clock_cycle!(sim, clock, x);
+                    x.latch.next = false;
+                    x.excess.next = 0.into();
+                    x = sim.wait(1, x)?;
+                    let got = x.value.val().to_u64() as u16;
+                    let want = pf::weight(excess, e, &table);
+                    if got != want {
+                        errors.push(format!("case {case}: weight({excess}, e {e}) = {want}, rtl {got}"));
+                    }
+                    n += 1;
+                }
+            }
+            Ok((x, n))
+        },
+    );
+    assert_eq!(checks, 6000);
+}
+
+#[test]
+fn resample_sums_pick_what_pf_resample_picks() {
+    let checks = run_clocked(
+        Resample::new(),
+        |x| x.clock.next = !x.clock.val(),
+        |sim, mut x, errors| {
+            let mut seed = 29u64;
+            let pulse = |x: &mut Box<Resample>, which: usize, on: bool| match which {
+                0 => x.clear.next = on,
+                1 => x.set_pointer.next = on,
+                2 => x.add_weight.next = on,
+                _ => x.advance.next = on,
+            };
+            for which in 0..4 {
+                pulse(&mut x, which, false);
+            }
+            wait_clock_true!(sim, clock, x);
+            for case in 0..60 {
+                let n = 1 + (lcg(&mut seed) % 256) as usize;
+                // Some weights zero (particles that cannot be picked), some all equal.
+                let weights: Vec<u16> = (0..n)
+                    .map(|i| {
+                        if case % 4 == 0 {
+                            1000
+                        } else if lcg(&mut seed).is_multiple_of(3) {
+                            0
+                        } else {
+                            (lcg(&mut seed) as u16) | (i == 0) as u16
+                        }
+                    })
+                    .collect();
+                let w_sum: u32 = weights.iter().map(|&w| w as u32).sum::<u32>().max(1);
+                let u0 = (lcg(&mut seed) % (1 << 16)) as u32;
+                let want = pf::resample(&weights, w_sum, u0);
+                x.w_sum.next = Bits::<24>::from(w_sum as u64);
+                // As the sequencer's states drive it, the bench playing the multiplier.
+                x.product.next = Bits::<44>::from(u0 as u64 * w_sum as u64);
+                x.clear.next = true;
+                x.set_pointer.next = true;
+                wait_clock_cycle!(sim, clock, x);
+                x.clear.next = false;
+                x.set_pointer.next = false;
+                let add = |x: &mut Box<Resample>, w: u16| {
+                    x.product.next = Bits::<44>::from(n as u64 * w as u64);
+                    x.add_weight.next = true;
+                };
+                add(&mut x, weights[0]);
+                wait_clock_cycle!(sim, clock, x);
+                x.add_weight.next = false;
+                let (mut i, mut picks) = (0usize, Vec::new());
+                while picks.len() < n {
+                    x = sim.wait(1, x)?;
+                    if x.beyond.val() && i + 1 < n {
+                        i += 1;
+                        add(&mut x, weights[i]);
+                    } else {
+                        picks.push(i);
+                        x.advance.next = true;
+                    }
+                    wait_clock_cycle!(sim, clock, x);
+                    x.add_weight.next = false;
+                    x.advance.next = false;
+                }
+                if picks != want {
+                    errors.push(format!("case {case} ({n} particles): picks differ from pf::resample"));
+                }
+            }
+            Ok((x, 60))
+        },
+    );
+    assert_eq!(checks, 60);
+}
+
+#[test]
+fn param_bank_moves_vectors_as_the_filter_does() {
+    let checks = run_clocked(
+        ParamBank::new(),
+        |x| x.clock.next = !x.clock.val(),
+        |sim, mut x, errors| {
+            let mut seed = 31u64;
+            // The reference: plain arrays [centre, cap, floor, sigma, est, best, cur].
+            let mut r = [[0i64; 7]; 7];
+            let (centre, cap, floor, sigma, est, best, cur) = (0, 1, 2, 3, 4, 5, 6);
+            let widths = [24, 22, 22, 22, 24, 24, 24];
+            wait_clock_true!(sim, clock, x);
+            let mut n = 0;
+            for step in 0..4000 {
+                let op = lcg(&mut seed) % 12;
+                let pd = (lcg(&mut seed) % 7) as usize;
+                let data = (lcg(&mut seed) & 0xff_ffff) as i64;
+                let sigma_in = (lcg(&mut seed) & 0x3f_ffff) as i64;
+                let cfg_addr = (lcg(&mut seed) % 25) as usize;
+                let cfg_data = lcg(&mut seed) & ((1 << 48) - 1);
+                x.cfg_we.next = op == 0;
+                x.cfg_addr.next = Bits::<5>::from(cfg_addr as u64);
+                x.cfg_data.next = Bits::<24>::from(cfg_data & 0xff_ffff);
+                x.pd.next = Bits::<3>::from(pd as u64);
+                x.data.next = Bits::<24>::from(data as u64);
+                x.sigma_in.next = Bits::<22>::from(sigma_in as u64);
+                x.axis.next = Bits::<2>::from(lcg(&mut seed) % 3);
+                x.init.next = op == 1;
+                x.cur_put.next = op == 2;
+                x.best_put.next = op == 3;
+                x.est_put.next = op == 4;
+                x.sigma_put.next = op == 5;
+                x.cur_from_est.next = op == 6;
+                x.best_from_est.next = op == 7;
+                x.best_from_cur.next = op == 8;
+                x.cur_from_best.next = op == 9;
+                x.centre_from_best.next = op == 10;
+                x = sim.wait(1, x)?;
+                let axis = x.axis.val().to_u64() as usize;
+                let shown = [
+                    (x.sel_centre.val().to_u64() as i64, r[centre][pd]),
+                    (x.sel_cap.val().to_u64() as i64, r[cap][pd]),
+                    (x.sel_floor.val().to_u64() as i64, r[floor][pd]),
+                    (x.sel_sigma.val().to_u64() as i64, r[sigma][pd]),
+                    (x.sel_est.val().to_u64() as i64, r[est][pd]),
+                    (x.angle.val().to_u64() as i64, r[cur][4 + axis]),
+                    (x.translation.val().to_u64() as i64, r[cur][axis]),
+                    (x.scale.val().to_u64() as i64, r[cur][3]),
+                ];
+                if let Some(k) = shown.iter().position(|(got, want)| got != want) {
+                    errors.push(format!("step {step}: output {k} is {}, the arrays say {}", shown[k].0, shown[k].1));
+                }
+                let params = x.params.val();
+                for (q, &b) in r[best].iter().enumerate() {
+                    if params.get_bits::<24>(24 * q).to_u64() as i64 != b {
+                        errors.push(format!("step {step}: params word {q}"));
+                    }
+                }
+                wait_clock_cycle!(sim, clock, x);
+                let before = r;
+                match op {
+                    0 if cfg_addr < 21 => {
+                        let (v, q) = (cfg_addr / 7, cfg_addr % 7);
+                        r[[centre, cap, floor][v]][q] =
+                            (cfg_data & ((1 << widths[[centre, cap, floor][v]]) - 1)) as i64;
+                    }
+                    1 => {
+                        for q in 0..7 {
+                            r[cap][q] = before[cap][q].max(before[floor][q]);
+                            r[sigma][q] = r[cap][q];
+                            r[cur][q] = before[centre][q];
+                        }
+                    }
+                    2 => r[cur][pd] = data,
+                    3 => r[best][pd] = data,
+                    4 => r[est][pd] = data,
+                    5 => r[sigma][pd] = sigma_in,
+                    6 => r[cur] = before[est],
+                    7 => r[best] = before[est],
+                    8 => r[best] = before[cur],
+                    9 => r[cur] = before[best],
+                    10 => r[centre] = before[best],
+                    _ => {}
+                }
+                n += 1;
+            }
+            Ok((x, n))
+        },
+    );
+    assert_eq!(checks, 4000);
 }

@@ -22,8 +22,8 @@ pub struct Cordic {
     pub angle: Signal<In, Bits<24>>,
     /// This step is the last (the 18th).
     pub last: Signal<Out, Bit>,
-    /// Cosine or sine (Q2.16, 20-bit two's complement).
-    pub value: Signal<Out, Bits<20>>,
+    /// Cosine or sine (Q2.16, sign-extended to the pose program's 26 bits).
+    pub value: Signal<Out, Bits<26>>,
     cx: DFF<Bits<22>>,
     cy: DFF<Bits<22>>,
     cz: DFF<Bits<25>>,
@@ -41,6 +41,7 @@ pub struct Cordic {
     cor_out: Signal<Local, Bits<22>>,
     cor_sum: Signal<Local, Bits<22>>,
     cor_r: Signal<Local, Bits<20>>,
+    cor_v: Signal<Local, Bits<20>>,
 }
 
 impl Default for Cordic {
@@ -77,6 +78,7 @@ impl Cordic {
             cor_out: Default::default(),
             cor_sum: Default::default(),
             cor_r: Default::default(),
+            cor_v: Default::default(),
         }
     }
 }
@@ -114,9 +116,13 @@ impl Logic for Cordic {
         }
         self.cor_sum.next = self.cor_out.val() + 2;
         self.cor_r.next = bit_cast::<20, 22>(self.cor_sum.val() >> 2);
-        self.value.next = self.cor_r.val();
+        self.cor_v.next = self.cor_r.val();
         if self.cflip.q.val() {
-            self.value.next = bits::<20>(0) - self.cor_r.val();
+            self.cor_v.next = bits::<20>(0) - self.cor_r.val();
+        }
+        self.value.next = bit_cast::<26, 20>(self.cor_v.val());
+        if self.cor_v.val().get_bit(19) {
+            self.value.next = bit_cast::<26, 20>(self.cor_v.val()) | bits::<26>(0x3f0_0000);
         }
         self.last.next = self.ci.q.val() == 17;
 

@@ -5,69 +5,10 @@ use super::*;
 impl Logic for PfSequencer {
     #[hdl_gen]
     fn update(&mut self) {
-        dff_setup!(
-            self,
-            clock,
-            n_part,
-            n_iter,
-            tq,
-            seed,
-            thr_cost,
-            thr_max,
-            state,
-            ret,
-            ret2,
-            rng,
-            k,
-            iter_done,
-            run_r,
-            fin_r,
-            first,
-            half,
-            i,
-            j,
-            pd,
-            spread,
-            pa,
-            cra,
-            wra,
-            x_r,
-            off,
-            start_r,
-            pose_r,
-            maxd,
-            costr,
-            cmin,
-            imin,
-            best_cost_r,
-            best_max_r,
-            p,
-            mask,
-            cnt,
-            pre,
-            sh,
-            w_sum,
-            acc,
-            lft,
-            rgt,
-            cj
-        );
-        for q in 0..7 {
-            self.centre[q].clock.next = self.clock.val();
-            self.centre[q].d.next = self.centre[q].q.val();
-            self.cap[q].clock.next = self.clock.val();
-            self.cap[q].d.next = self.cap[q].q.val();
-            self.floor[q].clock.next = self.clock.val();
-            self.floor[q].d.next = self.floor[q].q.val();
-            self.sigma[q].clock.next = self.clock.val();
-            self.sigma[q].d.next = self.sigma[q].q.val();
-            self.est[q].clock.next = self.clock.val();
-            self.est[q].d.next = self.est[q].q.val();
-            self.best[q].clock.next = self.clock.val();
-            self.best[q].d.next = self.best[q].q.val();
-            self.cur[q].clock.next = self.clock.val();
-            self.cur[q].d.next = self.cur[q].q.val();
-        }
+        dff_setup!(self, clock, n_part, n_iter, tq, seed, thr_cost, thr_max, state, ret, ret2, rng, k, iter_done);
+        dff_setup!(self, clock, run_r, fin_r, first, half, i, j, pd, spread, pa, cra, wra, x_r, off, start_r, pose_r);
+        dff_setup!(self, clock, maxd, costr, cmin, imin, best_cost_r, best_max_r, p, mask, cnt, w_sum, acc);
+        dff_setup!(self, clock, cj);
         self.pram.read_clock.next = self.clock.val();
         self.pram.write_clock.next = self.clock.val();
         self.cram.read_clock.next = self.clock.val();
@@ -89,67 +30,50 @@ impl Logic for PfSequencer {
         self.iterations.next = self.iter_done.q.val();
         self.best_cost.next = self.best_cost_r.q.val();
         self.best_max.next = self.best_max_r.q.val();
-        self.params.next = bit_cast::<168, 24>(self.best[0].q.val())
-            | (bit_cast::<168, 24>(self.best[1].q.val()) << 24)
-            | (bit_cast::<168, 24>(self.best[2].q.val()) << 48)
-            | (bit_cast::<168, 24>(self.best[3].q.val()) << 72)
-            | (bit_cast::<168, 24>(self.best[4].q.val()) << 96)
-            | (bit_cast::<168, 24>(self.best[5].q.val()) << 120)
-            | (bit_cast::<168, 24>(self.best[6].q.val()) << 144);
+        self.params.next = self.bank.params.val();
 
-        // Parameter `d` of the vectors.
-        self.sel_centre.next = self.centre[0].q.val();
-        self.sel_sigma.next = self.sigma[0].q.val();
-        self.sel_floor.next = self.floor[0].q.val();
-        self.sel_cap.next = self.cap[0].q.val();
-        self.sel_est.next = self.est[0].q.val();
-        for q in 1..7 {
-            if self.pd.q.val().index() == q {
-                self.sel_centre.next = self.centre[q].q.val();
-                self.sel_sigma.next = self.sigma[q].q.val();
-                self.sel_floor.next = self.floor[q].q.val();
-                self.sel_cap.next = self.cap[q].q.val();
-                self.sel_est.next = self.est[q].q.val();
-            }
-        }
+        // The parameter vectors, parameter `pd` of each.
+        self.bank.clock.next = self.clock.val();
+        self.bank.cfg_we.next = self.cfg_we.val();
+        self.bank.cfg_addr.next = self.cfg_addr.val();
+        self.bank.cfg_data.next = self.cfg_data.val().get_bits::<24>(0);
+        self.bank.pd.next = self.pd.q.val();
+        self.bank.axis.next = self.cj.q.val();
+        self.bank.init.next = false;
+        self.bank.cur_put.next = false;
+        self.bank.best_put.next = false;
+        self.bank.est_put.next = false;
+        self.bank.sigma_put.next = false;
+        self.bank.cur_from_est.next = false;
+        self.bank.best_from_est.next = false;
+        self.bank.best_from_cur.next = false;
+        self.bank.cur_from_best.next = false;
+        self.bank.centre_from_best.next = false;
+        self.bank.data.next = self.propagate.value.val();
+        self.bank.sigma_in.next = self.estimate.spread.val();
 
         // PRNG: xorshift32 (13, 17, 5).
         self.xorshift.x.next = self.rng.q.val();
         self.rng_next.next = self.xorshift.y.val();
         self.u_hi.next = self.rng.q.val().get_bits::<16>(16);
 
-        // Propagation arithmetic.
-        self.prod_sh14.next = self.mul.product.val().get_bits::<26>(14);
-        self.prod_sh15.next = self.mul.product.val().get_bits::<26>(15);
-        self.ref24.next = self.sel_centre.val();
+        // Propagation arithmetic (the reference of `diff` is the estimate for the spread).
+        self.propagate.x.next = self.x_r.q.val();
+        self.propagate.centre.next = self.bank.sel_centre.val();
+        self.propagate.reference.next = self.bank.sel_centre.val();
         if self.spread.q.val() {
-            self.ref24.next = self.sel_est.val();
+            self.propagate.reference.next = self.bank.sel_est.val();
         }
-        self.diff24.next = self.x_r.q.val() - self.ref24.val();
-        self.diff26.next = bit_cast::<26, 24>(self.diff24.val());
-        if self.diff24.val().get_bit(23) {
-            self.diff26.next = bit_cast::<26, 24>(self.diff24.val()) | bits::<26>(0x300_0000);
-        }
-        self.lim26.next = bit_cast::<26, 22>(self.sel_sigma.val()) << 1;
-        // Negations go through a Local: in a Verilog compare, `0 - x` would be 32 bits wide.
-        self.neg_lim26.next = bits::<26>(0) - self.lim26.val();
-        self.v24.next = self.sel_centre.val() + self.off.q.val().get_bits::<24>(0);
-        self.v_fix.next = self.v24.val();
-        if (self.pd.q.val() == 3) && (self.v24.val().get_bit(23) || !self.v24.val().any()) {
-            self.v_fix.next = bits::<24>(1);
-        }
+        self.propagate.sigma.next = self.bank.sel_sigma.val();
+        self.propagate.product.next = self.mul.product.val().get_bits::<27>(14);
+        self.propagate.first.next = self.first.q.val();
+        self.propagate.off.next = self.off.q.val();
+        self.propagate.scale.next = self.pd.q.val() == 3;
         self.ex_now.next = self.cram.read_data.val().get_bits::<48>(0) - self.cmin.q.val();
         self.ex_masked.next = self.ex_now.val() & !self.mask.q.val();
 
         // CORDIC.
-        self.ang.next = self.cur[4].q.val();
-        if self.cj.q.val() == 1 {
-            self.ang.next = self.cur[5].q.val();
-        }
-        if self.cj.q.val() == 2 {
-            self.ang.next = self.cur[6].q.val();
-        }
-        self.cordic.angle.next = self.ang.val();
+        self.cordic.angle.next = self.bank.angle.val();
         self.cordic.sin.next = self.state.q.val() == SeqState::CorSin;
         self.cordic.load.next = false;
         self.cordic.step.next = false;
@@ -161,87 +85,48 @@ impl Logic for PfSequencer {
         self.pose_prog.latch.next = false;
         self.pose_prog.exec.next = false;
         self.pose_prog.retire.next = false;
-        self.tr_in.next = self.cur[0].q.val();
-        if self.cj.q.val() == 1 {
-            self.tr_in.next = self.cur[1].q.val();
-        }
-        if self.cj.q.val() == 2 {
-            self.tr_in.next = self.cur[2].q.val();
-        }
-        self.tr_in_s25.next = bit_cast::<25, 24>(self.tr_in.val());
-        if self.tr_in.val().get_bit(23) {
-            self.tr_in_s25.next = bit_cast::<25, 24>(self.tr_in.val()) | bits::<25>(0x100_0000);
-        }
-        self.tr_y.next = self.tr_in_s25.val() + bits::<25>(32);
-        self.tr_t.next = bit_cast::<19, 25>(self.tr_y.val() >> 6);
-        self.tr_sat.next = self.tr_t.val().get_bits::<18>(0);
-        if (self.tr_t.val() ^ bits::<19>(0x4_0000)) > bits::<19>(0x5_ffff) {
-            self.tr_sat.next = bits::<18>(0x1_ffff);
-        }
-        if (self.tr_t.val() ^ bits::<19>(0x4_0000)) < bits::<19>(0x2_0000) {
-            self.tr_sat.next = bits::<18>(0x2_0000);
-        }
+        self.translation.x.next = self.bank.translation.val();
 
         // Estimate / spread arithmetic.
-        self.acc_abs.next = self.acc.q.val();
-        if self.acc.q.val().get_bit(47) {
-            self.acc_abs.next = bits::<48>(0) - self.acc.q.val();
-        }
-        self.q26.next = self.div.quotient.val().get_bits::<26>(0);
-        self.mean26.next = self.q26.val();
-        if self.acc.q.val().get_bit(47) {
-            self.mean26.next = bits::<26>(0) - self.q26.val();
-        }
-        self.dev26.next = self.q26.val() + (self.q26.val() >> 2);
-        self.sig_new.next = self.dev26.val().get_bits::<22>(0);
-        if self.dev26.val() > bit_cast::<26, 22>(self.sel_cap.val()) {
-            self.sig_new.next = self.sel_cap.val();
-        }
-        if self.dev26.val() < bit_cast::<26, 22>(self.sel_floor.val()) {
-            self.sig_new.next = self.sel_floor.val();
-        }
-        self.est_v.next = self.sel_centre.val() + bit_cast::<24, 26>(self.mean26.val());
-        self.est_fix.next = self.est_v.val();
-        if (self.pd.q.val() == 3) && (self.est_v.val().get_bit(23) || !self.est_v.val().any()) {
-            self.est_fix.next = bits::<24>(1);
-        }
-        self.abs26.next = self.diff26.val();
-        if self.diff26.val().get_bit(25) {
-            self.abs26.next = bits::<26>(0) - self.diff26.val();
-        }
+        self.estimate.acc.next = self.acc.q.val();
+        self.estimate.quotient.next = self.div.quotient.val();
+        self.estimate.centre.next = self.bank.sel_centre.val();
+        self.estimate.floor.next = self.bank.sel_floor.val();
+        self.estimate.cap.next = self.bank.sel_cap.val();
+        self.estimate.scale.next = self.pd.q.val() == 3;
         self.maxd_next.next = self.maxd.q.val();
         if self.nn_valid.val() && (self.nn_dist.val() > self.maxd.q.val()) {
             self.maxd_next.next = self.nn_dist.val();
         }
-        self.t_entry.next = self.sh.q.val().get_bits::<8>(0);
-        if self.sh.q.val() > 255 {
-            self.t_entry.next = bits::<8>(255);
-        }
-        self.exp_rom.address.next = self.t_entry.val();
-        self.e_tmp.next = self.tq.q.val();
-        if (self.p.q.val() > 2) && ((self.p.q.val() - 2) > self.tq.q.val()) {
-            self.e_tmp.next = self.p.q.val() - 2;
-        }
+        self.resample.clock.next = self.clock.val();
+        self.resample.clear.next = false;
+        self.resample.set_pointer.next = false;
+        self.resample.add_weight.next = false;
+        self.resample.advance.next = false;
+        self.resample.product.next = self.mul.product.val();
+        self.resample.w_sum.next = self.w_sum.q.val();
+        self.weight.clock.next = self.clock.val();
+        self.weight.temper.next = false;
+        self.weight.p.next = self.p.q.val();
+        self.weight.tq.next = self.tq.q.val();
+        self.weight.latch.next = false;
+        self.weight.excess.next = self.ex_now.val();
 
         // Sign extensions (a mux on the sign bit, so no carry chain lengthens a path).
         self.u_hi_s18.next = bit_cast::<18, 16>(self.u_hi.val());
         if self.u_hi.val().get_bit(15) {
             self.u_hi_s18.next = bit_cast::<18, 16>(self.u_hi.val()) | bits::<18>(0x3_0000);
         }
-        self.cor_v_s26.next = bit_cast::<26, 20>(self.cordic.value.val());
-        if self.cordic.value.val().get_bit(19) {
-            self.cor_v_s26.next = bit_cast::<26, 20>(self.cordic.value.val()) | bits::<26>(0x3f0_0000);
-        }
-        self.scale_s26.next = bit_cast::<26, 24>(self.cur[3].q.val());
-        if self.cur[3].q.val().get_bit(23) {
-            self.scale_s26.next = bit_cast::<26, 24>(self.cur[3].q.val()) | bits::<26>(0x300_0000);
+        self.scale_s26.next = bit_cast::<26, 24>(self.bank.scale.val());
+        if self.bank.scale.val().get_bit(23) {
+            self.scale_s26.next = bit_cast::<26, 24>(self.bank.scale.val()) | bits::<26>(0x300_0000);
         }
 
         // Memory defaults.
         self.pram.read_address.next = self.pa.q.val();
         self.pram.write_enable.next = false;
         self.pram.write_address.next = self.pa.q.val();
-        self.pram.write_data.next = self.v_fix.val();
+        self.pram.write_data.next = self.propagate.value.val();
         self.cram.read_address.next = self.cra.q.val();
         self.cram.write_enable.next = false;
         self.cram.write_address.next = self.i.q.val().get_bits::<8>(0);
@@ -250,30 +135,19 @@ impl Logic for PfSequencer {
         self.wram.read_address.next = self.wra.q.val();
         self.wram.write_enable.next = false;
         self.wram.write_address.next = self.i.q.val().get_bits::<8>(0);
-        self.wram.write_data.next = self.exp_rom.data.val();
+        self.wram.write_data.next = self.weight.value.val();
         self.pose_prog.load.next = false;
         self.pose_prog.load_addr.next = bit_cast::<5, 2>(self.cj.q.val()) << 1;
-        self.pose_prog.load_data.next = self.cor_v_s26.val();
+        self.pose_prog.load_data.next = self.cordic.value.val();
         self.start_r.d.next = false;
         self.mul_go.next = false;
-        self.mul_a_in.next = bit_cast::<26, 22>(self.sel_sigma.val());
+        self.mul_a_in.next = bit_cast::<26, 22>(self.bank.sel_sigma.val());
         self.mul_b_in.next = self.u_hi_s18.val();
         self.div_go.next = false;
-        self.div_n_in.next = self.acc_abs.val();
+        self.div_n_in.next = self.estimate.magnitude.val();
 
         // Configuration writes.
         if self.cfg_we.val() {
-            for q in 0..7 {
-                if self.cfg_addr.val().index() == q {
-                    self.centre[q].d.next = self.cfg_data.val().get_bits::<24>(0);
-                }
-                if self.cfg_addr.val().index() == (q + 7) {
-                    self.cap[q].d.next = self.cfg_data.val().get_bits::<22>(0);
-                }
-                if self.cfg_addr.val().index() == (q + 14) {
-                    self.floor[q].d.next = self.cfg_data.val().get_bits::<22>(0);
-                }
-            }
             if self.cfg_addr.val() == 21 {
                 self.seed.d.next = self.cfg_data.val().get_bits::<32>(0);
             }
@@ -293,14 +167,7 @@ impl Logic for PfSequencer {
         match self.state.q.val() {
             SeqState::Idle => {
                 if self.go.val() {
-                    for q in 0..7 {
-                        self.sigma[q].d.next = self.cap[q].q.val();
-                        if self.floor[q].q.val() > self.cap[q].q.val() {
-                            self.cap[q].d.next = self.floor[q].q.val();
-                            self.sigma[q].d.next = self.floor[q].q.val();
-                        }
-                        self.cur[q].d.next = self.centre[q].q.val();
-                    }
+                    self.bank.init.next = true;
                     self.rng.d.next = self.seed.q.val();
                     if !self.seed.q.val().any() {
                         self.rng.d.next = bits::<32>(1);
@@ -385,7 +252,8 @@ impl Logic for PfSequencer {
                 }
             }
             SeqState::PoseT => {
-                self.pose_r.d.next = (self.pose_r.q.val() >> 18) | (bit_cast::<216, 18>(self.tr_sat.val()) << 198);
+                self.pose_r.d.next =
+                    (self.pose_r.q.val() >> 18) | (bit_cast::<216, 18>(self.translation.t.val()) << 198);
                 self.cj.d.next = self.cj.q.val() + 1;
                 if self.cj.q.val() == 2 {
                     self.state.d.next = self.ret.q.val();
@@ -409,9 +277,7 @@ impl Logic for PfSequencer {
             SeqState::StartDone => {
                 self.best_cost_r.d.next = self.costr.q.val();
                 self.best_max_r.d.next = self.maxd.q.val();
-                for q in 0..7 {
-                    self.best[q].d.next = self.cur[q].q.val();
-                }
+                self.bank.best_from_cur.next = true;
                 self.state.d.next = SeqState::IterBegin;
             }
             // ---- One iteration.
@@ -435,30 +301,17 @@ impl Logic for PfSequencer {
             SeqState::PropMul => {
                 self.x_r.d.next = self.pram.read_data.val();
                 if !self.mul.busy.val() {
-                    if self.first.q.val() {
-                        self.off.d.next = self.prod_sh14.val();
-                    } else {
-                        self.off.d.next = self.diff26.val() + self.prod_sh15.val();
-                    }
+                    self.off.d.next = self.propagate.step.val();
                     self.state.d.next = SeqState::PropClamp;
                 }
             }
             SeqState::PropClamp => {
-                if (self.off.q.val() ^ bits::<26>(0x200_0000)) > (self.lim26.val() ^ bits::<26>(0x200_0000)) {
-                    self.off.d.next = self.lim26.val();
-                }
-                if (self.off.q.val() ^ bits::<26>(0x200_0000)) < (self.neg_lim26.val() ^ bits::<26>(0x200_0000)) {
-                    self.off.d.next = self.neg_lim26.val();
-                }
+                self.off.d.next = self.propagate.clamped.val();
                 self.state.d.next = SeqState::PropWrite;
             }
             SeqState::PropWrite => {
                 self.pram.write_enable.next = true;
-                for q in 0..7 {
-                    if self.pd.q.val().index() == q {
-                        self.cur[q].d.next = self.v_fix.val();
-                    }
-                }
+                self.bank.cur_put.next = true;
                 self.pa.d.next = self.pa.q.val() + 1;
                 self.pd.d.next = self.pd.q.val() + 1;
                 if self.pd.q.val() == 6 {
@@ -521,10 +374,7 @@ impl Logic for PfSequencer {
                 }
             }
             SeqState::TSet => {
-                self.pre.d.next = 0.into();
-                if self.e_tmp.val() > 5 {
-                    self.pre.d.next = self.e_tmp.val() - 5;
-                }
+                self.weight.temper.next = true;
                 self.i.d.next = 0.into();
                 self.w_sum.d.next = 0.into();
                 self.state.d.next = SeqState::WAddr;
@@ -538,12 +388,12 @@ impl Logic for PfSequencer {
                 self.state.d.next = SeqState::WData;
             }
             SeqState::WData => {
-                self.sh.d.next = self.ex_now.val() >> self.pre.q.val();
+                self.weight.latch.next = true;
                 self.state.d.next = SeqState::WIdx;
             }
             SeqState::WIdx => {
                 self.wram.write_enable.next = true;
-                self.w_sum.d.next = self.w_sum.q.val() + bit_cast::<24, 16>(self.exp_rom.data.val());
+                self.w_sum.d.next = self.w_sum.q.val() + bit_cast::<24, 16>(self.weight.value.val());
                 self.i.d.next = self.i.q.val() + 1;
                 if (self.i.q.val() + 1) == self.n_part.q.val() {
                     self.state.d.next = SeqState::BestCheck;
@@ -577,11 +427,8 @@ impl Logic for PfSequencer {
                 self.state.d.next = SeqState::BestData;
             }
             SeqState::BestData => {
-                for q in 0..7 {
-                    if self.pd.q.val().index() == q {
-                        self.best[q].d.next = self.pram.read_data.val();
-                    }
-                }
+                self.bank.best_put.next = true;
+                self.bank.data.next = self.pram.read_data.val();
                 self.pa.d.next = self.pa.q.val() + 1;
                 self.pd.d.next = self.pd.q.val() + 1;
                 if self.pd.q.val() == 6 {
@@ -618,9 +465,9 @@ impl Logic for PfSequencer {
                 self.mul_go.next = true;
                 self.mul_b_in.next = bit_cast::<18, 16>(self.wram.read_data.val());
                 if self.spread.q.val() {
-                    self.mul_a_in.next = self.abs26.val();
+                    self.mul_a_in.next = self.propagate.abs_diff.val();
                 } else {
-                    self.mul_a_in.next = self.diff26.val();
+                    self.mul_a_in.next = self.propagate.diff.val();
                 }
             }
             SeqState::SumDiv => {
@@ -641,14 +488,11 @@ impl Logic for PfSequencer {
             }
             SeqState::SumDivWait => {
                 if !self.div.busy.val() {
-                    for q in 0..7 {
-                        if self.pd.q.val().index() == q {
-                            if self.spread.q.val() {
-                                self.sigma[q].d.next = self.sig_new.val();
-                            } else {
-                                self.est[q].d.next = self.est_fix.val();
-                            }
-                        }
+                    if self.spread.q.val() {
+                        self.bank.sigma_put.next = true;
+                    } else {
+                        self.bank.est_put.next = true;
+                        self.bank.data.next = self.estimate.value.val();
                     }
                     self.pd.d.next = self.pd.q.val() + 1;
                     self.state.d.next = SeqState::SumBegin;
@@ -664,9 +508,7 @@ impl Logic for PfSequencer {
             }
             SeqState::EstEval => {
                 self.spread.d.next = false;
-                for q in 0..7 {
-                    self.cur[q].d.next = self.est[q].q.val();
-                }
+                self.bank.cur_from_est.next = true;
                 self.cj.d.next = 0.into();
                 self.ret.d.next = SeqState::EvStart;
                 self.ret2.d.next = SeqState::EstDone;
@@ -676,16 +518,12 @@ impl Logic for PfSequencer {
                 if self.costr.q.val() < self.best_cost_r.q.val() {
                     self.best_cost_r.d.next = self.costr.q.val();
                     self.best_max_r.d.next = self.maxd.q.val();
-                    for q in 0..7 {
-                        self.best[q].d.next = self.est[q].q.val();
-                    }
+                    self.bank.best_from_est.next = true;
                 }
                 self.state.d.next = SeqState::Centre;
             }
             SeqState::Centre => {
-                for q in 0..7 {
-                    self.centre[q].d.next = self.best[q].q.val();
-                }
+                self.bank.centre_from_best.next = true;
                 self.iter_done.d.next = self.k.q.val() + 1;
                 self.state.d.next = SeqState::StopCheck;
             }
@@ -708,12 +546,12 @@ impl Logic for PfSequencer {
                 self.wra.d.next = 0.into();
                 self.i.d.next = 0.into();
                 self.j.d.next = 0.into();
-                self.rgt.d.next = 0.into();
+                self.resample.clear.next = true;
                 self.state.d.next = SeqState::RsL;
             }
             SeqState::RsL => {
                 if !self.mul.busy.val() {
-                    self.lft.d.next = bit_cast::<50, 44>(self.mul.product.val());
+                    self.resample.set_pointer.next = true;
                     self.state.d.next = SeqState::RsWData;
                 }
             }
@@ -732,12 +570,12 @@ impl Logic for PfSequencer {
             }
             SeqState::RsWMul => {
                 if !self.mul.busy.val() {
-                    self.rgt.d.next = self.rgt.q.val() + (bit_cast::<50, 44>(self.mul.product.val()) << 16);
+                    self.resample.add_weight.next = true;
                     self.state.d.next = SeqState::RsLoop;
                 }
             }
             SeqState::RsLoop => {
-                if (self.lft.q.val() > self.rgt.q.val()) && ((self.i.q.val() + 1) < self.n_part.q.val()) {
+                if self.resample.beyond.val() && ((self.i.q.val() + 1) < self.n_part.q.val()) {
                     self.i.d.next = self.i.q.val() + 1;
                     self.state.d.next = SeqState::RsWAddr;
                 } else {
@@ -765,7 +603,7 @@ impl Logic for PfSequencer {
                 }
             }
             SeqState::CpNext => {
-                self.lft.d.next = self.lft.q.val() + (bit_cast::<50, 24>(self.w_sum.q.val()) << 16);
+                self.resample.advance.next = true;
                 self.j.d.next = self.j.q.val() + 1;
                 if (self.j.q.val() + 1) == self.n_part.q.val() {
                     self.state.d.next = SeqState::RsDone;
@@ -779,9 +617,7 @@ impl Logic for PfSequencer {
                 self.state.d.next = SeqState::IterBegin;
             }
             SeqState::Fin => {
-                for q in 0..7 {
-                    self.cur[q].d.next = self.best[q].q.val();
-                }
+                self.bank.cur_from_best.next = true;
                 self.cj.d.next = 0.into();
                 self.ret.d.next = SeqState::FinDone;
                 self.state.d.next = SeqState::CorInit;

@@ -1,32 +1,56 @@
 //! `PfSequencer`: the on-board particle filter (docs/sequencer.md), the RTL of
 //! [`crate::pf::run`]. It owns the particle set (two halves of a 4,096 x 24 RAM), the
 //! per-particle costs and weights and the state machine (`kernel.rs`), and drives the
-//! nearest-neighbour pipeline through `start` / `pose`. Its arithmetic is one block a
-//! file, each the twin of a [`crate::pf`] function (tests: `fpga/tests/sequencer_blocks.rs`):
+//! nearest-neighbour pipeline through `start` / `pose`. Its parameter vectors and its
+//! arithmetic are one block a file, each the twin of a [`crate::pf`] function or state
+//! (tests: `fpga/tests/sequencer_blocks.rs`):
+//! - [`param_bank`]: `ParamBank`, the centre, cap, floor, spread, estimate, best and current
+//!   particle vectors;
 //! - [`serial_mul`]: `SerialMul`, 26 x 18 bits in 18 clocks;
 //! - [`serial_div`]: `SerialDiv`, 48 / 24 bits in 48 clocks ([`crate::pf::div_signed`]);
 //! - [`xorshift`]: `Xorshift32`, the PRNG's step ([`crate::pf::Xorshift32`]);
 //! - [`cordic`]: `Cordic`, cosine and sine in 18 steps ([`crate::pf::cordic`]);
 //! - [`pose_program`]: `PoseProgram`, [`crate::pf::POSE_PROGRAM`] in ROM over a 32 x 26
-//!   register file ([`crate::pf::run_program`]).
+//!   register file ([`crate::pf::run_program`]);
+//! - [`propagate`]: `Propagate`, a particle's parameter moved and clamped
+//!   ([`crate::pf::propagate`]);
+//! - [`estimate`]: `Estimate`, the estimate and spread after a weighted sum
+//!   ([`crate::pf::estimate_param`], [`crate::pf::spread`]);
+//! - [`translation`]: `Translation`, a translation parameter to the pose's
+//!   ([`crate::pf::translation`]);
+//! - [`weight`]: `Weight`, a cost excess to its weight through the exp table in ROM
+//!   ([`crate::pf::weight`], [`crate::pf::temper`]'s exponent);
+//! - [`resample`]: `Resample`, the pointer and cumulative sum of systematic resampling
+//!   ([`crate::pf::resample`]).
 //!
 //! Everything is sequential and small next to the pipeline's ~10^4 clocks per particle.
 //! The cycle-accurate mirror is [`crate::sequencer::SequencerModel`].
 
-use crate::format::exp_table;
 use rust_hdl::prelude::*;
 
 pub mod cordic;
+pub mod estimate;
 mod kernel;
+pub mod param_bank;
 pub mod pose_program;
+pub mod propagate;
+pub mod resample;
 pub mod serial_div;
 pub mod serial_mul;
+pub mod translation;
+pub mod weight;
 pub mod xorshift;
 
 pub use cordic::Cordic;
+pub use estimate::Estimate;
+pub use param_bank::ParamBank;
 pub use pose_program::PoseProgram;
+pub use propagate::Propagate;
+pub use resample::Resample;
 pub use serial_div::SerialDiv;
 pub use serial_mul::SerialMul;
+pub use translation::Translation;
+pub use weight::Weight;
 pub use xorshift::Xorshift32;
 
 pub use crate::seq_state::SeqState;
@@ -81,13 +105,6 @@ pub struct PfSequencer {
     /// Particle RAM write data.
     pub p_wdata: Signal<Out, Bits<24>>,
     // Configuration and filter state.
-    centre: [DFF<Bits<24>>; 7],
-    cap: [DFF<Bits<22>>; 7],
-    floor: [DFF<Bits<22>>; 7],
-    sigma: [DFF<Bits<22>>; 7],
-    est: [DFF<Bits<24>>; 7],
-    best: [DFF<Bits<24>>; 7],
-    cur: [DFF<Bits<24>>; 7],
     n_part: DFF<Bits<9>>,
     n_iter: DFF<Bits<16>>,
     tq: DFF<Bits<6>>,
@@ -124,12 +141,8 @@ pub struct PfSequencer {
     p: DFF<Bits<6>>,
     mask: DFF<Bits<48>>,
     cnt: DFF<Bits<9>>,
-    pre: DFF<Bits<6>>,
-    sh: DFF<Bits<48>>,
     w_sum: DFF<Bits<24>>,
     acc: DFF<Bits<48>>,
-    lft: DFF<Bits<50>>,
-    rgt: DFF<Bits<50>>,
     cj: DFF<Bits<2>>,
     all48: Constant<Bits<48>>,
     sign44: Constant<Bits<44>>,
@@ -138,58 +151,32 @@ pub struct PfSequencer {
     pram: RAM<Bits<24>, 12>,
     cram: RAM<Bits<82>, 8>,
     wram: RAM<Bits<16>, 8>,
-    exp_rom: ROM<Bits<16>, 8>,
-    // The arithmetic, one block each.
+    // The parameter vectors and the arithmetic, one block each.
+    bank: ParamBank,
     mul: SerialMul,
     div: SerialDiv,
     xorshift: Xorshift32,
     cordic: Cordic,
     pose_prog: PoseProgram,
+    propagate: Propagate,
+    estimate: Estimate,
+    translation: Translation,
+    weight: Weight,
+    resample: Resample,
     // Combinational helpers.
     mul_go: Signal<Local, Bit>,
     mul_a_in: Signal<Local, Bits<26>>,
     mul_b_in: Signal<Local, Bits<18>>,
     div_go: Signal<Local, Bit>,
     div_n_in: Signal<Local, Bits<48>>,
-    sel_centre: Signal<Local, Bits<24>>,
-    sel_sigma: Signal<Local, Bits<22>>,
-    sel_floor: Signal<Local, Bits<22>>,
-    sel_cap: Signal<Local, Bits<22>>,
-    sel_est: Signal<Local, Bits<24>>,
     rng_next: Signal<Local, Bits<32>>,
     u_hi: Signal<Local, Bits<16>>,
-    ref24: Signal<Local, Bits<24>>,
     ex_now: Signal<Local, Bits<48>>,
     ex_masked: Signal<Local, Bits<48>>,
-    est_v: Signal<Local, Bits<24>>,
-    sig_new: Signal<Local, Bits<22>>,
-    est_fix: Signal<Local, Bits<24>>,
-    v_fix: Signal<Local, Bits<24>>,
-    prod_sh14: Signal<Local, Bits<26>>,
-    prod_sh15: Signal<Local, Bits<26>>,
-    diff24: Signal<Local, Bits<24>>,
-    diff26: Signal<Local, Bits<26>>,
-    lim26: Signal<Local, Bits<26>>,
-    neg_lim26: Signal<Local, Bits<26>>,
-    v24: Signal<Local, Bits<24>>,
-    ang: Signal<Local, Bits<24>>,
-    tr_y: Signal<Local, Bits<25>>,
-    tr_t: Signal<Local, Bits<19>>,
-    tr_sat: Signal<Local, Bits<18>>,
-    acc_abs: Signal<Local, Bits<48>>,
-    q26: Signal<Local, Bits<26>>,
-    mean26: Signal<Local, Bits<26>>,
-    dev26: Signal<Local, Bits<26>>,
-    abs26: Signal<Local, Bits<26>>,
     // Sign extensions, as a mux on the sign bit (no carry chain).
     u_hi_s18: Signal<Local, Bits<18>>,
-    cor_v_s26: Signal<Local, Bits<26>>,
     scale_s26: Signal<Local, Bits<26>>,
-    tr_in_s25: Signal<Local, Bits<25>>,
-    tr_in: Signal<Local, Bits<24>>,
     maxd_next: Signal<Local, Bits<34>>,
-    t_entry: Signal<Local, Bits<8>>,
-    e_tmp: Signal<Local, Bits<6>>,
 }
 
 impl Default for PfSequencer {
@@ -224,13 +211,6 @@ impl PfSequencer {
             p_we: Default::default(),
             p_waddr: Default::default(),
             p_wdata: Default::default(),
-            centre: Default::default(),
-            cap: Default::default(),
-            floor: Default::default(),
-            sigma: Default::default(),
-            est: Default::default(),
-            best: Default::default(),
-            cur: Default::default(),
             n_part: Default::default(),
             n_iter: Default::default(),
             tq: Default::default(),
@@ -267,12 +247,8 @@ impl PfSequencer {
             p: Default::default(),
             mask: Default::default(),
             cnt: Default::default(),
-            pre: Default::default(),
-            sh: Default::default(),
             w_sum: Default::default(),
             acc: Default::default(),
-            lft: Default::default(),
-            rgt: Default::default(),
             cj: Default::default(),
             all48: Constant::new(Bits::<48>::from((1u64 << 48) - 1)),
             sign44: Constant::new(Bits::<44>::from(1u64 << 43)),
@@ -280,55 +256,29 @@ impl PfSequencer {
             pram: Default::default(),
             cram: Default::default(),
             wram: Default::default(),
-            exp_rom: exp_table().iter().map(|&w| Bits::<16>::from(w as u64)).into(),
+            bank: ParamBank::new(),
             mul: SerialMul::new(),
             div: SerialDiv::new(),
             xorshift: Xorshift32::new(),
             cordic: Cordic::new(),
             pose_prog: PoseProgram::new(),
+            propagate: Propagate::new(),
+            estimate: Estimate::new(),
+            translation: Translation::new(),
+            weight: Weight::new(),
+            resample: Resample::new(),
             mul_go: Default::default(),
             mul_a_in: Default::default(),
             mul_b_in: Default::default(),
             div_go: Default::default(),
             div_n_in: Default::default(),
-            sel_centre: Default::default(),
-            sel_sigma: Default::default(),
-            sel_floor: Default::default(),
-            sel_cap: Default::default(),
-            sel_est: Default::default(),
             rng_next: Default::default(),
             u_hi: Default::default(),
-            ref24: Default::default(),
             ex_now: Default::default(),
             ex_masked: Default::default(),
-            est_v: Default::default(),
-            sig_new: Default::default(),
-            est_fix: Default::default(),
-            v_fix: Default::default(),
-            prod_sh14: Default::default(),
-            prod_sh15: Default::default(),
-            diff24: Default::default(),
-            diff26: Default::default(),
-            lim26: Default::default(),
-            neg_lim26: Default::default(),
-            v24: Default::default(),
-            ang: Default::default(),
-            tr_y: Default::default(),
-            tr_t: Default::default(),
-            tr_sat: Default::default(),
-            acc_abs: Default::default(),
-            q26: Default::default(),
-            mean26: Default::default(),
-            dev26: Default::default(),
-            abs26: Default::default(),
             u_hi_s18: Default::default(),
-            cor_v_s26: Default::default(),
             scale_s26: Default::default(),
-            tr_in_s25: Default::default(),
-            tr_in: Default::default(),
             maxd_next: Default::default(),
-            t_entry: Default::default(),
-            e_tmp: Default::default(),
         }
     }
 }

@@ -1,5 +1,5 @@
 //! `SerialDiv`: the sequencer's restoring divider, `quotient = n / d` in 48 clocks (`n` 48
-//! bits, `d` 24 bits, unsigned), the magnitude step of [`crate::pf::div_signed`]; the test
+//! bits, `d` 24 bits, unsigned; the quotient's low 26 bits out), the magnitude step of [`crate::pf::div_signed`]; the test
 //! is `fpga/tests/sequencer_blocks.rs`.
 
 use rust_hdl::prelude::*;
@@ -17,8 +17,9 @@ pub struct SerialDiv {
     pub n: Signal<In, Bits<48>>,
     /// Divisor (non-zero).
     pub d: Signal<In, Bits<24>>,
-    /// The quotient, valid from the clock `busy` falls.
-    pub quotient: Signal<Out, Bits<48>>,
+    /// The quotient's low 26 bits, valid from the clock `busy` falls (the filter's
+    /// quotients, a mean offset or spread of 24-bit parameters, are below 2^25).
+    pub quotient: Signal<Out, Bits<26>>,
     /// A quotient is in progress (48 clocks from the clock after `go`).
     pub busy: Signal<Out, Bit>,
     dv_n: DFF<Bits<48>>,
@@ -39,7 +40,7 @@ impl Logic for SerialDiv {
     #[hdl_gen]
     fn update(&mut self) {
         dff_setup!(self, clock, dv_n, dv_d, dv_rem, dv_cnt);
-        self.quotient.next = self.dv_n.q.val();
+        self.quotient.next = self.dv_n.q.val().get_bits::<26>(0);
         self.busy.next = self.dv_cnt.q.val().any();
         self.rem2.next = (self.dv_rem.q.val() << 1) | bit_cast::<25, 1>(self.dv_n.q.val().get_bits::<1>(47));
         if self.go.val() {
