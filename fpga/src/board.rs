@@ -41,7 +41,7 @@ use crate::format::{unpack_point, FxPoint, WeightScale, MAX_POINTS};
 use crate::messages::{
     pose_from_bytes, two_u16, EvaluateReply, Identity, NearestReply, ResultReply, RunState, StatusReply, WeightSummary,
     EVALUATE_HEADER_BYTES, FLAG_FIRST, FLAG_LAST, LOAD_HEADER_BYTES, MAX_LOAD_POINTS, MAX_NEAREST, MAX_POSES,
-    NEAREST_REQUEST_BYTES, POINT_BYTES, POSE_BYTES, RUN_REPLY_BYTES, W_SUM_MASK,
+    NEAREST_REQUEST_BYTES, POINT_BYTES, POSE_BYTES, RUN_REPLY_BYTES, TWO_U16_BYTES, W_SUM_MASK,
 };
 use crate::pf::{PfConfig, PfOutcome};
 use crate::pipeline::evaluate;
@@ -207,7 +207,7 @@ impl BoardModel {
                 Ok(two_u16(offset as u16, count as u16))
             }
             Command::SetSizes => {
-                if d.len() != 4 {
+                if d.len() != TWO_U16_BYTES {
                     return Err(BadLength);
                 }
                 let (m, s) = (le(&d[0..2]) as usize, le(&d[2..4]) as usize);

@@ -214,9 +214,12 @@ pub fn load_request(offset: u16, points: &[FxPoint]) -> Vec<u8> {
     out
 }
 
+/// Bytes of two u16 fields.
+pub const TWO_U16_BYTES: usize = 4;
+
 /// Two u16 fields (LoadModel / LoadScan replies, SetSizes request and reply).
 pub fn two_u16(a: u16, b: u16) -> Vec<u8> {
-    let mut out = Vec::with_capacity(4);
+    let mut out = Vec::with_capacity(TWO_U16_BYTES);
     put(&mut out, a as u64, 2);
     put(&mut out, b as u64, 2);
     out
@@ -224,7 +227,7 @@ pub fn two_u16(a: u16, b: u16) -> Vec<u8> {
 
 /// Parse two u16 fields.
 pub fn parse_two_u16(d: &[u8]) -> Result<(u16, u16), MessageError> {
-    need(d, 4)?;
+    need(d, TWO_U16_BYTES)?;
     Ok((le(&d[0..2]) as u16, le(&d[2..4]) as u16))
 }
 

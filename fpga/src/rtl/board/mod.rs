@@ -4,6 +4,9 @@
 //! - [`frame_rx`]: `FrameReceiver`, streaming COBS decode, CRC check, frame buffer writes;
 //! - [`reply_tx`]: `ReplySender`, reply buffer, CRC and COBS encoder before the UART;
 //! - [`engine`]: `CommandEngine<P>`, command execution, scan store, pipeline and weights;
+//! - [`request_check`]: `RequestCheck`, a request's busy, command, length and capacity checks;
+//! - [`scan_feeder`]: `ScanFeeder`, the scan store's points into the pipeline;
+//! - [`sequencer`]: `PfSequencer`, the on-board particle filter, and its arithmetic blocks;
 //! - [`top`]: `BoardTop<P>`, pins, reset synchroniser, LEDs.
 //!
 //! The byte-level reference is [`crate::board::BoardModel`]: the Verilated board must send
@@ -13,6 +16,8 @@ pub mod crc;
 pub mod engine;
 pub mod frame_rx;
 pub mod reply_tx;
+pub mod request_check;
+pub mod scan_feeder;
 pub mod sequencer;
 pub mod top;
 pub mod uart;
