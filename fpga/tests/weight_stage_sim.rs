@@ -4,7 +4,7 @@
 #![cfg(feature = "rtl")]
 
 use pficp_fpga::format::WeightScale;
-use pficp_fpga::rtl::weight_stage::WeightStage;
+use pficp_fpga::rtl::weights::WeightStage;
 use pficp_fpga::weights::{WeightInputs, WeightModel, WeightOutputs};
 use rust_hdl::prelude::*;
 

@@ -1,13 +1,20 @@
-//! The rust_hdl RTL of the nearest-neighbour pipeline (feature `rtl`).
+//! The rust_hdl RTL (feature `rtl`), each block under the name of its model in the crate's
+//! root (`crate::pipeline` and [`pipeline`], `crate::weights` and [`weights`], ...).
 //!
 //! One block a file:
 //! - [`mul18`]: `Mul18`, a registered 18 x 18 signed multiplier (Verilog wrapper, one DSP48A1);
 //! - [`transform`]: `Transform`, the pose register and the transform pipeline (9 `Mul18`);
 //! - [`lane`]: `Lane`, one scan point's distance pipeline and running minimum (3 `Mul18`);
-//! - [`pipeline`]: `NnPipeline<P>`, the top: state machine, model RAM, `P` lanes, Reduce.
+//! - [`pipeline`]: `NnPipeline<P>`, the nearest-neighbour top: state machine, model RAM,
+//!   `P` lanes, Reduce ([`crate::pipeline::PipelineModel`]);
+//! - [`weights`]: `WeightStage`, minimum cost and exp-table weights
+//!   ([`crate::weights::WeightModel`]);
+//! - [`particle_weights`]: the two wired together ([`crate::particle_weights`]);
+//! - [`board`]: the board top and its blocks, the sequencer among them
+//!   ([`crate::board::BoardModel`], [`crate::sequencer::SequencerModel`]).
 //!
-//! `NnPipeline<P>` agrees with [`crate::pipeline::PipelineModel`] port for port on every
-//! clock (tests/rtl_sim.rs). [`pipeline_verilog`] gives the Verilog.
+//! Each agrees with its model port for port on every clock (fpga/tests in rust_hdl's
+//! simulator, sim/tests under Verilator). The `*_verilog` functions give the Verilog.
 
 pub mod board;
 pub mod lane;
@@ -15,7 +22,7 @@ pub mod mul18;
 pub mod particle_weights;
 pub mod pipeline;
 pub mod transform;
-pub mod weight_stage;
+pub mod weights;
 
 pub use lane::Lane;
 pub use mul18::{Mul18, MUL18_MODULE};
@@ -103,7 +110,7 @@ pub fn particle_weights_verilog(lanes: usize) -> String {
 
 /// The Verilog of the weight stage alone, top module `top` (docs/weights.md).
 pub fn weight_stage_verilog() -> String {
-    let mut uut = weight_stage::WeightStage::new();
+    let mut uut = weights::WeightStage::new();
     uut.connect_all();
     dedup_modules(&generate_verilog(&uut))
 }

@@ -3,7 +3,7 @@
 //! [`crate::particle_weights::ParticleWeightModel`].
 
 use super::pipeline::NnPipeline;
-use super::weight_stage::WeightStage;
+use super::weights::WeightStage;
 use rust_hdl::prelude::*;
 
 /// The whole particle-weight pipeline with `P` lanes.
