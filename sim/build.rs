@@ -17,7 +17,8 @@
 //! 3. the shim: the checked-in template `cpp/shim.h` (create, free, tick, VCD open, flush
 //!    and close, templated on the Verilated class) instantiated for `<prefix>` by
 //!    `PFICP_SHIM`, and the port copies generated from the `VL_IN*/VL_OUT*` port lines of
-//!    `<prefix>.h` after checking them against the design's documented ports: `set_inputs`
+//!    `<prefix>.h` after checking them against the design's ports (`src/ports.rs`, the one
+//!    list the wrappers also take their compared outputs from): `set_inputs`
 //!    (a packed `u64` array, masked to the port widths) and `get_outputs`;
 //! 4. one unity file compiled with the `cc` compiler and flags at `-O2`, but with the
 //!    run-once code (most of the source) after a pragma that turns optimisation off:
@@ -38,97 +39,11 @@ use std::time::Instant;
 /// design point).
 const DEFAULT_LANES: [usize; 2] = [4, 16];
 
-/// A port: (name, is_input, width). `clock` is driven by `tick`.
-type PortSpec = (&'static str, bool, usize);
-
-/// The ports of the nearest-neighbour pipeline's `top` (docs/pipeline.md), in the order of
-/// the packed input/output arrays the shim exchanges with Rust.
-const PIPELINE_PORTS: &[PortSpec] = &[
-    ("clock", true, 1),
-    ("model_we", true, 1),
-    ("model_waddr", true, 12),
-    ("model_wdata", true, 48),
-    ("model_count", true, 13),
-    ("start", true, 1),
-    ("pose", true, 216),
-    ("scan_valid", true, 1),
-    ("scan_data", true, 48),
-    ("scan_last", true, 1),
-    ("scan_ready", false, 1),
-    ("busy", false, 1),
-    ("nn_valid", false, 1),
-    ("nn_index", false, 12),
-    ("nn_dist", false, 34),
-    ("cost_valid", false, 1),
-    ("cost", false, 48),
-];
-
-/// The ports the particle-weight pipeline (`fpga/src/rtl/particle_weights.rs`) adds to
-/// [`PIPELINE_PORTS`]: the weight stage's controls and outputs (docs/weights.md; `busy` and
-/// `count` renamed `w_busy` and `w_count`).
-const PW_EXTRA_PORTS: &[PortSpec] = &[
-    ("clear", true, 1),
-    ("weigh", true, 1),
-    ("pre_shift", true, 6),
-    ("q_mul", true, 17),
-    ("w_busy", false, 1),
-    ("w_count", false, 9),
-    ("min_cost", false, 48),
-    ("w_valid", false, 1),
-    ("w_index", false, 8),
-    ("weight", false, 16),
-    ("w_done", false, 1),
-    ("w_sum", false, 24),
-];
-
-/// The ports of the weight stage (docs/weights.md).
-const WEIGHT_STAGE_PORTS: &[PortSpec] = &[
-    ("clock", true, 1),
-    ("clear", true, 1),
-    ("cost_valid", true, 1),
-    ("cost", true, 48),
-    ("weigh", true, 1),
-    ("pre_shift", true, 6),
-    ("q_mul", true, 17),
-    ("busy", false, 1),
-    ("count", false, 9),
-    ("min_cost", false, 48),
-    ("w_valid", false, 1),
-    ("w_index", false, 8),
-    ("weight", false, 16),
-    ("w_done", false, 1),
-    ("w_sum", false, 24),
-];
-
-/// The pins of the board top (`fpga/src/rtl/board/top.rs`).
-const BOARD_PORTS: &[PortSpec] =
-    &[("clock", true, 1), ("reset_n", true, 1), ("uart_rx", true, 1), ("uart_tx", false, 1), ("leds", false, 4)];
-
-/// The ports of the particle-filter sequencer (`fpga/src/rtl/board/sequencer.rs`).
-const SEQUENCER_PORTS: &[PortSpec] = &[
-    ("clock", true, 1),
-    ("reset", true, 1),
-    ("cfg_we", true, 1),
-    ("cfg_addr", true, 5),
-    ("cfg_data", true, 48),
-    ("go", true, 1),
-    ("nn_ready", true, 1),
-    ("cost_valid", true, 1),
-    ("cost", true, 48),
-    ("nn_valid", true, 1),
-    ("nn_dist", true, 34),
-    ("start", false, 1),
-    ("pose", false, 216),
-    ("running", false, 1),
-    ("finished", false, 1),
-    ("iterations", false, 16),
-    ("best_cost", false, 48),
-    ("best_max", false, 34),
-    ("params", false, 168),
-    ("p_we", false, 1),
-    ("p_waddr", false, 12),
-    ("p_wdata", false, 24),
-];
+// Every design's ports, in one place (also the wrappers' compared outputs).
+#[path = "src/ports.rs"]
+#[allow(dead_code)]
+mod ports;
+use ports::*;
 
 /// One generated design.
 struct Design {
@@ -154,7 +69,7 @@ const DESIGNS: [Design; 6] = [
         per_lane: true,
         verilog: pficp_fpga::rtl::pipeline_verilog,
         ports: &[PIPELINE_PORTS],
-        spec: "docs/pipeline.md (sim/build.rs PIPELINE_PORTS)",
+        spec: "docs/pipeline.md (sim/src/ports.rs PIPELINE_PORTS)",
     },
     Design {
         name: "particle_weights",
@@ -162,7 +77,7 @@ const DESIGNS: [Design; 6] = [
         per_lane: true,
         verilog: pficp_fpga::rtl::particle_weights_verilog,
         ports: &[PIPELINE_PORTS, PW_EXTRA_PORTS],
-        spec: "fpga/src/rtl/particle_weights.rs (sim/build.rs PIPELINE_PORTS + PW_EXTRA_PORTS)",
+        spec: "fpga/src/rtl/particle_weights.rs (sim/src/ports.rs PIPELINE_PORTS + PW_EXTRA_PORTS)",
     },
     Design {
         name: "weight_stage",
@@ -170,7 +85,7 @@ const DESIGNS: [Design; 6] = [
         per_lane: false,
         verilog: |_| pficp_fpga::rtl::weight_stage_verilog(),
         ports: &[WEIGHT_STAGE_PORTS],
-        spec: "docs/weights.md (sim/build.rs WEIGHT_STAGE_PORTS)",
+        spec: "docs/weights.md (sim/src/ports.rs WEIGHT_STAGE_PORTS)",
     },
     Design {
         name: "board",
@@ -178,7 +93,7 @@ const DESIGNS: [Design; 6] = [
         per_lane: false,
         verilog: |_| pficp_fpga::rtl::board_verilog(&pficp_fpga::board::BoardConfig::default()),
         ports: &[BOARD_PORTS],
-        spec: "fpga/src/rtl/board/top.rs (sim/build.rs BOARD_PORTS)",
+        spec: "fpga/src/rtl/board/top.rs (sim/src/ports.rs BOARD_PORTS)",
     },
     Design {
         name: "sequencer",
@@ -186,7 +101,7 @@ const DESIGNS: [Design; 6] = [
         per_lane: false,
         verilog: |_| pficp_fpga::rtl::sequencer_verilog(),
         ports: &[SEQUENCER_PORTS],
-        spec: "fpga/src/rtl/board/sequencer.rs (sim/build.rs SEQUENCER_PORTS)",
+        spec: "fpga/src/rtl/board/sequencer/ (sim/src/ports.rs SEQUENCER_PORTS)",
     },
     Design {
         name: "board_fast",
@@ -194,7 +109,7 @@ const DESIGNS: [Design; 6] = [
         per_lane: false,
         verilog: |_| pficp_fpga::rtl::board_verilog(&pficp_fpga::board::BoardConfig::FAST_SIM),
         ports: &[BOARD_PORTS],
-        spec: "fpga/src/rtl/board/top.rs (sim/build.rs BOARD_PORTS)",
+        spec: "fpga/src/rtl/board/top.rs (sim/src/ports.rs BOARD_PORTS)",
     },
 ];
 
@@ -643,6 +558,7 @@ fn build_all(jobs: &[Job], threads: usize, out: &Path, compiler: &cc::Tool) -> V
 fn main() {
     println!("cargo:rerun-if-changed=build.rs");
     println!("cargo:rerun-if-changed=cpp/shim.h");
+    println!("cargo:rerun-if-changed=src/ports.rs");
     let t_all = Instant::now();
     let out = PathBuf::from(std::env::var("OUT_DIR").unwrap());
     let version = verilator_version();

@@ -1,7 +1,7 @@
 //! Output formatting shared by the `pficp` subcommands.
 
 use crate::geometry::{Pose, PoseRecord};
-use crate::icp::Registration;
+use crate::registration::icp::Registration;
 use serde::Serialize;
 
 /// The JSON object `pficp register --json` prints.
@@ -48,12 +48,12 @@ pub struct AlternativeRecord {
     pub excess_sigmas: f64,
 }
 
-/// PF-ICP's alternatives, uncertainty and fit (docs in `crate::conclusion`).
+/// PF-ICP's alternatives, uncertainty and fit (docs in `crate::pf_icp::conclusion`).
 #[derive(Clone, Debug, Serialize)]
 pub struct Assessment {
     /// Other poses that fit as well within the noise (empty: the pose is unambiguous).
     pub alternatives: Vec<AlternativeRecord>,
-    /// Names and order of the covariance's parameters ([`crate::surface::LOCAL_NAMES`]).
+    /// Names and order of the covariance's parameters ([`crate::pf_icp::surface::LOCAL_NAMES`]).
     pub covariance_order: [&'static str; 7],
     /// Covariance (model units, scale, rad); `null` for undetermined parameters.
     pub covariance: [[Option<f64>; 7]; 7],
@@ -75,14 +75,14 @@ pub struct Assessment {
 
 impl Assessment {
     /// From PF-ICP's conclusion.
-    pub fn new(c: &crate::conclusion::Conclusion) -> Self {
+    pub fn new(c: &crate::pf_icp::conclusion::Conclusion) -> Self {
         Assessment {
             alternatives: c
                 .alternatives
                 .iter()
                 .map(|a| AlternativeRecord { pose: a.pose.record(), cost: a.cost, excess_sigmas: a.excess_sigmas })
                 .collect(),
-            covariance_order: crate::surface::LOCAL_NAMES,
+            covariance_order: crate::pf_icp::surface::LOCAL_NAMES,
             covariance: c.uncertainty.covariance,
             sigma: c.uncertainty.sigma,
             undetermined: c.uncertainty.undetermined.clone(),
@@ -97,7 +97,7 @@ impl Assessment {
     pub fn text(&self) -> String {
         let mut s = String::new();
         let show = |k: usize| {
-            let name = crate::surface::LOCAL_NAMES[k];
+            let name = crate::pf_icp::surface::LOCAL_NAMES[k];
             match self.sigma[k] {
                 Some(v) if k >= 4 => format!("{name} {:.3} deg", v.to_degrees()),
                 Some(v) => format!("{name} {v:.3e}"),
@@ -149,7 +149,7 @@ impl RegisterReport {
     }
 
     /// With PF-ICP's alternatives, uncertainty and fit.
-    pub fn assessed(mut self, c: &crate::conclusion::Conclusion) -> Self {
+    pub fn assessed(mut self, c: &crate::pf_icp::conclusion::Conclusion) -> Self {
         self.assessment = Some(Assessment::new(c));
         self
     }

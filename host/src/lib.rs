@@ -1,37 +1,34 @@
-//! PF-ICP host library: point-cloud registration in f64.
+//! PF-ICP host library: point-cloud registration in f64, and the host side of the board.
 //!
-//! Entry points, one line each:
-//! - [`pf_icp::register`]: the paper's PF-ICP (k-means start, covariance, particle filter).
-//! - [`icp::icp`]: ICP (Algorithm 1), with optional Welsch or Cauchy robust weights.
-//! - [`sparse_icp::sparse_icp`] and [`em_icp::em_icp`]: the other baselines.
-//! - [`datasets`]: the built-in models 1 to 3 and their scans.
-//! - [`io`]: PLY, XYZ and CSV files.
+//! The tree follows the data path:
+//! - [`io`] reads and writes PLY, XYZ and CSV clouds into a [`cloud::Cloud`]; [`geometry`]
+//!   holds poses and transforms, [`nn`] the nearest-neighbour search every method uses.
+//! - [`request::Request`]: one registration (method, engine, settings), checked and run;
+//!   what the CLI's `register` calls.
+//! - [`pf_icp`]: PF-ICP ([`pf_icp::register`]): k-means start and global search, ICP
+//!   covariance, particle filter, polish and conclusion, one module each.
+//! - [`registration`]: ICP (Algorithm 1, [`registration::icp::icp`]) and the other
+//!   baselines, and [`registration::methods::run`], which runs any of them or PF-ICP.
+//! - [`board`]: the board client over the serial line, the on-board and host-driven
+//!   modes, the fixed-point bridge to the board's formats.
+//! - [`datasets`], [`parts`], [`real_shapes`]: the built-in models 1 to 3 and their scans,
+//!   the synthetic parts and the real shapes of the realistic benchmark.
+//! - [`eval`]: the paper's experiments and the realistic benchmark; [`cli`]: the CLI's
+//!   reports.
 #![warn(missing_docs)]
 
 pub mod board;
 pub mod cli;
 pub mod cloud;
-pub mod conclusion;
-pub mod covariance;
 pub mod datasets;
-pub mod em_icp;
 pub mod eval;
-pub mod features;
 pub mod geometry;
-pub mod hessian;
-pub mod hypotheses;
-pub mod icp;
-pub mod init;
 pub mod io;
-pub mod kmeans;
-pub mod methods;
 pub mod nn;
-pub mod particle_filter;
 pub mod parts;
 pub mod pf_icp;
 pub mod real_shapes;
-pub mod sparse_icp;
-pub mod surface;
-pub mod svd_match;
+pub mod registration;
+pub mod request;
 #[cfg(test)]
 mod test_support;

@@ -10,11 +10,12 @@ use pficp::board::BoardClient;
 use pficp::cli::{pose_table, RegisterReport};
 use pficp::cloud::Cloud;
 use pficp::datasets::{self, ModelId, Sampling, ScanSpec};
-use pficp::init::InitMode;
 use pficp::io::{format_from_path, read_cloud, write_cloud};
-use pficp::methods::{self, Method, MethodSettings};
 use pficp::nn::NearestNeighbours;
+use pficp::pf_icp::init::InitMode;
 use pficp::pf_icp::PfIcpSettings;
+use pficp::registration::methods::{self, Method, MethodSettings};
+use pficp::request::{BoardProgress, BoardRun, Engine, Registered, Request};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -57,7 +58,7 @@ struct LinkArgs {
     #[arg(long, default_value_t = pficp::board::DEFAULT_BAUD)]
     baud: u32,
     /// Time allowed per reply in milliseconds (plus the board's modelled transfer and compute time).
-    #[arg(long, default_value_t = 2000)]
+    #[arg(long, default_value_t = pficp::board::DEFAULT_TIMEOUT.as_millis() as u64)]
     timeout_ms: u64,
 }
 
@@ -113,23 +114,33 @@ enum InitArg {
     Nearest,
 }
 
+impl From<InitMode> for InitArg {
+    fn from(m: InitMode) -> InitArg {
+        match m {
+            InitMode::Auto => InitArg::Auto,
+            InitMode::Index => InitArg::Index,
+            InitMode::Nearest => InitArg::Nearest,
+        }
+    }
+}
+
 #[derive(clap::Args)]
 struct PfArgs {
     /// Clusters K per cloud (PF-ICP).
-    #[arg(long, default_value_t = 100)]
+    #[arg(long, default_value_t = PfIcpSettings::default().clusters)]
     clusters: usize,
     /// Particles (PF-ICP).
-    #[arg(long, default_value_t = 50)]
+    #[arg(long, default_value_t = PfIcpSettings::default().particles)]
     particles: usize,
     /// Iteration cap (the filter's for PF-ICP, the method's own otherwise).
-    #[arg(long, default_value_t = 50)]
+    #[arg(long, default_value_t = PfIcpSettings::default().iterations)]
     iterations: usize,
     /// Seed of every random choice.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = PfIcpSettings::default().seed)]
     seed: u64,
     /// Cluster pairing for PF-ICP's start: index (scan = model's points in order),
     /// nearest (independent scan) or auto (try both).
-    #[arg(long, value_enum, default_value_t = InitArg::Auto)]
+    #[arg(long, value_enum, default_value_t = InitArg::from(PfIcpSettings::default().init))]
     init: InitArg,
 }
 
@@ -362,10 +373,6 @@ fn main() {
     }
 }
 
-/// The scan's bounding-box diagonal may be this many times the model's at least (and its
-/// inverse at most).
-const MIN_EXTENT_RATIO: f64 = 1e-6;
-
 fn load(path: &Path, name: &str) -> Result<Cloud> {
     Ok(read_cloud(path, name)?)
 }
@@ -375,32 +382,8 @@ fn register(a: &RegisterArgs) -> Result<()> {
     let method: Method = a.method.into();
     let model = load(&a.model, "model")?;
     let scan = load(&a.scan, "scan")?;
-    if method == Method::PfIcp {
-        for (name, c) in [("model", &model), ("scan", &scan)] {
-            if c.len() < settings.clusters {
-                bail!(
-                    "{name} has {} points, fewer than the {} clusters asked for (--clusters)",
-                    c.len(),
-                    settings.clusters
-                );
-            }
-        }
-    }
-    if scan.len() < 3 || model.len() < 3 {
-        bail!("registration needs at least 3 points in each cloud (model {}, scan {})", model.len(), scan.len());
-    }
-    let extent_ratio = scan.diagonal() / model.diagonal();
-    if !(MIN_EXTENT_RATIO..=1.0 / MIN_EXTENT_RATIO).contains(&extent_ratio) {
-        bail!(
-            "the scan's extent is {extent_ratio:e} times the model's: beyond {MIN_EXTENT_RATIO:e} to {:e} (different units?)",
-            1.0 / MIN_EXTENT_RATIO
-        );
-    }
     if let Some(out) = &a.out_aligned {
         format_from_path(out)?;
-    }
-    if a.board.is_some() && method != Method::PfIcp {
-        bail!("--board runs PF-ICP only (got --method {})", method.name());
     }
     if a.board.is_none() && (a.host_driven || a.board_points.is_some()) {
         bail!("--host-driven and --board-points need --board PORT");
@@ -408,10 +391,16 @@ fn register(a: &RegisterArgs) -> Result<()> {
     if a.host_driven && a.board_points.is_some() {
         bail!("--board-points sets the on-board filter's scan sample; --host-driven weighs the host's sample");
     }
-    let board_points = a.board_points.unwrap_or(pficp::board::on_board::DEFAULT_BOARD_POINTS);
-    if board_points == 0 {
-        bail!("--board-points must be at least 1");
-    }
+    let engine = match (&a.board, a.host_driven) {
+        (None, _) => Engine::Software,
+        (Some(_), true) => Engine::HostDriven,
+        (Some(_), false) => Engine::OnBoard {
+            board_points: a.board_points.unwrap_or(pficp::board::on_board::DEFAULT_BOARD_POINTS),
+            poll: pficp::board::DEFAULT_POLL,
+        },
+    };
+    let request = Request { method, engine, settings };
+    request.check(&model, &scan)?;
     // Open the port before the work starts: a missing or silent board fails at once.
     let mut client = match &a.board {
         Some(port) => {
@@ -423,62 +412,33 @@ fn register(a: &RegisterArgs) -> Result<()> {
         None => None,
     };
     eprintln!("registering {} scan points to {} model points with {}", scan.len(), model.len(), method.name());
-    let nn = NearestNeighbours::new(model.points());
-    let (outcome, engine) = match client.as_mut() {
-        None => (methods::run(method, &nn, scan.points(), &MethodSettings { pf: settings }), None),
-        Some(c) if !a.host_driven => {
-            let start = Instant::now();
-            let r = pficp::board::on_board::register_on_board(
-                c,
-                &nn,
-                scan.points(),
-                &settings,
-                board_points,
-                pficp::board::DEFAULT_POLL,
-                &mut on_board_progress(),
-            )?;
-            let b = &r.board;
-            eprintln!(
-                "board: {} model points{}, {} scan points, {} iterations on the board (best cost {:.3e}), \
-                 {} Status polls, modelled board time {:.3} s, {} requests, {} resends",
-                b.model_points,
-                if b.model_subsampled { " (subsampled)" } else { "" },
-                b.scan_points,
-                b.result.iterations,
-                b.cost_msd,
-                b.polls,
-                b.modelled.as_secs_f64(),
-                b.stats.requests,
-                b.stats.resends + b.stats.restarts
-            );
-            let outcome = methods::Outcome {
-                registration: r.pf.registration.clone(),
-                elapsed: start.elapsed(),
-                pf: Some(Box::new(r.pf)),
-            };
-            (outcome, a.board.as_deref().map(|p| (p, false)))
-        }
-        Some(c) => {
-            let start = Instant::now();
-            let r = pficp::board::host_driven::register(c, &nn, scan.points(), &settings, &mut upload_progress())?;
-            let b = &r.board;
-            eprintln!(
-                "board: {} model points{}, {} scan points, {} iterations weighed, {} requests, {} resends",
-                b.model_points,
-                if b.model_subsampled { " (subsampled)" } else { "" },
-                b.scan_points,
-                b.iterations,
-                b.stats.requests,
-                b.stats.resends + b.stats.restarts
-            );
-            let outcome = methods::Outcome {
-                registration: r.pf.registration.clone(),
-                elapsed: start.elapsed(),
-                pf: Some(Box::new(r.pf)),
-            };
-            (outcome, a.board.as_deref().map(|p| (p, true)))
-        }
-    };
+    let progress = BoardProgress { upload: &mut upload_progress(), on_board: &mut on_board_progress() };
+    let Registered { outcome, board } = request.run(&model, &scan, client.as_mut(), progress)?;
+    match &board {
+        Some(BoardRun::OnBoard(b)) => eprintln!(
+            "board: {} model points{}, {} scan points, {} iterations on the board (best cost {:.3e}), \
+             {} Status polls, modelled board time {:.3} s, {} requests, {} resends",
+            b.model_points,
+            if b.model_subsampled { " (subsampled)" } else { "" },
+            b.scan_points,
+            b.result.iterations,
+            b.cost_msd,
+            b.polls,
+            b.modelled.as_secs_f64(),
+            b.stats.requests,
+            b.stats.resends + b.stats.restarts
+        ),
+        Some(BoardRun::HostDriven(b)) => eprintln!(
+            "board: {} model points{}, {} scan points, {} iterations weighed, {} requests, {} resends",
+            b.model_points,
+            if b.model_subsampled { " (subsampled)" } else { "" },
+            b.scan_points,
+            b.iterations,
+            b.stats.requests,
+            b.stats.resends + b.stats.restarts
+        ),
+        None => {}
+    }
     if let Some(pf) = &outcome.pf {
         let t = &pf.times;
         eprintln!(
@@ -493,9 +453,9 @@ fn register(a: &RegisterArgs) -> Result<()> {
     if let Some(pf) = &outcome.pf {
         report = report.assessed(&pf.conclusion);
     }
-    if let Some((port, host_driven)) = engine {
+    if let (Some(port), Some(run)) = (&a.board, &board) {
         report = report.on_board(port);
-        if host_driven {
+        if matches!(run, BoardRun::HostDriven(_)) {
             report = report.host_driven();
         }
     }

@@ -1,5 +1,5 @@
 //! Boards that misbehave, served on a real pseudo-terminal: each ends in a clear, typed
-//! error within the time the client documents (host/src/board.rs, "Every read is
+//! error within the time the client documents (host/src/board/client.rs, "Every read is
 //! bounded"), never a hang, a panic or a result built on bad numbers.
 
 mod support;

@@ -14,9 +14,9 @@
 use pficp::board::on_board;
 use pficp::cloud::bbox_diagonal;
 use pficp::datasets::{make, ModelId, Sampling, ScanSpec};
-use pficp::methods::{PoseError, Tolerance};
 use pficp::nn::NearestNeighbours;
 use pficp::pf_icp::{self, PfIcpSettings};
+use pficp::registration::methods::{PoseError, Tolerance};
 use pficp_fpga::board::BoardConfig;
 use pficp_fpga::messages::ResultReply;
 use pficp_fpga::pf;

@@ -28,6 +28,7 @@
 mod core;
 pub mod fuzz;
 mod lockstep;
+pub mod ports;
 pub mod serial;
 mod wrappers;
 

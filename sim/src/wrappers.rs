@@ -3,6 +3,7 @@
 
 use crate::core::*;
 use crate::lockstep::Rtl;
+use crate::ports;
 use pficp_fpga::board::BoardConfig;
 use pficp_fpga::particle_weights::ParticleWeightModel;
 use pficp_fpga::particle_weights::{PwInputs, PwOutputs};
@@ -184,24 +185,7 @@ pub struct VerilatedSequencer {
 verilated_common!(VerilatedSequencer, SeqInputs);
 
 /// Output words of the sequencer, one name per `u64` (wide ports repeat).
-pub(crate) const SEQUENCER_OUTPUT_WORDS: [&str; 16] = [
-    "start",
-    "pose",
-    "pose",
-    "pose",
-    "pose",
-    "running",
-    "finished",
-    "iterations",
-    "best_cost",
-    "best_max",
-    "params",
-    "params",
-    "params",
-    "p_we",
-    "p_waddr",
-    "p_wdata",
-];
+pub(crate) const SEQUENCER_OUTPUT_WORDS: [&str; 16] = ports::output_words(ports::SEQUENCER_PORTS);
 
 impl VerilatedSequencer {
     /// The sequencer after power-up (idle, no result).
@@ -301,31 +285,14 @@ impl Default for VerilatedWeightStage {
 }
 
 /// Output port names of the pipeline in the order [`Lockstep`](crate::Lockstep) compares them.
-pub const OUTPUT_PORTS: [&str; 7] = ["scan_ready", "busy", "nn_valid", "nn_index", "nn_dist", "cost_valid", "cost"];
+pub const OUTPUT_PORTS: [&str; 7] = ports::outputs(&[ports::PIPELINE_PORTS]);
 
 /// Output port names of the particle-weight pipeline in the order [`PwLockstep`](crate::PwLockstep) compares
 /// them (the pipeline's, then the weight stage's).
-pub const PW_OUTPUT_PORTS: [&str; 15] = [
-    "scan_ready",
-    "busy",
-    "nn_valid",
-    "nn_index",
-    "nn_dist",
-    "cost_valid",
-    "cost",
-    "w_busy",
-    "w_count",
-    "min_cost",
-    "w_valid",
-    "w_index",
-    "weight",
-    "w_done",
-    "w_sum",
-];
+pub const PW_OUTPUT_PORTS: [&str; 15] = ports::outputs(&[ports::PIPELINE_PORTS, ports::PW_EXTRA_PORTS]);
 
 /// Output port names of the weight stage in the order [`WeightLockstep`](crate::WeightLockstep) compares them.
-pub const WEIGHT_OUTPUT_PORTS: [&str; 8] =
-    ["busy", "count", "min_cost", "w_valid", "w_index", "weight", "w_done", "w_sum"];
+pub const WEIGHT_OUTPUT_PORTS: [&str; 8] = ports::outputs(&[ports::WEIGHT_STAGE_PORTS]);
 
 pub(crate) fn port_values(o: &Outputs) -> [u64; 7] {
     [o.scan_ready as u64, o.busy as u64, o.nn_valid as u64, o.nn_index as u64, o.nn_dist, o.cost_valid as u64, o.cost]

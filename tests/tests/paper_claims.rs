@@ -8,9 +8,9 @@
 
 use pficp::cloud::bbox_diagonal;
 use pficp::datasets::{make, random_truth, ModelId, Sampling, ScanSpec};
-use pficp::methods::{run, Method, MethodSettings, PoseError, Tolerance};
 use pficp::nn::NearestNeighbours;
 use pficp::pf_icp::PfIcpSettings;
+use pficp::registration::methods::{run, Method, MethodSettings, PoseError, Tolerance};
 use rand::SeedableRng;
 
 fn paper_case(id: ModelId, clusters: usize) {

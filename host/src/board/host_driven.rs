@@ -14,7 +14,7 @@
 //!    board returns each cost (a sum of squared distances in Q8.26 units, normalised frame).
 //! 3. The host turns the costs into the software filter's units (MSD of the sample in the
 //!    clouds' units: `cost * r_model^2 / (n * 2^26)`), takes the tempered
-//!    `Q_k = max(Q, median excess / 6)` from them ([`crate::particle_filter::tempered_q`])
+//!    `Q_k = max(Q, median excess / 6)` from them ([`crate::pf_icp::particle_filter::tempered_q`])
 //!    and weighs the stored costs on the board with
 //!    [`WeightScale::for_two_q`]`(2 Q_k` in cost LSBs`)`.
 //! 4. The board's weights, normalised to sum 1, drive the estimate and the resampling.
@@ -26,7 +26,7 @@ use super::fixed::{normalised_pose, quantise_pose, Normalisation};
 use super::{board_model, BoardClient, BoardError, ClientStats, Upload, MAX_PARTICLES, MAX_POINTS};
 use crate::geometry::Pose;
 use crate::nn::NearestNeighbours;
-use crate::particle_filter::{tempered_q, WeighError, Weighed};
+use crate::pf_icp::particle_filter::{tempered_q, WeighError, Weighed};
 use crate::pf_icp::{register_with, ParticleWeights, PfIcpResult, PfIcpSettings};
 use nalgebra::Point3;
 use pficp_fpga::format::{FxPoint, FxPose, WeightScale, DIST_FRAC};

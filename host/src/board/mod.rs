@@ -8,12 +8,15 @@
 //! - [`host_driven`]: PF-ICP on the host with each iteration's weights from the board
 //!   (`--host-driven`, protocol version 1 boards).
 //! - [`fixed`]: normalisation and quantisation of clouds and poses (docs/fixed-point.md).
+//! - [`pty`]: a board served on a pseudo-terminal (the tests', the board bench's and
+//!   `pficp-sim-board`'s one server).
 
 pub mod client;
 pub mod error;
 pub mod fixed;
 pub mod host_driven;
 pub mod on_board;
+pub mod pty;
 
 pub use client::*;
 pub use error::BoardError;

@@ -9,9 +9,9 @@
 use super::fixed::{original_pose, Normalisation};
 use super::{board_model, BoardClient, BoardError, ClientStats, Upload, MAX_PARTICLES, MAX_POINTS};
 use crate::geometry::Pose;
-use crate::icp::Registration;
 use crate::nn::NearestNeighbours;
 use crate::pf_icp::{prior, weight_sample, PfIcpResult, PfIcpSettings, Prior, StageTimes};
+use crate::registration::icp::Registration;
 use nalgebra::Point3;
 use pficp_fpga::format::{FxPoint, DIST_FRAC};
 use pficp_fpga::messages::{Identity, ResultReply, RunState, MAX_D2_MASK, NO_COST};
@@ -223,8 +223,8 @@ pub fn finish(
 ) -> PfIcpResult {
     let filter_pose = params_pose(&result.params, &plan.model_norm, &plan.scan_norm);
     let t = Instant::now();
-    let surface = crate::surface::Surface::new(nn);
-    let conclusion = crate::conclusion::conclude(
+    let surface = crate::pf_icp::surface::Surface::new(nn);
+    let conclusion = crate::pf_icp::conclusion::conclude(
         &surface,
         scan,
         &filter_pose,
@@ -234,7 +234,7 @@ pub fn finish(
     );
     let polished = Registration {
         pose: conclusion.pose,
-        msd: crate::icp::msd(nn, scan, &conclusion.pose),
+        msd: crate::registration::icp::msd(nn, scan, &conclusion.pose),
         iterations: result.iterations as usize,
         errors: Vec::new(),
     };

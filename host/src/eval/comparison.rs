@@ -8,7 +8,7 @@
 //!   80 particles, 100 iterations) against EM-ICP (100 iterations).
 //!
 //! The baselines start from the identity and share PF-ICP's iteration cap
-//! ([`crate::methods::run`]). Each estimate is also checked against
+//! ([`crate::registration::methods::run`]). Each estimate is also checked against
 //! [`Tolerance::PAPER`] and [`Tolerance::SUCCESS`].
 
 use super::text_table::{num, TextTable};
@@ -16,9 +16,9 @@ use super::{paper_order, EvalOptions, ROW_DECIMALS, ROW_LABELS};
 use crate::cloud::bbox_diagonal;
 use crate::datasets::{make, ModelId, Sampling, ScanSpec};
 use crate::geometry::PoseRecord;
-use crate::methods::{run as run_method, Method, MethodSettings, PoseError, Tolerance};
 use crate::nn::NearestNeighbours;
 use crate::pf_icp::PfIcpSettings;
+use crate::registration::methods::{run as run_method, Method, MethodSettings, PoseError, Tolerance};
 use serde::Serialize;
 
 /// One method's column.

@@ -1,6 +1,6 @@
-//! Tables 2 and 3: the start of PF-ICP (k-means, [`crate::init::initial_pose`]) and
+//! Tables 2 and 3: the start of PF-ICP (k-means, [`crate::pf_icp::init::initial_pose`]) and
 //! Algorithm 5's spread of ICP over one-point-per-cluster subsets, for `K = 10` and
-//! `K = 100`, against Censi's Hessian covariance ([`crate::hessian`]).
+//! `K = 100`, against Censi's Hessian covariance ([`crate::pf_icp::hessian`]).
 //!
 //! The Hessian column is evaluated at the result of the plain ICP baseline
 //! ([`Method::Icp`]: identity start, 50 iterations; the "ICP parameter" the paper's tables
@@ -17,14 +17,14 @@
 
 use super::text_table::{num, TextTable};
 use super::{paper_order, EvalOptions, ROW_DECIMALS, ROW_LABELS};
-use crate::covariance::approximate_icp_variance;
 use crate::datasets::{make, ModelId, Sampling, ScanSpec};
-use crate::hessian::{hessian_covariance, std_devs};
-use crate::icp::IcpSettings;
-use crate::init::{initial_pose, InitMode};
-use crate::methods::{run as run_method, Method, MethodSettings};
 use crate::nn::NearestNeighbours;
+use crate::pf_icp::covariance::approximate_icp_variance;
+use crate::pf_icp::hessian::{hessian_covariance, std_devs};
+use crate::pf_icp::init::{initial_pose, InitMode};
 use crate::pf_icp::PfIcpSettings;
+use crate::registration::icp::IcpSettings;
+use crate::registration::methods::{run as run_method, Method, MethodSettings};
 use nalgebra::Point3;
 use serde::Serialize;
 

@@ -19,7 +19,7 @@ pub mod success;
 mod text_table;
 
 use crate::geometry::{param, Params};
-use crate::methods::Method;
+use crate::registration::methods::Method;
 use anyhow::Context;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -202,7 +202,7 @@ pub(crate) fn median(values: &[f64]) -> f64 {
 mod tests {
     use super::*;
     use crate::geometry::Pose;
-    use crate::methods::Tolerance;
+    use crate::registration::methods::Tolerance;
 
     #[test]
     fn tiny_run_reproduces_the_papers_point() {

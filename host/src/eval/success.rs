@@ -6,7 +6,7 @@
 //! translation within half the diagonal) from a generator seeded by the seed and the
 //! model, so both noise levels see the same transforms. Each trial scans the model
 //! independently ([`Sampling::Independent`]) with its own seed and runs every method
-//! ([`crate::methods::run`], PF-ICP seeded by the trial). Success is
+//! ([`crate::registration::methods::run`], PF-ICP seeded by the trial). Success is
 //! [`Tolerance::SUCCESS`]. Trials run one after another (the methods use rayon inside),
 //! so the counts are a function of the seed.
 
@@ -14,9 +14,9 @@ use super::text_table::TextTable;
 use super::{median, mix, paper_order, EvalOptions};
 use crate::cloud::bbox_diagonal;
 use crate::datasets::{make, random_truth, ModelId, Sampling, ScanSpec};
-use crate::methods::{run as run_method, MethodSettings, PoseError, Tolerance};
 use crate::nn::NearestNeighbours;
 use crate::pf_icp::PfIcpSettings;
+use crate::registration::methods::{run as run_method, MethodSettings, PoseError, Tolerance};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;

@@ -1,98 +1,61 @@
-//! A board served on a pseudo-terminal: a thread reads the bytes the client writes to one
-//! end and answers through a handler (by default the byte-level reference,
-//! `pficp_fpga::board::BoardModel`). The client gets the other end, a real tty with a path.
+//! A board served on a pseudo-terminal (the library's server, `pficp::board::pty`): a thread
+//! reads the bytes the client writes to one end and answers through a handler (by default
+//! the byte-level reference, `pficp_fpga::board::BoardModel`). The client gets the other
+//! end, a real tty with a path. Also the clouds and the uploaded client the tests share.
 
 #![allow(dead_code)]
 
+use pficp::board::pty::{read_some, PtyBoard as Server};
 use pficp_fpga::board::{BoardConfig, BoardModel};
-use serialport::{SerialPort, TTYPort};
-use std::io::{ErrorKind, Read, Write};
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
-use std::thread::JoinHandle;
+use serialport::TTYPort;
+use std::io::{ErrorKind, Write};
 use std::time::Duration;
 
-/// What the board does with the bytes it read: the bytes it answers, or `None` to close
-/// its end of the line.
-pub type Handler = Box<dyn FnMut(&[u8]) -> Option<Vec<u8>> + Send>;
+pub use pficp::board::pty::Handler;
 
-/// The board thread and the client's end of the line.
+/// The library's pseudo-terminal server (`pficp::board::pty`), with the tests' defaults:
+/// a failure to make a pseudo-terminal fails the test.
 pub struct PtyBoard {
-    /// The client's end (a tty with a path), until taken.
-    pub client_end: Option<TTYPort>,
+    server: Server,
     /// Its path (`/dev/pts/N`).
     pub path: String,
-    stop: Arc<AtomicBool>,
-    thread: Option<JoinHandle<()>>,
 }
 
 impl PtyBoard {
-    /// A new pseudo-terminal whose board end runs `turn` (with reads timing out after
-    /// `read_timeout`) until it returns false or the board is dropped.
-    fn run(read_timeout: Duration, mut turn: impl FnMut(&mut TTYPort) -> bool + Send + 'static) -> PtyBoard {
-        let (mut board_end, client_end) = TTYPort::pair().expect("a pseudo-terminal");
-        let path = client_end.name().expect("the client end has a path");
-        board_end.set_timeout(read_timeout).unwrap();
-        let stop = Arc::new(AtomicBool::new(false));
-        let flag = stop.clone();
-        // Dropping `board_end` at the end closes the line: the client's reads fail.
-        let thread = std::thread::spawn(move || while !flag.load(Ordering::Relaxed) && turn(&mut board_end) {});
-        PtyBoard { client_end: Some(client_end), path, stop, thread: Some(thread) }
+    fn wrap(server: std::io::Result<Server>) -> PtyBoard {
+        let server = server.expect("a pseudo-terminal");
+        PtyBoard { path: server.path.clone(), server }
     }
 
     /// Serve `handler` on a new pseudo-terminal.
-    pub fn serve(mut handler: Handler) -> PtyBoard {
-        let mut buf = [0u8; 4096];
-        PtyBoard::run(Duration::from_millis(20), move |port| {
-            let n = match port.read(&mut buf) {
-                Ok(0) => return false,
-                Ok(n) => n,
-                Err(e) if e.kind() == ErrorKind::TimedOut || e.kind() == ErrorKind::Interrupted => return true,
-                Err(_) => return false, // the client's end is gone
-            };
-            match handler(&buf[..n]) {
-                Some(out) => out.is_empty() || port.write_all(&out).is_ok(),
-                None => false,
-            }
-        })
+    pub fn serve(handler: Handler) -> PtyBoard {
+        PtyBoard::wrap(Server::serve(handler))
     }
 
     /// A line that sends `next()` every millisecond, whatever it is sent (which it drops):
     /// a babbling device.
     pub fn babbling(mut next: impl FnMut() -> Vec<u8> + Send + 'static) -> PtyBoard {
         let mut buf = [0u8; 4096];
-        PtyBoard::run(Duration::from_millis(1), move |port| {
-            match port.read(&mut buf) {
-                Ok(0) => return false,
-                Ok(_) => {}
-                Err(e) if e.kind() == ErrorKind::TimedOut || e.kind() == ErrorKind::Interrupted => {}
-                Err(_) => return false,
+        PtyBoard::wrap(Server::run(Duration::from_millis(1), move |port: &mut TTYPort| {
+            if read_some(port, &mut buf).is_none() {
+                return false;
             }
             match port.write_all(&next()) {
                 Ok(()) => true,
                 // The client does not read and the line is full: babble on.
                 Err(e) => e.kind() == ErrorKind::TimedOut || e.kind() == ErrorKind::Interrupted,
             }
-        })
+        }))
     }
 
     /// The reference board.
     pub fn reference() -> PtyBoard {
-        PtyBoard::serve(reference_handler())
+        PtyBoard::wrap(Server::reference(BoardConfig::default()))
     }
 
     /// A client on this line (takes the client's end).
     pub fn client(&mut self) -> pficp::board::BoardClient {
-        pficp::board::BoardClient::from_port(Box::new(self.client_end.take().expect("one client per board")))
-    }
-}
-
-impl Drop for PtyBoard {
-    fn drop(&mut self) {
-        self.stop.store(true, Ordering::Relaxed);
-        if let Some(t) = self.thread.take() {
-            let _ = t.join();
-        }
+        self.server.client().expect("one client per board")
     }
 }
 

@@ -18,18 +18,15 @@
 use anyhow::{Context, Result};
 use clap::Parser;
 use pficp::board::host_driven;
+use pficp::board::pty::PtyBoard;
 use pficp::board::BoardClient;
 use pficp::cloud::bbox_diagonal;
 use pficp::datasets::{make, ModelId, Sampling, ScanSpec};
-use pficp::methods::PoseError;
 use pficp::nn::NearestNeighbours;
 use pficp::pf_icp::{self, PfIcpSettings};
-use pficp_fpga::board::{BoardConfig, BoardModel};
+use pficp::registration::methods::PoseError;
+use pficp_fpga::board::BoardConfig;
 use pficp_fpga::pipeline::clocks_per_particle;
-use serialport::{SerialPort, TTYPort};
-use std::io::{ErrorKind, Read, Write};
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// The command engine's clocks per evaluated pose besides the pipeline's.
@@ -49,33 +46,6 @@ struct Args {
     /// Software-mode runs (the median is reported).
     #[arg(long, default_value_t = 3)]
     runs: usize,
-}
-
-/// The reference board on a pseudo-terminal, in a thread.
-fn serve_reference(config: BoardConfig) -> Result<(String, Arc<AtomicBool>, std::thread::JoinHandle<()>)> {
-    let (mut board_end, client_end) = TTYPort::pair().context("a pseudo-terminal")?;
-    let path = client_end.name().context("pty name")?;
-    board_end.set_timeout(Duration::from_millis(20))?;
-    let stop = Arc::new(AtomicBool::new(false));
-    let flag = stop.clone();
-    let thread = std::thread::spawn(move || {
-        let _keep = client_end;
-        let mut board = BoardModel::new(config);
-        let mut buf = [0u8; 4096];
-        while !flag.load(Ordering::Relaxed) {
-            match board_end.read(&mut buf) {
-                Ok(n) => {
-                    let out = board.receive_all(&buf[..n]);
-                    if !out.is_empty() && board_end.write_all(&out).is_err() {
-                        break;
-                    }
-                }
-                Err(e) if matches!(e.kind(), ErrorKind::TimedOut | ErrorKind::Interrupted) => {}
-                Err(_) => break,
-            }
-        }
-    });
-    Ok((path, stop, thread))
 }
 
 fn main() -> Result<()> {
@@ -106,11 +76,11 @@ fn main() -> Result<()> {
     let soft = soft.unwrap();
     let soft_median = soft_times[soft_times.len() / 2];
 
-    let (path, stop, thread) = serve_reference(config)?;
+    let mut board = PtyBoard::reference(config).context("a pseudo-terminal")?;
+    let path = board.path.clone();
     let mut client = BoardClient::open(&path, config.baud, Duration::from_secs(10))?;
     let r = host_driven::register(&mut client, &nn, &ds.scan, &settings, &mut |_, _, _| {})?;
-    stop.store(true, Ordering::Relaxed);
-    thread.join().ok();
+    board.stop();
 
     let poses = (r.board.iterations * args.particles) as u64;
     let bytes = (r.board.stats.bytes_sent + r.board.stats.bytes_received) as u64;

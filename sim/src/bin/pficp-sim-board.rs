@@ -11,12 +11,13 @@
 
 use anyhow::{Context, Result};
 use clap::Parser;
+use pficp::board::pty::PtyLine;
 use pficp_fpga::board::BoardConfig;
 use pficp_sim::serial::{SerialBoard, LED_BUSY};
-use serialport::{SerialPort, TTYPort};
+use serialport::SerialPort;
 use std::io::{ErrorKind, Read, Write};
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -65,11 +66,8 @@ fn serve(args: Args) -> Result<i32> {
     if let Some(v) = &args.vcd {
         board.trace_to(v).with_context(|| format!("opening {}", v.display()))?;
     }
-    let (mut master, slave) = TTYPort::pair().context("creating a pseudo-terminal pair")?;
-    let path = slave.name().context("the pseudo-terminal has no name")?;
-    // Keep the slave open: when the host closes its end the master then does not hang up,
-    // and the next host can open the same path.
-    let _slave = slave;
+    let mut line = PtyLine::new().context("creating a pseudo-terminal pair")?;
+    let path = line.path.clone();
     println!("{path}");
     std::io::stdout().flush().ok();
     if let Some(f) = &args.path_file {
@@ -86,26 +84,40 @@ fn serve(args: Args) -> Result<i32> {
 
     let started = Instant::now();
     let mut buf = [0u8; 4096];
-    while !stop.load(Ordering::Relaxed) {
+    let mut failure: Option<anyhow::Error> = None;
+    line.serve_here(&stop, |master| {
         // Wait for the host only when the board has nothing to do.
         let idle = board.idle();
-        master.set_timeout(if idle { Duration::from_millis(50) } else { Duration::from_millis(0) })?;
+        if let Err(e) = master.set_timeout(if idle { Duration::from_millis(50) } else { Duration::from_millis(0) }) {
+            failure = Some(anyhow::Error::from(e).context("setting the pseudo-terminal's timeout"));
+            return false;
+        }
         match master.read(&mut buf) {
             Ok(n) => board.send(&buf[..n]),
             Err(e) if matches!(e.kind(), ErrorKind::TimedOut | ErrorKind::WouldBlock | ErrorKind::Interrupted) => {}
-            Err(e) => return Err(e).context("reading the pseudo-terminal"),
+            Err(e) => {
+                failure = Some(anyhow::Error::from(e).context("reading the pseudo-terminal"));
+                return false;
+            }
         }
         if idle && board.idle() {
-            continue;
+            return true;
         }
         for _ in 0..args.chunk {
             board.step();
         }
         let out = board.take_received();
         if !out.is_empty() {
-            master.write_all(&out).context("writing the pseudo-terminal")?;
+            if let Err(e) = master.write_all(&out) {
+                failure = Some(anyhow::Error::from(e).context("writing the pseudo-terminal"));
+                return false;
+            }
             master.flush().ok();
         }
+        true
+    });
+    if let Some(e) = failure {
+        return Err(e);
     }
 
     let (sent, received) = board.byte_counts();

@@ -40,9 +40,9 @@ pub use scoring::*;
 use super::text_table::TextTable;
 use super::{median, mix};
 use crate::cloud::centroid;
-use crate::methods::{run as run_method, Method, MethodSettings};
 use crate::nn::NearestNeighbours;
 use crate::pf_icp::PfIcpSettings;
+use crate::registration::methods::{run as run_method, Method, MethodSettings};
 use anyhow::Context;
 use nalgebra::Point3;
 use serde::Serialize;
@@ -117,7 +117,7 @@ pub struct CaseResult {
     /// PF-ICP only: the truth lies inside the reported 95% region.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub inside_95: Option<bool>,
-    /// Capped surface cost of the estimate on the whole scan ([`crate::surface::Surface::cost`],
+    /// Capped surface cost of the estimate on the whole scan ([`crate::pf_icp::surface::Surface::cost`],
     /// cap 5% of the diagonal), to compare with the truth's.
     pub cost: f64,
 }
@@ -252,7 +252,7 @@ pub fn run(opts: &RealisticOptions) -> anyhow::Result<RealisticReport> {
                 exported.push(export_case(dir, &c)?);
             }
             let nn = NearestNeighbours::new(&c.model);
-            let surface = crate::surface::Surface::new(&nn);
+            let surface = crate::pf_icp::surface::Surface::new(&nn);
             let settings = MethodSettings { pf: PfIcpSettings { seed: c.seed, ..opts.pf.clone() } };
             let mut results: Vec<CaseResult> = opts
                 .methods

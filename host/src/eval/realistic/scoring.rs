@@ -85,8 +85,8 @@ pub fn inside_95(d2: f64, dof: usize) -> bool {
 /// Squared Mahalanobis distance of `truth` from the conclusion's pose under its covariance,
 /// over the determined parameters, and their number (`None` if the covariance is not
 /// positive definite).
-pub fn mahalanobis2(c: &crate::conclusion::Conclusion, truth: &Pose, at: &Point3<f64>) -> Option<(f64, usize)> {
-    let e = crate::conclusion::local_error(&c.pose, truth, at);
+pub fn mahalanobis2(c: &crate::pf_icp::conclusion::Conclusion, truth: &Pose, at: &Point3<f64>) -> Option<(f64, usize)> {
+    let e = crate::pf_icp::conclusion::local_error(&c.pose, truth, at);
     let k: Vec<usize> = (0..7).filter(|&i| c.uncertainty.sigma[i].is_some()).collect();
     let n = k.len();
     let m = nalgebra::DMatrix::from_fn(n, n, |a, b| c.uncertainty.covariance[k[a]][k[b]].unwrap_or(0.0));

@@ -1,7 +1,7 @@
 //! The global search behind PF-ICP's start: many start poses, each refined by a short
 //! trimmed ICP with scale, ranked by the capped surface cost, distinct ones kept.
 //!
-//! The k-means start (Algorithm 4, [`crate::init`]) is one pose; on partial views and
+//! The k-means start (Algorithm 4, [`crate::pf_icp::init`]) is one pose; on partial views and
 //! near-symmetric parts it often sits in a wrong basin (a flip, a turn about a
 //! near-symmetry axis) that a filter spread around it never leaves. So the start is the
 //! best of many hypotheses:
@@ -9,7 +9,7 @@
 //!   candidate the k-means stage refined (principal-frame flips and sweeps);
 //! - a uniform set of rotations ([`rotation_grid`], super-Fibonacci samples of SO(3)),
 //!   each with the centroids' translation and the ratio of RMS radii as scale;
-//! - feature-based proposals ([`crate::features`]: FPFH correspondences, RANSAC), which
+//! - feature-based proposals ([`crate::pf_icp::features`]: FPFH correspondences, RANSAC), which
 //!   the caller adds to the starts.
 //!
 //! Three passes of trimmed ICP, each on the best distinct survivors of the one before:
@@ -28,8 +28,8 @@
 use crate::cloud::centroid;
 use crate::geometry::Pose;
 use crate::nn::NearestNeighbours;
-use crate::surface::Surface;
-use crate::svd_match::{match_pairs, ScaleRule};
+use crate::pf_icp::surface::Surface;
+use crate::registration::svd_match::{match_pairs, ScaleRule};
 use nalgebra::{Matrix3, Point3, UnitQuaternion};
 use rayon::prelude::*;
 
@@ -192,7 +192,7 @@ pub fn search(
 ) -> Vec<Hypothesis> {
     let nn = surface.nn();
     let diag = crate::cloud::bbox_diagonal(nn.points());
-    let cap = crate::surface::COST_CAP * diag;
+    let cap = crate::pf_icp::surface::COST_CAP * diag;
     let at = centroid(sample);
     let coarse_pts = &sample[..settings.coarse_points.min(sample.len())];
     let fine_pts = &sample[..settings.fine_points.min(sample.len())];

@@ -116,7 +116,7 @@ impl<'a> Surface<'a> {
                 (least_axis(&nb), gap)
             })
             .unzip();
-        let spacing = crate::icp::median(&gaps);
+        let spacing = crate::registration::icp::median(&gaps);
         Self { nn, normals, spacing }
     }
 
@@ -166,7 +166,7 @@ impl<'a> Surface<'a> {
         let q: Vec<Point3<f64>> = points.iter().map(|p| pose.apply(p)).collect();
         let contacts: Vec<Contact> = q.par_iter().map(|x| self.contact(x)).collect();
         let d: Vec<f64> = contacts.iter().map(|c| c.dist2.sqrt()).collect();
-        let sigma = 1.4826 * crate::icp::median(&d);
+        let sigma = 1.4826 * crate::registration::icp::median(&d);
         let tau = (INLIER_SIGMAS * sigma).max(0.5 * self.spacing);
         let mask = d.iter().map(|&x| x <= tau).collect();
         (q, contacts, mask)

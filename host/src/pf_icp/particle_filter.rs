@@ -79,7 +79,7 @@ pub fn lowest(costs: &[f64]) -> (usize, f64) {
 pub fn tempered_q(costs: &[f64], q: f64) -> f64 {
     let (_, cmin) = lowest(costs);
     let excess: Vec<f64> = costs.iter().map(|c| c - cmin).collect();
-    q.max(crate::icp::median(&excess) / 6.0).max(1e-300)
+    q.max(crate::registration::icp::median(&excess) / 6.0).max(1e-300)
 }
 
 /// The software weights: `w_i = exp(-(c_i - c_min) / (2 Q_k))`, normalised.

@@ -2,38 +2,50 @@
 //! 7 registration parameters, ICP polish; with a global search before the filter and a
 //! conclusion after it (docs/decisions.md, "Global registration").
 //!
-//! Stages (each timed in [`StageTimes`]):
-//! 1. **Clustering and start** ([`crate::init`]): k-means on both clouds, paired centroids,
-//!    SVD (Eq. 15); then the global search ([`crate::hypotheses`], with
-//!    [`crate::features`]' proposals): the filter starts from its best hypothesis.
-//! 2. **Covariance** ([`crate::covariance`], Algorithm 5): spread of ICP on `n_C`
+//! Stages (each timed in [`StageTimes`]), one module each below this one (with
+//! [`kmeans`], the clustering, and [`hessian`], the cost curvature behind the covariance
+//! the result reports):
+//! 1. **Clustering and start** ([`crate::pf_icp::init`]): k-means on both clouds, paired centroids,
+//!    SVD (Eq. 15); then the global search ([`crate::pf_icp::hypotheses`], with
+//!    [`crate::pf_icp::features`]' proposals): the filter starts from its best hypothesis.
+//! 2. **Covariance** ([`crate::pf_icp::covariance`], Algorithm 5): spread of ICP on `n_C`
 //!    one-point-per-cluster subsets; its standard deviations set the propagation region
 //!    (`+-2 sigma`), the variance of the subset MSDs is `Q`.
-//! 3. **Filter** ([`crate::particle_filter`]): particles `[a, b, c, s, phi, theta, psi]`
+//! 3. **Filter** ([`crate::pf_icp::particle_filter`]): particles `[a, b, c, s, phi, theta, psi]`
 //!    in the centred frame ([`Centred`]: rotation about the clouds' centroids), each
 //!    weighed by the capped surface cost ([`Surface::cost`]) of the transformed scan (a
 //!    fixed random subset of at most `weight_points` scan points); after every iteration a
 //!    few trimmed ICP iterations refine the weighted estimate and the best particle
 //!    (`icp_per_iteration`, 0 to turn off); stop on the thresholds, a stalled best cost
 //!    (`patience`) or the cap.
-//! 4. **Polish and conclusion** ([`crate::conclusion`]): point-to-plane ICP with scale
+//! 4. **Polish and conclusion** ([`crate::pf_icp::conclusion`]): point-to-plane ICP with scale
 //!    (`polish_iterations`) on the whole scan from the filter's estimate and the best
 //!    hypotheses, the lowest cost wins; alternatives, covariance, fit.
 //!
 //! [`register_with`] takes the particles' costs and weights from a [`ParticleWeights`]
 //! source instead (the board: `crate::board::host_driven`); everything else is the same.
 
-use crate::conclusion::Conclusion;
-use crate::covariance::{approximate_icp_variance, IcpCovariance};
+pub mod conclusion;
+pub mod covariance;
+pub mod features;
+pub mod hessian;
+pub mod hypotheses;
+pub mod init;
+pub mod kmeans;
+pub mod particle_filter;
+pub mod surface;
+
 use crate::geometry::{Centred, Params, Pose};
-use crate::hypotheses::{self, Hypothesis, SearchSettings};
-use crate::icp::{icp, IcpSettings, Registration};
-use crate::init::{initial_pose, InitMode, InitialPose};
-use crate::kmeans::Pairing;
 use crate::nn::NearestNeighbours;
-use crate::particle_filter::{self, Adaptive, FilterSettings, Objective, WeighError, Weighed};
-use crate::surface::Surface;
+use crate::pf_icp::conclusion::Conclusion;
+use crate::pf_icp::covariance::{approximate_icp_variance, IcpCovariance};
+use crate::pf_icp::init::{initial_pose, InitMode, InitialPose};
+use crate::pf_icp::kmeans::Pairing;
+use crate::pf_icp::surface::Surface;
+use crate::registration::icp::{icp, IcpSettings, Registration};
+use hypotheses::{Hypothesis, SearchSettings};
 use nalgebra::Point3;
+use particle_filter::{Adaptive, FilterSettings, Objective, WeighError, Weighed};
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -79,7 +91,7 @@ pub struct PfIcpSettings {
     /// Stop the filter when its best cost stalls this many iterations
     /// ([`FilterSettings::patience`]; `None`: thresholds and cap only).
     pub patience: Option<usize>,
-    /// The global search for the start ([`crate::hypotheses`]); `None`: the k-means start
+    /// The global search for the start ([`crate::pf_icp::hypotheses`]); `None`: the k-means start
     /// alone, as in the paper.
     pub search: Option<SearchSettings>,
 }
@@ -137,7 +149,7 @@ pub struct PfIcpResult {
     /// Stage timings.
     pub times: StageTimes,
     /// The filter's per-iteration records.
-    pub filter_history: Vec<crate::particle_filter::IterationRecord>,
+    pub filter_history: Vec<crate::pf_icp::particle_filter::IterationRecord>,
 }
 
 /// The filter's scale stays within these factors of its start's.
@@ -219,7 +231,7 @@ impl Objective for PoseObjective<'_> {
     fn cost(&self, x: &[f64]) -> f64 {
         let pose = self.pose(x);
         if self.weights.is_some() {
-            crate::icp::msd(self.surface.nn(), self.sample, &pose)
+            crate::registration::icp::msd(self.surface.nn(), self.sample, &pose)
         } else {
             self.surface.cost(self.sample, &pose, self.cap)
         }
@@ -249,7 +261,7 @@ impl Objective for PoseObjective<'_> {
                 &start,
                 self.refine_iterations,
                 REFINE_TRIM,
-                crate::svd_match::ScaleRule::LeastSquares,
+                crate::registration::svd_match::ScaleRule::LeastSquares,
             )
         };
         let mut refined = self.frame.params(&pose).to_vec();
@@ -342,7 +354,7 @@ fn prior_on(surface: &Surface, scan: &[Point3<f64>], settings: &PfIcpSettings) -
         Some(search) => {
             let mut starts = initial.candidates.clone();
             starts.extend(hypotheses::grid_starts(scan, model, search.grid));
-            starts.extend(crate::features::proposals(
+            starts.extend(crate::pf_icp::features::proposals(
                 nn,
                 &sample,
                 hypotheses::radius_ratio(scan, model),
@@ -433,7 +445,7 @@ pub fn register_with(
         frame,
         refine_iterations: settings.icp_per_iteration,
         weights,
-        cap: crate::surface::COST_CAP * diag,
+        cap: crate::pf_icp::surface::COST_CAP * diag,
         scale_range: (start_scale * SCALE_BOUNDS.0, start_scale * SCALE_BOUNDS.1),
     };
     let filter_settings = FilterSettings {
@@ -452,7 +464,7 @@ pub fn register_with(
     let filter_pose = frame.pose(filtered.estimate.as_slice().try_into().expect("7 states"));
     let t3 = Instant::now();
 
-    let conclusion = crate::conclusion::conclude(
+    let conclusion = crate::pf_icp::conclusion::conclude(
         &surface,
         scan,
         &filter_pose,
@@ -462,7 +474,7 @@ pub fn register_with(
     );
     let polished = Registration {
         pose: conclusion.pose,
-        msd: crate::icp::msd(nn, scan, &conclusion.pose),
+        msd: crate::registration::icp::msd(nn, scan, &conclusion.pose),
         iterations: filtered.iterations,
         errors: Vec::new(),
     };

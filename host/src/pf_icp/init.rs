@@ -15,9 +15,9 @@
 
 use crate::cloud::centroid;
 use crate::geometry::Pose;
-use crate::kmeans::{kmeans, Clustering, KmeansSettings, Pairing};
 use crate::nn::NearestNeighbours;
-use crate::svd_match::{match_pairs, ScaleRule};
+use crate::pf_icp::kmeans::{kmeans, Clustering, KmeansSettings, Pairing};
+use crate::registration::svd_match::{match_pairs, ScaleRule};
 use nalgebra::{Matrix3, Point3, Rotation3, Unit, Vector3};
 use rayon::prelude::*;
 
@@ -148,7 +148,7 @@ pub fn initial_pose(
     if mode != InitMode::Index || candidates.is_empty() {
         let centroid_nn = NearestNeighbours::new(&model_clusters.centroids);
         let (mu_m, mu_d) = (centroid(scan), centroid(model));
-        let s = crate::hypotheses::radius_ratio(scan, model);
+        let s = crate::pf_icp::hypotheses::radius_ratio(scan, model);
         let starts: Vec<Pose> = rotation_candidates(scan, model)
             .into_iter()
             .map(|r| Pose { scale: s, rotation: r, translation: mu_d.coords - s * (r * mu_m.coords) })

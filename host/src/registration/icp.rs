@@ -9,7 +9,7 @@
 
 use crate::geometry::Pose;
 use crate::nn::NearestNeighbours;
-use crate::svd_match::{match_pairs, ScaleRule};
+use crate::registration::svd_match::{match_pairs, ScaleRule};
 use nalgebra::Point3;
 
 /// Robust weighting of the residuals.

@@ -2,7 +2,7 @@
 //! result says about itself (alternatives, uncertainty, fit).
 //!
 //! 1. **Polish and choice**: the filter's estimate and the best hypotheses of the global
-//!    search ([`crate::hypotheses`]: the first [`ARBITRATED`] + 1, and any other within
+//!    search ([`crate::pf_icp::hypotheses`]: the first [`ARBITRATED`] + 1, and any other within
 //!    [`CANDIDATE_COST_FACTOR`] of the best's cost, [`MAX_CANDIDATES`] poses in all) are
 //!    each polished on the scan ([`Surface::polish`]; on [`COMPARE_POINTS`] of a larger one,
 //!    the winner then on all of it); the lowest capped surface cost wins. A filter that
@@ -16,7 +16,7 @@
 //!    shape lists its symmetric poses; a near-symmetric one whose breaking feature is
 //!    clearly seen lists none.
 //! 3. **Uncertainty**: the covariance of the local parameters
-//!    [`crate::surface::LOCAL_NAMES`] (translation of the scan centroid's image, scale,
+//!    [`crate::pf_icp::surface::LOCAL_NAMES`] (translation of the scan centroid's image, scale,
 //!    rotation vector in the model frame) is `k^2 sigma^2 (J^T J)^-1` from the surface
 //!    residuals' curvature ([`Surface::curvature`]), `k` = [`COVARIANCE_INFLATION`] for the
 //!    correlation of neighbouring residuals (calibrated on the realistic benchmark's dev
@@ -31,8 +31,8 @@
 
 use crate::cloud::{bbox_diagonal, centroid};
 use crate::geometry::{Centred, Pose};
-use crate::hypotheses::{same_pose, Hypothesis};
-use crate::surface::{Surface, COST_CAP};
+use crate::pf_icp::hypotheses::{same_pose, Hypothesis};
+use crate::pf_icp::surface::{Surface, COST_CAP};
 use nalgebra::Point3;
 use nalgebra::Rotation3;
 use rayon::prelude::*;
@@ -77,7 +77,7 @@ pub struct Uncertainty {
     /// One-sigma values (`None`: undetermined).
     pub sigma: [Option<f64>; 7],
     /// The motions the scan does not determine, in words
-    /// ([`crate::surface::Degeneracy::motions`]).
+    /// ([`crate::pf_icp::surface::Degeneracy::motions`]).
     pub undetermined: Vec<String>,
 }
 

@@ -8,9 +8,9 @@
 //! the `Q` of the likelihood (Eq. 20).
 
 use crate::geometry::{wrap_angle, Centred, Params, Pose};
-use crate::icp::{icp, IcpSettings};
-use crate::kmeans::Clustering;
 use crate::nn::NearestNeighbours;
+use crate::pf_icp::kmeans::Clustering;
+use crate::registration::icp::{icp, IcpSettings};
 use nalgebra::Point3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -115,7 +115,7 @@ pub fn approximate_icp_variance(
 mod tests {
     use super::*;
     use crate::datasets::{make, ModelId, Sampling, ScanSpec};
-    use crate::kmeans::{kmeans, KmeansSettings};
+    use crate::pf_icp::kmeans::{kmeans, KmeansSettings};
 
     #[test]
     fn spread_grows_with_noise_and_is_deterministic() {

@@ -25,9 +25,9 @@
 
 use crate::cloud::{bbox_diagonal, centroid};
 use crate::geometry::Pose;
-use crate::hypotheses::same_pose;
 use crate::nn::NearestNeighbours;
-use crate::svd_match::{match_pairs, ScaleRule};
+use crate::pf_icp::hypotheses::same_pose;
+use crate::registration::svd_match::{match_pairs, ScaleRule};
 use nalgebra::{Point3, Vector3};
 use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
@@ -85,7 +85,7 @@ fn describe(points: Vec<Point3<f64>>, radius: f64) -> Described {
         .map(|p| {
             let idx: Vec<usize> = nn.nearest_k(p, NORMAL_NEIGHBOURS).into_iter().map(|q| q.index).collect();
             let nb: Vec<Point3<f64>> = idx.iter().map(|&i| points[i]).collect();
-            let n = crate::surface::least_axis(&nb);
+            let n = crate::pf_icp::surface::least_axis(&nb);
             if n.dot(&(p - c)) < 0.0 {
                 -n
             } else {

@@ -29,9 +29,9 @@
 //! [`EmIcpSettings::sigma_final`].
 
 use crate::geometry::Pose;
-use crate::icp::Registration;
 use crate::nn::{Closest, NearestNeighbours};
-use crate::svd_match::{match_pairs, ScaleRule};
+use crate::registration::icp::Registration;
+use crate::registration::svd_match::{match_pairs, ScaleRule};
 use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
 
@@ -203,7 +203,7 @@ pub fn em_icp(nn: &NearestNeighbours, scan: &[Point3<f64>], init: &Pose, setting
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::icp::{icp, IcpSettings};
+    use crate::registration::icp::{icp, IcpSettings};
     use nalgebra::{Rotation3, Unit};
     use rand::{Rng, SeedableRng};
 

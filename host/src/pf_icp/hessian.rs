@@ -367,7 +367,7 @@ pub fn std_devs(cov: &Covariance) -> [f64; 7] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::icp::{icp, IcpSettings};
+    use crate::registration::icp::{icp, IcpSettings};
     use rand::{Rng, SeedableRng};
     use rand_distr::{Distribution, Normal};
 

@@ -43,9 +43,9 @@
 //! data, so it then runs to [`SparseIcpSettings::max_iterations`].
 
 use crate::geometry::Pose;
-use crate::icp::{median, Registration};
 use crate::nn::NearestNeighbours;
-use crate::svd_match::{match_pairs, ScaleRule};
+use crate::registration::icp::{median, Registration};
+use crate::registration::svd_match::{match_pairs, ScaleRule};
 use nalgebra::{Point3, Vector3};
 
 /// How [`SparseIcpSettings::mu`] is turned into the ADMM penalty.
@@ -237,7 +237,7 @@ pub fn sparse_icp(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::icp::{icp, IcpSettings};
+    use crate::registration::icp::{icp, IcpSettings};
     use rand::{Rng, SeedableRng};
 
     use crate::test_support::spiral as curve;

@@ -6,13 +6,13 @@
 //! return the pose scan-to-model, the MSD over the whole scan, iterations and the error
 //! per iteration.
 
-use crate::em_icp::{em_icp, EmIcpSettings};
 use crate::geometry::Pose;
-use crate::icp::{icp, IcpSettings, Registration};
 use crate::nn::NearestNeighbours;
 use crate::pf_icp::{register, PfIcpResult, PfIcpSettings};
-use crate::sparse_icp::{sparse_icp, SparseIcpSettings};
-use crate::svd_match::ScaleRule;
+use crate::registration::em_icp::{em_icp, EmIcpSettings};
+use crate::registration::icp::{icp, IcpSettings, Registration};
+use crate::registration::sparse_icp::{sparse_icp, SparseIcpSettings};
+use crate::registration::svd_match::ScaleRule;
 use nalgebra::Point3;
 use std::time::{Duration, Instant};
 

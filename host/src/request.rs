@@ -1,0 +1,168 @@
+//! One registration as a caller asks for it: the method, the engine that runs it and the
+//! settings ([`Request`]). [`Request::check`] refuses what cannot run with one line naming
+//! the problem (before any work or any board traffic); [`Request::run`] runs it on the
+//! clouds. The CLI's `register` parses its flags into a `Request`, opens the board when the
+//! engine needs one, and prints the [`Registered`] result.
+
+use crate::board::host_driven::{self, BoardReport};
+use crate::board::on_board::{self, OnBoardReport, OnBoardStep, DEFAULT_BOARD_POINTS};
+use crate::board::{BoardClient, Upload, DEFAULT_POLL};
+use crate::cloud::Cloud;
+use crate::nn::NearestNeighbours;
+use crate::pf_icp::PfIcpSettings;
+use crate::registration::methods::{self, Method, MethodSettings, Outcome};
+use anyhow::{bail, Result};
+use std::time::{Duration, Instant};
+
+/// The scan's bounding-box diagonal may be this many times the model's at least (and its
+/// inverse at most): beyond it the clouds are in different units, or one is a point.
+pub const MIN_EXTENT_RATIO: f64 = 1e-6;
+
+/// Where the registration runs.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Engine {
+    /// Everything on the host.
+    Software,
+    /// PF-ICP's filter on the board ([`on_board`]): the start, covariance and polish on the
+    /// host; the board weighs each particle over `board_points` scan points and is polled
+    /// every `poll`.
+    OnBoard {
+        /// Scan points the on-board filter weighs each particle over.
+        board_points: usize,
+        /// Status poll period.
+        poll: Duration,
+    },
+    /// The host runs the filter; the board weighs each iteration's particles
+    /// ([`host_driven`], the mode of protocol version 1 boards).
+    HostDriven,
+}
+
+impl Engine {
+    /// The on-board filter with its defaults.
+    pub fn on_board() -> Engine {
+        Engine::OnBoard { board_points: DEFAULT_BOARD_POINTS, poll: DEFAULT_POLL }
+    }
+
+    /// A board is needed.
+    pub fn needs_board(&self) -> bool {
+        *self != Engine::Software
+    }
+}
+
+/// A registration request.
+#[derive(Clone, Debug)]
+pub struct Request {
+    /// The method.
+    pub method: Method,
+    /// Where it runs.
+    pub engine: Engine,
+    /// PF-ICP's settings (the baselines take the iteration cap and the seed from them).
+    pub settings: PfIcpSettings,
+}
+
+/// What the board did, for the report.
+#[derive(Clone, Debug)]
+pub enum BoardRun {
+    /// The on-board filter.
+    OnBoard(Box<OnBoardReport>),
+    /// The host-driven filter.
+    HostDriven(BoardReport),
+}
+
+/// A registration's result.
+pub struct Registered {
+    /// Pose, fit, iterations, time, and PF-ICP's intermediate results.
+    pub outcome: Outcome,
+    /// The board's part, when one ran.
+    pub board: Option<BoardRun>,
+}
+
+/// Progress of a board engine: the uploads (both modes) and the on-board run.
+pub struct BoardProgress<'a> {
+    /// A store's upload: `(store, points sent, points in all)`.
+    pub upload: &'a mut (dyn FnMut(Upload, usize, usize) + Send),
+    /// The on-board filter's steps: `(step, done, total)`.
+    pub on_board: &'a mut (dyn FnMut(OnBoardStep, usize, usize) + Send),
+}
+
+impl Request {
+    /// Software PF-ICP with the default settings.
+    pub fn new(method: Method) -> Request {
+        Request { method, engine: Engine::Software, settings: PfIcpSettings::default() }
+    }
+
+    /// Refuse what cannot run on these clouds: too few points for the clusters, fewer than
+    /// three points, extents in different units, a board engine for a baseline.
+    pub fn check(&self, model: &Cloud, scan: &Cloud) -> Result<()> {
+        if self.method == Method::PfIcp {
+            for (name, c) in [("model", model), ("scan", scan)] {
+                if c.len() < self.settings.clusters {
+                    bail!(
+                        "{name} has {} points, fewer than the {} clusters asked for (--clusters)",
+                        c.len(),
+                        self.settings.clusters
+                    );
+                }
+            }
+        }
+        if scan.len() < 3 || model.len() < 3 {
+            bail!("registration needs at least 3 points in each cloud (model {}, scan {})", model.len(), scan.len());
+        }
+        let extent_ratio = scan.diagonal() / model.diagonal();
+        if !(MIN_EXTENT_RATIO..=1.0 / MIN_EXTENT_RATIO).contains(&extent_ratio) {
+            bail!(
+                "the scan's extent is {extent_ratio:e} times the model's: beyond {MIN_EXTENT_RATIO:e} to {:e} (different units?)",
+                1.0 / MIN_EXTENT_RATIO
+            );
+        }
+        if self.engine.needs_board() && self.method != Method::PfIcp {
+            bail!("--board runs PF-ICP only (got --method {})", self.method.name());
+        }
+        if let Engine::OnBoard { board_points: 0, .. } = self.engine {
+            bail!("--board-points must be at least 1");
+        }
+        Ok(())
+    }
+
+    /// Run the request (after [`Request::check`]); `client` is the open board for a board
+    /// engine.
+    pub fn run(
+        &self,
+        model: &Cloud,
+        scan: &Cloud,
+        client: Option<&mut BoardClient>,
+        progress: BoardProgress,
+    ) -> Result<Registered> {
+        self.check(model, scan)?;
+        let nn = NearestNeighbours::new(model.points());
+        let start = Instant::now();
+        let board_outcome = |pf: crate::pf_icp::PfIcpResult| Outcome {
+            registration: pf.registration.clone(),
+            elapsed: start.elapsed(),
+            pf: Some(Box::new(pf)),
+        };
+        Ok(match (&self.engine, client) {
+            (Engine::Software, _) => Registered {
+                outcome: methods::run(self.method, &nn, scan.points(), &MethodSettings { pf: self.settings.clone() }),
+                board: None,
+            },
+            (_, None) => bail!("the {:?} engine needs an open board", self.engine),
+            (Engine::OnBoard { board_points, poll }, Some(c)) => {
+                let r = on_board::register_on_board(
+                    c,
+                    &nn,
+                    scan.points(),
+                    &self.settings,
+                    *board_points,
+                    *poll,
+                    progress.on_board,
+                )?;
+                Registered { board: Some(BoardRun::OnBoard(Box::new(r.board))), outcome: board_outcome(r.pf) }
+            }
+            (Engine::HostDriven, Some(c)) => {
+                let r = host_driven::register(c, &nn, scan.points(), &self.settings, progress.upload)?;
+                Registered { board: Some(BoardRun::HostDriven(r.board)), outcome: board_outcome(r.pf) }
+            }
+        })
+    }
+}

@@ -1,0 +1,137 @@
+//! Every Verilated design's ports, in one place: `build.rs` checks the Verilated headers
+//! against them and writes the shim's port copies from them; the wrappers take the names
+//! of the outputs they compare from them ([`outputs`], [`output_words`]). Each list is the
+//! order of the packed input and output arrays the shim exchanges with Rust; the RTL
+//! structs in `fpga/src/rtl` are where the ports are declared.
+
+/// A port: (name, is_input, width). `clock` is driven by `tick`.
+pub type PortSpec = (&'static str, bool, usize);
+
+/// The ports of the nearest-neighbour pipeline's `top` (docs/pipeline.md), in the order of
+/// the packed input/output arrays the shim exchanges with Rust.
+pub const PIPELINE_PORTS: &[PortSpec] = &[
+    ("clock", true, 1),
+    ("model_we", true, 1),
+    ("model_waddr", true, 12),
+    ("model_wdata", true, 48),
+    ("model_count", true, 13),
+    ("start", true, 1),
+    ("pose", true, 216),
+    ("scan_valid", true, 1),
+    ("scan_data", true, 48),
+    ("scan_last", true, 1),
+    ("scan_ready", false, 1),
+    ("busy", false, 1),
+    ("nn_valid", false, 1),
+    ("nn_index", false, 12),
+    ("nn_dist", false, 34),
+    ("cost_valid", false, 1),
+    ("cost", false, 48),
+];
+
+/// The ports the particle-weight pipeline (`fpga/src/rtl/particle_weights.rs`) adds to
+/// [`PIPELINE_PORTS`]: the weight stage's controls and outputs (docs/weights.md; `busy` and
+/// `count` renamed `w_busy` and `w_count`).
+pub const PW_EXTRA_PORTS: &[PortSpec] = &[
+    ("clear", true, 1),
+    ("weigh", true, 1),
+    ("pre_shift", true, 6),
+    ("q_mul", true, 17),
+    ("w_busy", false, 1),
+    ("w_count", false, 9),
+    ("min_cost", false, 48),
+    ("w_valid", false, 1),
+    ("w_index", false, 8),
+    ("weight", false, 16),
+    ("w_done", false, 1),
+    ("w_sum", false, 24),
+];
+
+/// The ports of the weight stage (docs/weights.md).
+pub const WEIGHT_STAGE_PORTS: &[PortSpec] = &[
+    ("clock", true, 1),
+    ("clear", true, 1),
+    ("cost_valid", true, 1),
+    ("cost", true, 48),
+    ("weigh", true, 1),
+    ("pre_shift", true, 6),
+    ("q_mul", true, 17),
+    ("busy", false, 1),
+    ("count", false, 9),
+    ("min_cost", false, 48),
+    ("w_valid", false, 1),
+    ("w_index", false, 8),
+    ("weight", false, 16),
+    ("w_done", false, 1),
+    ("w_sum", false, 24),
+];
+
+/// The pins of the board top (`fpga/src/rtl/board/top.rs`).
+pub const BOARD_PORTS: &[PortSpec] =
+    &[("clock", true, 1), ("reset_n", true, 1), ("uart_rx", true, 1), ("uart_tx", false, 1), ("leds", false, 4)];
+
+/// The ports of the particle-filter sequencer (`fpga/src/rtl/board/sequencer/`).
+pub const SEQUENCER_PORTS: &[PortSpec] = &[
+    ("clock", true, 1),
+    ("reset", true, 1),
+    ("cfg_we", true, 1),
+    ("cfg_addr", true, 5),
+    ("cfg_data", true, 48),
+    ("go", true, 1),
+    ("nn_ready", true, 1),
+    ("cost_valid", true, 1),
+    ("cost", true, 48),
+    ("nn_valid", true, 1),
+    ("nn_dist", true, 34),
+    ("start", false, 1),
+    ("pose", false, 216),
+    ("running", false, 1),
+    ("finished", false, 1),
+    ("iterations", false, 16),
+    ("best_cost", false, 48),
+    ("best_max", false, 34),
+    ("params", false, 168),
+    ("p_we", false, 1),
+    ("p_waddr", false, 12),
+    ("p_wdata", false, 24),
+];
+
+/// The names of the output ports of `lists` (concatenated), in order; `N` must be their
+/// count (checked at compile time).
+pub const fn outputs<const N: usize>(lists: &[&[PortSpec]]) -> [&'static str; N] {
+    let mut out = [""; N];
+    let (mut n, mut l) = (0, 0);
+    while l < lists.len() {
+        let mut i = 0;
+        while i < lists[l].len() {
+            if !lists[l][i].1 {
+                out[n] = lists[l][i].0;
+                n += 1;
+            }
+            i += 1;
+        }
+        l += 1;
+    }
+    assert!(n == N, "the output count is not N");
+    out
+}
+
+/// The names of the output ports of `ports`, one per 64-bit word (a wide port repeats);
+/// `N` must be the word count (checked at compile time).
+pub const fn output_words<const N: usize>(ports: &[PortSpec]) -> [&'static str; N] {
+    let mut out = [""; N];
+    let (mut n, mut i) = (0, 0);
+    while i < ports.len() {
+        if !ports[i].1 {
+            let mut w = 0;
+            while w < ports[i].2.div_ceil(64) {
+                out[n] = ports[i].0;
+                n += 1;
+                w += 1;
+            }
+        }
+        i += 1;
+    }
+    assert!(n == N, "the output word count is not N");
+    out
+}
