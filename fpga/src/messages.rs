@@ -25,10 +25,26 @@ pub const FLAG_FIRST: u8 = 1;
 pub const FLAG_LAST: u8 = 2;
 /// Data bytes of the Run reply: the request's particles and iterations echoed.
 pub const RUN_REPLY_BYTES: usize = 4;
-/// Data bytes of the Status reply.
-pub const STATUS_BYTES: usize = 9;
+/// Data bytes of the Status reply: state, iterations, best cost.
+pub const STATUS_BYTES: usize = 1 + 2 + COST_BYTES;
+/// Bytes of a cost (48 bits) on the wire.
+pub const COST_BYTES: usize = 6;
+/// Bytes of a squared distance (34 bits) on the wire.
+pub const DIST_BYTES: usize = 5;
+/// Bytes of a weight on the wire.
+pub const WEIGHT_BYTES: usize = 2;
+/// Bytes of an Evaluate reply's weight summary before its weights: count, min_cost, w_sum.
+pub const WEIGHT_SUMMARY_BYTES: usize = 2 + COST_BYTES + 3;
+/// Bytes of a Nearest reply before its results: first, count, cost.
+pub const NEAREST_HEAD_BYTES: usize = TWO_U16_BYTES + COST_BYTES;
+/// Bytes of one Nearest result: the model index, the squared distance.
+pub const NEAREST_RESULT_BYTES: usize = 2 + DIST_BYTES;
+/// Bytes of the Result reply before its parameters: iterations, cost, max_d2.
+pub const RESULT_HEAD_BYTES: usize = 2 + COST_BYTES + DIST_BYTES;
+/// Bytes of the Result reply's parameters (24 bits each).
+pub const RESULT_PARAMS_BYTES: usize = 3 * PARAMS;
 /// Data bytes of the Result reply.
-pub const RESULT_BYTES: usize = 2 + 6 + 5 + 3 * PARAMS + POSE_BYTES;
+pub const RESULT_BYTES: usize = RESULT_HEAD_BYTES + RESULT_PARAMS_BYTES + POSE_BYTES;
 /// Mask of the 24-bit `w_sum` field (the weight stage's accumulator).
 pub const W_SUM_MASK: u32 = (1 << 24) - 1;
 /// Data bytes of a Nearest request: first, count, pose.
@@ -284,14 +300,14 @@ impl EvaluateReply {
     pub fn encode(&self) -> Vec<u8> {
         let mut out = Vec::new();
         for &c in &self.costs {
-            put(&mut out, c, 6);
+            put(&mut out, c, COST_BYTES);
         }
         if let Some(s) = &self.summary {
             put(&mut out, s.weights.len() as u64, 2);
-            put(&mut out, s.min_cost, 6);
+            put(&mut out, s.min_cost, COST_BYTES);
             put(&mut out, s.w_sum as u64, 3);
             for &w in &s.weights {
-                put(&mut out, w as u64, 2);
+                put(&mut out, w as u64, WEIGHT_BYTES);
             }
         }
         out
@@ -299,22 +315,23 @@ impl EvaluateReply {
 
     /// Parse the reply to a request of `n` poses, with or without LAST.
     pub fn decode(d: &[u8], n: usize, last: bool) -> Result<Self, MessageError> {
-        let costs_len = 6 * n;
-        if d.len() < costs_len + if last { 11 } else { 0 } {
-            return Err(MessageError::Length { got: d.len(), expected: costs_len + if last { 11 } else { 0 } });
+        let costs_len = COST_BYTES * n;
+        let least = costs_len + if last { WEIGHT_SUMMARY_BYTES } else { 0 };
+        if d.len() < least {
+            return Err(MessageError::Length { got: d.len(), expected: least });
         }
-        let costs = d[..costs_len].chunks(6).map(le).collect();
+        let costs = d[..costs_len].chunks(COST_BYTES).map(le).collect();
         if !last {
             need(d, costs_len)?;
             return Ok(EvaluateReply { costs, summary: None });
         }
         let s = &d[costs_len..];
         let stored = le(&s[0..2]) as usize;
-        need(s, 11 + 2 * stored)?;
+        need(s, WEIGHT_SUMMARY_BYTES + WEIGHT_BYTES * stored)?;
         let summary = WeightSummary {
-            min_cost: le(&s[2..8]),
-            w_sum: le(&s[8..11]) as u32,
-            weights: s[11..].chunks(2).map(|c| le(c) as u16).collect(),
+            min_cost: le(&s[2..2 + COST_BYTES]),
+            w_sum: le(&s[2 + COST_BYTES..WEIGHT_SUMMARY_BYTES]) as u32,
+            weights: s[WEIGHT_SUMMARY_BYTES..].chunks(WEIGHT_BYTES).map(|c| le(c) as u16).collect(),
         };
         Ok(EvaluateReply { costs, summary: Some(summary) })
     }
@@ -355,18 +372,18 @@ impl NearestReply {
     /// The reply data.
     pub fn encode(&self) -> Vec<u8> {
         let mut out = two_u16(self.first, self.results.len() as u16);
-        put(&mut out, self.cost, 6);
+        put(&mut out, self.cost, COST_BYTES);
         for &(i, d) in &self.results {
             put(&mut out, i as u64, 2);
-            put(&mut out, d, 5);
+            put(&mut out, d, DIST_BYTES);
         }
         out
     }
 
     /// Parse the reply to `request`.
     pub fn decode(d: &[u8], request: &NearestRequest) -> Result<Self, MessageError> {
-        need(d, 10 + 7 * request.count as usize)?;
-        let (first, count) = parse_two_u16(&d[..4])?;
+        need(d, NEAREST_HEAD_BYTES + NEAREST_RESULT_BYTES * request.count as usize)?;
+        let (first, count) = parse_two_u16(&d[..TWO_U16_BYTES])?;
         if first != request.first {
             return Err(MessageError::Field { field: "first", got: first as u64, expected: request.first as u64 });
         }
@@ -375,8 +392,11 @@ impl NearestReply {
         }
         Ok(NearestReply {
             first,
-            cost: le(&d[4..10]),
-            results: d[10..].chunks(7).map(|c| (le(&c[..2]) as u16, le(&c[2..]))).collect(),
+            cost: le(&d[TWO_U16_BYTES..NEAREST_HEAD_BYTES]),
+            results: d[NEAREST_HEAD_BYTES..]
+                .chunks(NEAREST_RESULT_BYTES)
+                .map(|c| (le(&c[..2]) as u16, le(&c[2..])))
+                .collect(),
         })
     }
 }
@@ -425,7 +445,7 @@ impl StatusReply {
         let mut out = Vec::with_capacity(STATUS_BYTES);
         out.push(self.state as u8);
         put(&mut out, self.iterations as u64, 2);
-        put(&mut out, self.best_cost, 6);
+        put(&mut out, self.best_cost, COST_BYTES);
         out
     }
 

@@ -46,10 +46,14 @@ pub const CORDIC_K: i32 = 159188;
 /// Fraction bits inside the CORDIC (two guard bits over the output).
 pub const CORDIC_FRAC: u32 = 18;
 pub use crate::format::MAX_PARTICLES;
-/// Words of a Run request after its 6 header bytes (6 bytes each, little-endian).
+/// Words of a Run request after its header (each [`RUN_WORD_BYTES`], little-endian).
 pub const RUN_WORDS: usize = 24;
 /// Data bytes of a Run request.
-pub const RUN_BYTES: usize = 6 + 6 * RUN_WORDS;
+pub const RUN_BYTES: usize = RUN_HEADER_BYTES + RUN_WORD_BYTES * RUN_WORDS;
+/// Bytes of a Run request's header: particles, iterations, temperature exponent.
+pub const RUN_HEADER_BYTES: usize = 6;
+/// Bytes of one Run word (48 bits).
+pub const RUN_WORD_BYTES: usize = 6;
 /// The smallest temperature exponent (`2 Q_k >= 2^5` cost LSBs; `q_mul` stays `2^16`).
 pub const MIN_TEMPER_EXP: u32 = 5;
 
@@ -122,7 +126,7 @@ impl PfConfig {
             .chain(self.floor.iter().map(|&s| s as u64))
             .chain([self.seed as u64, self.thr_cost, self.thr_max]);
         for w in words {
-            out.extend(&w.to_le_bytes()[..6]);
+            out.extend(&w.to_le_bytes()[..RUN_WORD_BYTES]);
         }
         out
     }
@@ -140,7 +144,8 @@ impl PfConfig {
         if particles == 0 || particles as usize > MAX_PARTICLES || iterations == 0 {
             return Err(ConfigError::Capacity(particles, iterations));
         }
-        let w = |i: usize| le(&d[6 + 6 * i..12 + 6 * i]);
+        let at = |i: usize| RUN_HEADER_BYTES + RUN_WORD_BYTES * i;
+        let w = |i: usize| le(&d[at(i)..at(i + 1)]);
         let sigma = |i: usize| (w(i) & ((1 << SIGMA_BITS) - 1)) as u32;
         Ok(PfConfig {
             particles,

@@ -7,7 +7,14 @@
 //! code byte and the offending command.
 
 /// Largest body (command, sequence and data) in bytes.
-pub const MAX_BODY: usize = 2 + 4 + 170 * 6;
+pub const MAX_BODY: usize =
+    HEADER_BYTES + crate::messages::LOAD_HEADER_BYTES + crate::messages::MAX_LOAD_POINTS * crate::messages::POINT_BYTES;
+/// Bytes of a frame's header: the command code, then the sequence number.
+pub const HEADER_BYTES: usize = 2;
+/// Data bytes of an error reply: the error code, then the failed command.
+pub const ERROR_DATA_BYTES: usize = 2;
+/// Bytes of a frame's CRC-16 (after its data).
+pub const CRC_BYTES: usize = 2;
 /// Largest encoded frame, delimiter included (COBS adds one byte per 254 plus one).
 pub const MAX_FRAME: usize = MAX_BODY + 2 + (MAX_BODY + 2) / 254 + 2;
 /// The frame delimiter.
@@ -209,7 +216,7 @@ impl Frame {
         if body.len() < 4 {
             return Err(FrameError::BadLength);
         }
-        let (payload, crc) = body.split_at(body.len() - 2);
+        let (payload, crc) = body.split_at(body.len() - CRC_BYTES);
         if crc16(payload) != u16::from_le_bytes([crc[0], crc[1]]) {
             return Err(FrameError::BadCrc);
         }

@@ -34,49 +34,23 @@ fn signed<const N: usize>(b: Bits<N>) -> i64 {
     ((b.to_u64() << (64 - N)) as i64) >> (64 - N)
 }
 
-/// Run `bench` on `uut` with a clock; the failures it reports (or a simulator error) fail
-/// the test. Returns the count of checks the bench made.
-fn run_clocked<U: Block + Send + 'static>(
-    mut uut: U,
-    clock: fn(&mut Box<U>),
-    bench: impl Fn(&mut Sim<U>, Box<U>, &mut Vec<String>) -> Result<(Box<U>, usize), SimError>
-        + Send
-        + std::panic::RefUnwindSafe
-        + std::panic::UnwindSafe
-        + 'static,
-) -> usize {
-    let found = Arc::new(Mutex::new((Vec::<String>::new(), 0usize)));
-    let out = found.clone();
-    uut.connect_all();
-    let mut sim = Simulation::new();
-    sim.add_clock(5, move |x: &mut Box<U>| clock(x));
-    sim.add_testbench(move |mut sim: Sim<U>| {
-        let x = sim.init()?;
-        let mut errors = Vec::new();
-        let (x, checks) = bench(&mut sim, x, &mut errors)?;
-        *out.lock().unwrap() = (errors, checks);
-        sim.done(x)
-    });
-    let run = sim.run(Box::new(uut), 10_000_000);
-    let (errors, checks) = found.lock().unwrap().clone();
-    assert!(errors.is_empty(), "{} mismatches, the first: {}", errors.len(), errors[0]);
-    run.expect("simulation");
-    checks
-}
+/// What a bench is: it drives the block, checks it, pushes what differs to the list and
+/// returns how many checks it made.
+type Bench<U> = dyn Fn(&mut Sim<U>, Box<U>, &mut Vec<String>) -> Result<(Box<U>, usize), SimError>
+    + Send
+    + std::panic::RefUnwindSafe
+    + std::panic::UnwindSafe;
 
-/// Run `bench` on a combinational `uut` (no clock; `sim.wait(1, x)` settles it).
-fn run_comb<U: Block + Send + 'static>(
-    mut uut: U,
-    bench: impl Fn(&mut Sim<U>, Box<U>, &mut Vec<String>) -> Result<(Box<U>, usize), SimError>
-        + Send
-        + std::panic::RefUnwindSafe
-        + std::panic::UnwindSafe
-        + 'static,
-) -> usize {
+/// Run `bench` on `uut` (with `clock` toggled every 5 time units, if any); the failures it
+/// reports (or a simulator error) fail the test. Returns the count of checks it made.
+fn run_bench<U: Block + Send + 'static>(mut uut: U, clock: Option<fn(&mut Box<U>)>, bench: Box<Bench<U>>) -> usize {
     let found = Arc::new(Mutex::new((Vec::<String>::new(), 0usize)));
     let out = found.clone();
     uut.connect_all();
     let mut sim = Simulation::new();
+    if let Some(clock) = clock {
+        sim.add_clock(5, move |x: &mut Box<U>| clock(x));
+    }
     sim.add_testbench(move |mut sim: Sim<U>| {
         let x = sim.init()?;
         let mut errors = Vec::new();
@@ -89,6 +63,31 @@ fn run_comb<U: Block + Send + 'static>(
     assert!(errors.is_empty(), "{} mismatches, the first: {}", errors.len(), errors[0]);
     run.expect("simulation");
     checks
+}
+
+/// [`run_bench`] on a clocked block.
+fn run_clocked<U: Block + Send + 'static>(
+    uut: U,
+    clock: fn(&mut Box<U>),
+    bench: impl Fn(&mut Sim<U>, Box<U>, &mut Vec<String>) -> Result<(Box<U>, usize), SimError>
+        + Send
+        + std::panic::RefUnwindSafe
+        + std::panic::UnwindSafe
+        + 'static,
+) -> usize {
+    run_bench(uut, Some(clock), Box::new(bench))
+}
+
+/// [`run_bench`] on a combinational block (no clock; `sim.wait(1, x)` settles it).
+fn run_comb<U: Block + Send + 'static>(
+    uut: U,
+    bench: impl Fn(&mut Sim<U>, Box<U>, &mut Vec<String>) -> Result<(Box<U>, usize), SimError>
+        + Send
+        + std::panic::RefUnwindSafe
+        + std::panic::UnwindSafe
+        + 'static,
+) -> usize {
+    run_bench(uut, None, Box::new(bench))
 }
 
 #[test]
@@ -191,14 +190,8 @@ fn serial_div_matches_div_signed_in_48_clocks() {
 
 #[test]
 fn xorshift_step_matches_the_reference_prng() {
-    let found = Arc::new(Mutex::new((Vec::<String>::new(), 0usize)));
-    let out = found.clone();
-    let mut uut = Xorshift32::new();
-    uut.connect_all();
-    let mut sim = Simulation::new();
-    sim.add_testbench(move |mut sim: Sim<Xorshift32>| {
-        let mut x = sim.init()?;
-        let (mut errors, mut n) = (Vec::new(), 0);
+    let checks = run_comb(Xorshift32::new(), |sim, mut x, errors| {
+        let mut n = 0;
         for seed in [1u32, 0x8000_0000, 0xffff_ffff, 0x1234_5678] {
             let mut reference = pf::Xorshift32::new(seed);
             let mut state = reference.0;
@@ -214,14 +207,9 @@ fn xorshift_step_matches_the_reference_prng() {
                 n += 1;
             }
         }
-        *out.lock().unwrap() = (errors, n);
-        sim.done(x)
+        Ok((x, n))
     });
-    let run = sim.run(Box::new(uut), 100_000);
-    let (errors, n) = found.lock().unwrap().clone();
-    assert!(errors.is_empty(), "{} mismatches, the first: {}", errors.len(), errors[0]);
-    run.expect("simulation");
-    assert_eq!(n, 2000);
+    assert_eq!(checks, 2000);
 }
 
 #[test]

@@ -141,9 +141,9 @@ impl<const P: usize> Logic for CommandEngine<P> {
                     } else {
                         self.cur_cmd.d.next = self.cmd.val();
                         self.cur_seq.d.next = self.seq.val();
-                        self.dlen.d.next = self.len.val() - 4;
-                        self.faddr.d.next = 2.into();
-                        self.fcount.d.next = 6.into();
+                        self.dlen.d.next = self.len.val() - self.a_overhead.val();
+                        self.faddr.d.next = self.a_body.val();
+                        self.fcount.d.next = self.n_head_fetch.val();
                         self.ret.d.next = EngState::Decode;
                         self.state.d.next = EngState::FetchAddr;
                     }
@@ -178,7 +178,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
                 self.err_led.d.next = false;
                 self.outbuf.d.next = bit_cast::<216, 8>(self.cur_cmd.q.val() | bits::<8>(128))
                     | (bit_cast::<216, 8>(self.cur_seq.q.val()) << 8);
-                self.ecount.d.next = 2.into();
+                self.ecount.d.next = self.n_header.val();
                 self.state.d.next = EngState::Emit;
             }
             EngState::ErrHeader => {
@@ -188,7 +188,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
                     | (bit_cast::<216, 8>(self.e_seq.q.val()) << 8)
                     | (bit_cast::<216, 8>(self.e_code.q.val()) << 16)
                     | (bit_cast::<216, 8>(self.e_cmd.q.val()) << 24);
-                self.ecount.d.next = 4.into();
+                self.ecount.d.next = self.n_error.val();
                 self.ret.d.next = EngState::Send;
                 self.state.d.next = EngState::Emit;
             }
@@ -226,7 +226,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
                 } else if self.check.is_load.val() {
                     self.idx.d.next = 0.into();
                     self.waddr.d.next = self.h_lo.val().get_bits::<12>(0);
-                    self.faddr.d.next = 6.into();
+                    self.faddr.d.next = self.a_load.val();
                     self.state.d.next = EngState::LoadNext;
                 } else if self.check.is_sizes.val() {
                     self.model_count.d.next = self.h_lo.val().get_bits::<13>(0);
@@ -237,13 +237,13 @@ impl<const P: usize> Logic for CommandEngine<P> {
                     self.ret.d.next = EngState::EvBegin;
                     self.state.d.next = EngState::Header;
                 } else if self.check.is_nearest.val() {
-                    self.faddr.d.next = 6.into();
-                    self.fcount.d.next = 27.into();
+                    self.faddr.d.next = self.a_nearest.val();
+                    self.fcount.d.next = self.n_pose.val();
                     self.ret.d.next = EngState::NrRun;
                     self.state.d.next = EngState::FetchAddr;
                 } else if self.check.is_run.val() {
                     self.idx.d.next = 0.into();
-                    self.faddr.d.next = 8.into();
+                    self.faddr.d.next = self.a_run.val();
                     self.state.d.next = EngState::RunNext;
                 } else if self.check.is_status.val() {
                     self.ret.d.next = EngState::StBody;
@@ -259,7 +259,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
                     self.filter.cfg_data.next = self.hdr.q.val();
                     self.state.d.next = EngState::RunGo;
                 } else {
-                    self.fcount.d.next = 6.into();
+                    self.fcount.d.next = self.n_word.val();
                     self.ret.d.next = EngState::RunWrite;
                     self.state.d.next = EngState::FetchAddr;
                 }
@@ -286,7 +286,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
                 } else {
                     self.outbuf.d.next = bit_cast::<216, 48>(self.all48.val()) << 24;
                 }
-                self.ecount.d.next = 9.into();
+                self.ecount.d.next = self.n_status.val();
                 self.ret.d.next = EngState::Send;
                 self.state.d.next = EngState::Emit;
             }
@@ -294,19 +294,19 @@ impl<const P: usize> Logic for CommandEngine<P> {
                 self.outbuf.d.next = bit_cast::<216, 16>(self.filter.iterations.val())
                     | (bit_cast::<216, 48>(self.filter.best_cost.val()) << 16)
                     | (bit_cast::<216, 34>(self.filter.best_max.val()) << 64);
-                self.ecount.d.next = 13.into();
+                self.ecount.d.next = self.n_result_head.val();
                 self.ret.d.next = EngState::ResBody2;
                 self.state.d.next = EngState::Emit;
             }
             EngState::ResBody2 => {
                 self.outbuf.d.next = bit_cast::<216, 168>(self.filter.params.val());
-                self.ecount.d.next = 21.into();
+                self.ecount.d.next = self.n_result_params.val();
                 self.ret.d.next = EngState::ResBody3;
                 self.state.d.next = EngState::Emit;
             }
             EngState::ResBody3 => {
                 self.outbuf.d.next = self.filter.pose.val();
-                self.ecount.d.next = 27.into();
+                self.ecount.d.next = self.n_pose.val();
                 self.ret.d.next = EngState::Send;
                 self.state.d.next = EngState::Emit;
             }
@@ -315,7 +315,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
                     | (bit_cast::<216, 13>(self.model_count.q.val()) << 160)
                     | (bit_cast::<216, 13>(self.scan_count.q.val()) << 176)
                     | (bit_cast::<216, 9>(self.ws.count.val()) << 192);
-                self.ecount.d.next = 26.into();
+                self.ecount.d.next = self.n_identity.val();
                 self.ret.d.next = EngState::Send;
                 self.state.d.next = EngState::Emit;
             }
@@ -324,7 +324,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
                     self.ret.d.next = EngState::EchoBody;
                     self.state.d.next = EngState::Header;
                 } else {
-                    self.fcount.d.next = 6.into();
+                    self.fcount.d.next = self.n_point.val();
                     self.ret.d.next = EngState::LoadWrite;
                     self.state.d.next = EngState::FetchAddr;
                 }
@@ -341,7 +341,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
             }
             EngState::EchoBody => {
                 self.outbuf.d.next = bit_cast::<216, 32>(self.hdr.q.val().get_bits::<32>(0));
-                self.ecount.d.next = 4.into();
+                self.ecount.d.next = self.n_echo.val();
                 self.ret.d.next = EngState::Send;
                 self.state.d.next = EngState::Emit;
             }
@@ -351,7 +351,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
                         self.ws.clear.next = true;
                     }
                     self.idx.d.next = 0.into();
-                    self.faddr.d.next = 8.into();
+                    self.faddr.d.next = self.a_eval.val();
                     self.eval_mode.d.next = true;
                     self.state.d.next = EngState::EvNext;
                 }
@@ -360,7 +360,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
                 if self.idx.q.val() == bit_cast::<16, 8>(self.hdr.q.val().get_bits::<8>(40)) {
                     self.state.d.next = EngState::EvDone;
                 } else {
-                    self.fcount.d.next = 27.into();
+                    self.fcount.d.next = self.n_pose.val();
                     self.ret.d.next = EngState::EvRun;
                     self.state.d.next = EngState::FetchAddr;
                 }
@@ -375,7 +375,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
             EngState::EvWait => {
                 if self.nn.cost_valid.val() {
                     self.outbuf.d.next = bit_cast::<216, 48>(self.nn.cost.val());
-                    self.ecount.d.next = 6.into();
+                    self.ecount.d.next = self.n_cost.val();
                     self.ret.d.next = EngState::EvInc;
                     self.state.d.next = EngState::Emit;
                 }
@@ -405,7 +405,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
                 self.outbuf.d.next = bit_cast::<216, 9>(self.ws.count.val())
                     | (bit_cast::<216, 48>(self.ws.min_cost.val()) << 16)
                     | (bit_cast::<216, 24>(self.ws.w_sum.val()) << 64);
-                self.ecount.d.next = 11.into();
+                self.ecount.d.next = self.n_summary.val();
                 self.wi.d.next = 0.into();
                 self.ret.d.next = EngState::WLoop;
                 self.state.d.next = EngState::Emit;
@@ -419,7 +419,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
             }
             EngState::WRead => {
                 self.outbuf.d.next = bit_cast::<216, 16>(self.aux.read_data.val().get_bits::<16>(0));
-                self.ecount.d.next = 2.into();
+                self.ecount.d.next = self.n_weight.val();
                 self.wi.d.next = self.wi.q.val() + 1;
                 self.ret.d.next = EngState::WLoop;
                 self.state.d.next = EngState::Emit;
@@ -448,7 +448,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
             EngState::NrHead => {
                 self.outbuf.d.next = bit_cast::<216, 32>(self.hdr.q.val().get_bits::<32>(0))
                     | (bit_cast::<216, 48>(self.ncost.q.val()) << 32);
-                self.ecount.d.next = 10.into();
+                self.ecount.d.next = self.n_nearest_head.val();
                 self.wi.d.next = 0.into();
                 self.ret.d.next = EngState::NrLoop;
                 self.state.d.next = EngState::Emit;
@@ -463,7 +463,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
             EngState::NrRead => {
                 self.outbuf.d.next = bit_cast::<216, 12>(self.aux.read_data.val().get_bits::<12>(0))
                     | (bit_cast::<216, 34>(self.aux.read_data.val().get_bits::<34>(12)) << 16);
-                self.ecount.d.next = 7.into();
+                self.ecount.d.next = self.n_nearest_result.val();
                 self.wi.d.next = self.wi.q.val() + 1;
                 self.ret.d.next = EngState::NrLoop;
                 self.state.d.next = EngState::Emit;

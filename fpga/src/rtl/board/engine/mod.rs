@@ -13,13 +13,36 @@ use super::reply_tx::ReplySender;
 use super::request_check::RequestCheck;
 use super::scan_feeder::ScanFeeder;
 use super::sequencer::PfSequencer;
-use crate::messages::Identity;
-use crate::protocol::ErrorCode;
+use crate::messages::{
+    Identity, COST_BYTES, EVALUATE_HEADER_BYTES, IDENTITY_BYTES, LOAD_HEADER_BYTES, NEAREST_HEAD_BYTES,
+    NEAREST_REQUEST_BYTES, NEAREST_RESULT_BYTES, POINT_BYTES, POSE_BYTES, RESULT_HEAD_BYTES, RESULT_PARAMS_BYTES,
+    RUN_REPLY_BYTES, STATUS_BYTES, TWO_U16_BYTES, WEIGHT_BYTES, WEIGHT_SUMMARY_BYTES,
+};
+use crate::pf::{RUN_HEADER_BYTES, RUN_WORD_BYTES};
+use crate::protocol::{ErrorCode, CRC_BYTES, ERROR_DATA_BYTES, HEADER_BYTES};
 use crate::rtl::pipeline::NnPipeline;
 use crate::rtl::weights::WeightStage;
 use rust_hdl::prelude::*;
 
 mod kernel;
+
+/// A length as a `Fetch` or `Emit` count (`inbuf` and `outbuf` hold 27 bytes; the count
+/// is 5 bits).
+fn emit_count(bytes: usize) -> Constant<Bits<5>> {
+    assert!(bytes <= POSE_BYTES, "{bytes} bytes do not fit the engine's buffers");
+    Constant::new(Bits::<5>::from(bytes as u64))
+}
+
+/// A frame buffer address (11 bits).
+fn frame_address(at: usize) -> Constant<Bits<11>> {
+    Constant::new(Bits::<11>::from(at as u64))
+}
+
+// The header fetch takes the longest command header (the sums decode from it).
+const _: () = assert!(LOAD_HEADER_BYTES <= EVALUATE_HEADER_BYTES && RUN_HEADER_BYTES == EVALUATE_HEADER_BYTES);
+
+// The Run, Load and SetSizes replies echo four bytes (`EchoBody`).
+const _: () = assert!(RUN_REPLY_BYTES == TWO_U16_BYTES);
 mod state;
 pub use state::EngState;
 
@@ -99,6 +122,30 @@ pub struct CommandEngine<const P: usize> {
     all48: Constant<Bits<48>>,
     e_busy: Constant<Bits<8>>,
     e_no_result: Constant<Bits<8>>,
+    // Frame buffer addresses and fetch lengths (`Fetch*`), from the protocol's layouts.
+    a_overhead: Constant<Bits<11>>,
+    a_body: Constant<Bits<11>>,
+    a_load: Constant<Bits<11>>,
+    a_nearest: Constant<Bits<11>>,
+    a_run: Constant<Bits<11>>,
+    a_eval: Constant<Bits<11>>,
+    n_head_fetch: Constant<Bits<5>>,
+    n_point: Constant<Bits<5>>,
+    n_word: Constant<Bits<5>>,
+    // Reply lengths (`Emit` counts), from the protocol's layouts.
+    n_header: Constant<Bits<5>>,
+    n_error: Constant<Bits<5>>,
+    n_status: Constant<Bits<5>>,
+    n_result_head: Constant<Bits<5>>,
+    n_result_params: Constant<Bits<5>>,
+    n_pose: Constant<Bits<5>>,
+    n_identity: Constant<Bits<5>>,
+    n_echo: Constant<Bits<5>>,
+    n_cost: Constant<Bits<5>>,
+    n_summary: Constant<Bits<5>>,
+    n_weight: Constant<Bits<5>>,
+    n_nearest_head: Constant<Bits<5>>,
+    n_nearest_result: Constant<Bits<5>>,
     h: Signal<Local, Bits<48>>,
     h_lo: Signal<Local, Bits<16>>,
     h_hi: Signal<Local, Bits<16>>,
@@ -171,6 +218,28 @@ impl<const P: usize> CommandEngine<P> {
             all48: Constant::new(Bits::<48>::from((1u64 << 48) - 1)),
             e_busy: Constant::new(Bits::<8>::from(ErrorCode::Busy as u64)),
             e_no_result: Constant::new(Bits::<8>::from(ErrorCode::NoResult as u64)),
+            a_overhead: frame_address(HEADER_BYTES + CRC_BYTES),
+            a_body: frame_address(HEADER_BYTES),
+            a_load: frame_address(HEADER_BYTES + LOAD_HEADER_BYTES),
+            a_nearest: frame_address(HEADER_BYTES + NEAREST_REQUEST_BYTES - POSE_BYTES),
+            a_run: frame_address(HEADER_BYTES + RUN_HEADER_BYTES),
+            a_eval: frame_address(HEADER_BYTES + EVALUATE_HEADER_BYTES),
+            n_head_fetch: emit_count(EVALUATE_HEADER_BYTES),
+            n_point: emit_count(POINT_BYTES),
+            n_word: emit_count(RUN_WORD_BYTES),
+            n_header: emit_count(HEADER_BYTES),
+            n_error: emit_count(HEADER_BYTES + ERROR_DATA_BYTES),
+            n_status: emit_count(STATUS_BYTES),
+            n_result_head: emit_count(RESULT_HEAD_BYTES),
+            n_result_params: emit_count(RESULT_PARAMS_BYTES),
+            n_pose: emit_count(POSE_BYTES),
+            n_identity: emit_count(IDENTITY_BYTES),
+            n_echo: emit_count(TWO_U16_BYTES),
+            n_cost: emit_count(COST_BYTES),
+            n_summary: emit_count(WEIGHT_SUMMARY_BYTES),
+            n_weight: emit_count(WEIGHT_BYTES),
+            n_nearest_head: emit_count(NEAREST_HEAD_BYTES),
+            n_nearest_result: emit_count(NEAREST_RESULT_BYTES),
             h: Default::default(),
             h_lo: Default::default(),
             h_hi: Default::default(),
