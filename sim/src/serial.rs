@@ -102,8 +102,10 @@ pub struct SerialBoard {
     /// The iteration count of the last running Status (it must not go back).
     last_progress: u16,
     /// Clock of the first and of the last bit shifted to the board (receive LED).
-    rx_first: Option<u64>,
     rx_last: Option<u64>,
+    /// The clock the host began its latest byte, and the last clock of the byte before.
+    rx_byte_start: Option<u64>,
+    rx_prev_last: Option<u64>,
     /// The last reply frame was an error (the error LED's rule).
     last_error: bool,
 }
@@ -132,8 +134,9 @@ impl SerialBoard {
             status_frame: false,
             progress_frames: 0,
             last_progress: 0,
-            rx_first: None,
             rx_last: None,
+            rx_byte_start: None,
+            rx_prev_last: None,
             last_error: false,
         }
     }
@@ -264,8 +267,13 @@ impl SerialBoard {
             RxPhase::Stop(n, v) => RxPhase::Stop(n - 1, v),
         };
         if self.shifting.is_some() {
-            self.rx_first.get_or_insert(self.clocks());
-            self.rx_last = Some(self.clocks());
+            let now = self.clocks();
+            // A new byte: the one before ended more than a clock ago.
+            if self.rx_last.is_none_or(|l| l + 1 < now) {
+                self.rx_prev_last = self.rx_last;
+                self.rx_byte_start = Some(now);
+            }
+            self.rx_last = Some(now);
         }
         if self.reference.is_some() && self.mismatch.is_none() {
             self.check_leds(pins.leds);
@@ -398,12 +406,19 @@ impl SerialBoard {
         let now = self.clocks();
         let bit = self.bit as u64;
         let heartbeat = (now >> HEARTBEAT_BIT) & 1 == 1;
-        // Lit for sure: from a bit after the first start bit to a bit before the glow ends;
-        // dark for sure: before any start bit, or a bit after the glow ends.
-        let rx = match (self.rx_first, self.rx_last) {
-            (Some(first), Some(last)) if now > first + bit && now + bit < last + RX_GLOW_CLOCKS => Some(true),
-            (Some(_), Some(last)) if now > last + RX_GLOW_CLOCKS + bit => Some(false),
-            (None, _) => Some(false),
+        // Lit for sure: from a bit after a byte's start bit to a bit before its glow ends
+        // (the latest byte's, or the glow the byte before left); dark for sure: before any
+        // start bit, or a bit after the glow ends. Within a bit of a byte that starts after
+        // a dark pause, either.
+        let lit_latest = match (self.rx_byte_start, self.rx_last) {
+            (Some(start), Some(last)) => now > start + bit && now + bit < last + RX_GLOW_CLOCKS,
+            _ => false,
+        };
+        let lit_before = self.rx_prev_last.is_some_and(|last| now + bit < last + RX_GLOW_CLOCKS);
+        let rx = match self.rx_last {
+            _ if lit_latest || lit_before => Some(true),
+            Some(last) if now > last + RX_GLOW_CLOCKS + bit => Some(false),
+            None => Some(false),
             _ => None,
         };
         let sending = !matches!(self.rx, RxPhase::Idle);
