@@ -101,7 +101,7 @@ pub struct SerialBoard {
     progress_frames: u64,
     /// The iteration count of the last running Status (it must not go back).
     last_progress: u16,
-    /// Clock of the first and of the last bit shifted to the board (receive LED).
+    /// Clock of the last bit shifted to the board (receive LED).
     rx_last: Option<u64>,
     /// The clock the host began its latest byte, and the last clock of the byte before.
     rx_byte_start: Option<u64>,
