@@ -34,6 +34,104 @@ pub struct RegisterReport {
     /// PF-ICP only: what the result says about itself.
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
     pub assessment: Option<Assessment>,
+    /// What produced the result: the inputs, the settings and the command that runs it
+    /// again (`pficp register` sets it).
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub provenance: Option<Provenance>,
+}
+
+/// The inputs and settings of a registration, enough to run it again (JSON keys
+/// `version`, `inputs`, `settings`, `command`).
+#[derive(Clone, Debug, Serialize)]
+pub struct Provenance {
+    /// The `pficp` version that produced the result.
+    pub version: &'static str,
+    /// The clouds as given and their sizes.
+    pub inputs: Inputs,
+    /// The method's settings.
+    pub settings: Settings,
+    /// The `pficp register` command with every setting spelled out (paths as given).
+    pub command: String,
+}
+
+/// The two clouds of a registration.
+#[derive(Clone, Debug, Serialize)]
+pub struct Inputs {
+    /// Model file, as given.
+    pub model: String,
+    /// Scan file, as given.
+    pub scan: String,
+    /// Points read from the model file.
+    pub model_points: usize,
+    /// Points read from the scan file.
+    pub scan_points: usize,
+}
+
+/// The settings that decide a registration's result.
+#[derive(Clone, Debug, Serialize)]
+pub struct Settings {
+    /// Seed of every random choice.
+    pub seed: u64,
+    /// Clusters K per cloud (PF-ICP).
+    pub clusters: usize,
+    /// Particles (PF-ICP).
+    pub particles: usize,
+    /// Iteration cap.
+    pub iterations: usize,
+    /// PF-ICP's cluster pairing (`auto`, `index`, `nearest`).
+    pub init: String,
+    /// With the filter on the board: scan points it weighs each particle over.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub board_points: Option<usize>,
+}
+
+impl Provenance {
+    /// From the inputs and settings; `command` is built from them (`port` for a board run,
+    /// `host_driven` for its host-driven mode).
+    pub fn new(method: &str, inputs: Inputs, settings: Settings, port: Option<&str>, host_driven: bool) -> Self {
+        let mut words = vec![
+            "pficp".to_string(),
+            "register".to_string(),
+            "--model".to_string(),
+            shell_word(&inputs.model),
+            "--scan".to_string(),
+            shell_word(&inputs.scan),
+            "--method".to_string(),
+            method.to_string(),
+        ];
+        for (flag, value) in [
+            ("--clusters", settings.clusters.to_string()),
+            ("--particles", settings.particles.to_string()),
+            ("--iterations", settings.iterations.to_string()),
+            ("--seed", settings.seed.to_string()),
+            ("--init", settings.init.to_string()),
+        ] {
+            words.push(flag.to_string());
+            words.push(value);
+        }
+        if let Some(port) = port {
+            words.push("--board".to_string());
+            words.push(shell_word(port));
+            if host_driven {
+                words.push("--host-driven".to_string());
+            }
+        }
+        if let Some(n) = settings.board_points {
+            words.push("--board-points".to_string());
+            words.push(n.to_string());
+        }
+        Provenance { version: env!("CARGO_PKG_VERSION"), inputs, settings, command: words.join(" ") }
+    }
+}
+
+/// `s` quoted for a POSIX shell where it needs quoting.
+fn shell_word(s: &str) -> String {
+    let plain = !s.is_empty() && s.chars().all(|c| c.is_ascii_alphanumeric() || "/._-+,:=@%".contains(c));
+    if plain {
+        s.to_string()
+    } else {
+        format!("'{}'", s.replace('\'', "'\\''"))
+    }
 }
 
 /// Another pose that fits as well (JSON).
@@ -145,7 +243,14 @@ impl RegisterReport {
             iterations: r.iterations,
             seconds,
             assessment: None,
+            provenance: None,
         }
+    }
+
+    /// With what produced it.
+    pub fn produced_by(mut self, provenance: Provenance) -> Self {
+        self.provenance = Some(provenance);
+        self
     }
 
     /// With PF-ICP's alternatives, uncertainty and fit.
@@ -192,6 +297,11 @@ impl RegisterReport {
         s += &format!("seconds      {:.3}\n", self.seconds);
         if let Some(a) = &self.assessment {
             s += &a.text();
+        }
+        if let Some(p) = &self.provenance {
+            s +=
+                &format!("inputs       {} model points, {} scan points\n", p.inputs.model_points, p.inputs.scan_points);
+            s += &format!("reproduce    {}\n", p.command);
         }
         s
     }

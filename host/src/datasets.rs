@@ -303,6 +303,15 @@ pub fn make(id: ModelId, model_points: usize, truth: &Pose, spec: &ScanSpec) -> 
     Dataset { model, scan, truth: *truth }
 }
 
+/// Cut a partial view: keep the `visible` fraction of `points` lowest along `dir` (measured
+/// from their centroid), as a range sensor sees a part from one side. The order of the
+/// kept points is the sorted one; shuffle them if the order must not tell anything.
+pub fn cut_view(points: &mut Vec<Point3<f64>>, dir: &nalgebra::Vector3<f64>, visible: f64) {
+    let c = crate::cloud::centroid(points);
+    points.sort_by(|a, b| (a - c).dot(dir).total_cmp(&(b - c).dot(dir)));
+    points.truncate(((points.len() as f64) * visible).round() as usize);
+}
+
 /// Keep `n` points with a density that falls along x (uneven thinning for models 1, 2).
 fn thin_out(points: &[Point3<f64>], n: usize, rng: &mut impl Rng) -> Vec<Point3<f64>> {
     let (lo, hi) = points.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| (lo.min(p.x), hi.max(p.x)));

@@ -7,39 +7,49 @@
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
 use pficp::board::BoardClient;
-use pficp::cli::{pose_table, RegisterReport};
+use pficp::cli::{Inputs, Provenance, RegisterReport, Settings};
 use pficp::cloud::Cloud;
 use pficp::datasets::{self, ModelId, Sampling, ScanSpec};
 use pficp::io::{format_from_path, read_cloud, write_cloud};
 use pficp::nn::NearestNeighbours;
 use pficp::pf_icp::init::InitMode;
 use pficp::pf_icp::PfIcpSettings;
-use pficp::registration::methods::{self, Method, MethodSettings};
+use pficp::progress::{self, note, Progress};
+use pficp::registration::methods::Method;
 use pficp::request::{BoardProgress, BoardRun, Engine, Registered, Request};
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 #[derive(Parser)]
 #[command(name = "pficp", version, about = "PF-ICP point-cloud registration (particle filter + ICP + k-means)")]
 struct Cli {
+    /// No progress bars or progress lines on stderr (errors and warnings still print).
+    #[arg(long, short, global = true)]
+    quiet: bool,
     #[command(subcommand)]
     command: Command,
 }
 
 #[derive(Subcommand)]
 enum Command {
-    /// Register the built-in model-1 scan (Table 1 transform) and print the pose table
-    /// against the truth and against plain ICP.
-    Demo,
+    /// Register built-in model-1 twice: the paper's scan (the model's own points under the
+    /// Table 1 transform) and a realistic one (independently sampled, partial, noisy), with
+    /// PF-ICP and plain ICP against the truth, and PF-ICP's one-sigma uncertainty.
+    #[command(after_help = "Example:\n  pficp demo")]
+    Demo(DemoArgs),
     /// Register a scan to a model: the pose maps scan to model, d = s R m + T.
+    #[command(after_help = "Example:\n  pficp register --model part.ply --scan scan.pcd --json > pose.json")]
     Register(RegisterArgs),
     /// Write a built-in model, its scan and the truth pose to files.
+    #[command(after_help = "Example:\n  pficp gen --model model-2 --out-dir data --sampling independent --noise 0.1")]
     Gen(GenArgs),
-    /// Reproduce the paper's Tables 2 to 7, the success rates and the figures.
+    /// Reproduce the paper's Tables 2 to 7, the success rates and the figures, or run the
+    /// realistic benchmark.
+    #[command(after_help = "Example:\n  pficp eval --suite realistic --quick --out eval-out")]
     Eval(EvalArgs),
     /// Time one PF-ICP registration per stage (model-1, 2,000 + 2,000 points, K = 100,
     /// 50 particles, 50 iterations); build with --release.
+    #[command(after_help = "Example:\n  pficp bench --runs 7")]
     Bench(BenchArgs),
     /// Talk to the board over its serial port.
     #[command(subcommand)]
@@ -49,6 +59,7 @@ enum Command {
 #[derive(Subcommand)]
 enum BoardCommand {
     /// Print the board's Identify reply: protocol version, limits, clock, baud, sizes.
+    #[command(after_help = "Example:\n  pficp board info --port /dev/ttyUSB0")]
     Info(BoardInfoArgs),
 }
 
@@ -348,8 +359,18 @@ enum SplitArg {
 }
 
 #[derive(clap::Args)]
+struct DemoArgs {
+    /// Seed of the realistic scan (sampling, view, noise) and of every method.
+    #[arg(long, default_value_t = PfIcpSettings::default().seed)]
+    seed: u64,
+}
+
+/// Most `bench --runs`.
+const MAX_BENCH_RUNS: usize = 1000;
+
+#[derive(clap::Args)]
 struct BenchArgs {
-    /// Repetitions (the median is reported).
+    /// Repetitions (the median is reported; at most 1000).
     #[arg(long, default_value_t = 5)]
     runs: usize,
     /// Scan sampling: the paper's or an independent scan.
@@ -359,8 +380,9 @@ struct BenchArgs {
 
 fn main() {
     let cli = Cli::parse();
+    progress::set_quiet(cli.quiet);
     let result = match cli.command {
-        Command::Demo => demo(),
+        Command::Demo(a) => demo(&a),
         Command::Register(a) => register(&a),
         Command::Gen(a) => gen(&a),
         Command::Eval(a) => eval(&a),
@@ -406,16 +428,16 @@ fn register(a: &RegisterArgs) -> Result<()> {
         Some(port) => {
             let mut c = a.link.open(port)?;
             let id = c.identify()?;
-            eprintln!("board on {port}: protocol {}, {} lanes at {} Hz", id.version, id.lanes, id.clock_hz);
+            note(format_args!("board on {port}: protocol {}, {} lanes at {} Hz", id.version, id.lanes, id.clock_hz));
             Some(c)
         }
         None => None,
     };
-    eprintln!("registering {} scan points to {} model points with {}", scan.len(), model.len(), method.name());
+    note(format_args!("registering {} scan points to {} model points with {}", scan.len(), model.len(), method.name()));
     let progress = BoardProgress { upload: &mut upload_progress(), on_board: &mut on_board_progress() };
     let Registered { outcome, board } = request.run(&model, &scan, client.as_mut(), progress)?;
     match &board {
-        Some(BoardRun::OnBoard(b)) => eprintln!(
+        Some(BoardRun::OnBoard(b)) => note(format_args!(
             "board: {} model points{}, {} scan points, {} iterations on the board (best cost {:.3e}), \
              {} Status polls, modelled board time {:.3} s, {} requests, {} resends",
             b.model_points,
@@ -427,8 +449,8 @@ fn register(a: &RegisterArgs) -> Result<()> {
             b.modelled.as_secs_f64(),
             b.stats.requests,
             b.stats.resends + b.stats.restarts
-        ),
-        Some(BoardRun::HostDriven(b)) => eprintln!(
+        )),
+        Some(BoardRun::HostDriven(b)) => note(format_args!(
             "board: {} model points{}, {} scan points, {} iterations weighed, {} requests, {} resends",
             b.model_points,
             if b.model_subsampled { " (subsampled)" } else { "" },
@@ -436,18 +458,18 @@ fn register(a: &RegisterArgs) -> Result<()> {
             b.iterations,
             b.stats.requests,
             b.stats.resends + b.stats.restarts
-        ),
+        )),
         None => {}
     }
     if let Some(pf) = &outcome.pf {
         let t = &pf.times;
-        eprintln!(
+        note(format_args!(
             "stages: clustering {:.3} s, covariance {:.3} s, filter {:.3} s, polish {:.3} s",
             t.clustering.as_secs_f64(),
             t.covariance.as_secs_f64(),
             t.filter.as_secs_f64(),
             t.polish.as_secs_f64()
-        );
+        ));
     }
     let mut report = RegisterReport::new(method.name(), &outcome.registration, outcome.elapsed.as_secs_f64());
     if let Some(pf) = &outcome.pf {
@@ -459,6 +481,24 @@ fn register(a: &RegisterArgs) -> Result<()> {
             report = report.host_driven();
         }
     }
+    let inputs = Inputs {
+        model: a.model.display().to_string(),
+        scan: a.scan.display().to_string(),
+        model_points: model.len(),
+        scan_points: scan.len(),
+    };
+    let recorded = Settings {
+        seed: a.pf.seed,
+        clusters: a.pf.clusters,
+        particles: a.pf.particles,
+        iterations: a.pf.iterations,
+        init: a.pf.init.to_possible_value().map_or_else(String::new, |v| v.get_name().to_string()),
+        board_points: match request.engine {
+            Engine::OnBoard { board_points, .. } => Some(board_points),
+            _ => None,
+        },
+    };
+    report = report.produced_by(Provenance::new(method.name(), inputs, recorded, a.board.as_deref(), a.host_driven));
     if a.json {
         println!("{}", serde_json::to_string(&report)?);
     } else {
@@ -467,44 +507,42 @@ fn register(a: &RegisterArgs) -> Result<()> {
     if let Some(out) = &a.out_aligned {
         let aligned = outcome.registration.pose.apply_all(scan.points());
         write_cloud(out, &aligned, format_from_path(out)?)?;
-        eprintln!("wrote the aligned scan to {}", out.display());
+        note(format_args!("wrote the aligned scan to {}", out.display()));
     }
     Ok(())
 }
 
-/// Upload progress on stderr: one updating line on a terminal, one line per store otherwise.
+/// Upload progress on stderr: a bar per store on a terminal, one line per finished store
+/// ([`pficp::progress`]).
 fn upload_progress() -> impl FnMut(pficp::board::Upload, usize, usize) + Send {
-    let tty = std::io::stderr().is_terminal();
+    let mut bar: Option<Progress> = None;
     move |store, done, total| {
-        if tty {
-            eprint!("\ruploading the {}: {done}/{total} points", store.name());
-            if done == total {
-                eprintln!();
+        let b = bar
+            .get_or_insert_with(|| Progress::bar(&format!("uploading the {}", store.name()), total as u64, "points"));
+        b.set(done as u64);
+        if done == total {
+            if let Some(b) = bar.take() {
+                b.finish(format_args!("uploaded the {}: {total} points", store.name()));
             }
-        } else if done == total {
-            eprintln!("uploaded the {}: {total} points", store.name());
         }
     }
 }
 
 /// The on-board registration's progress on stderr: the uploads as [`upload_progress`],
-/// then the filter's iterations (one updating line on a terminal, one line at the end
-/// otherwise).
+/// then a bar over the filter's iterations (one line when it is done).
 fn on_board_progress() -> impl FnMut(pficp::board::on_board::OnBoardStep, usize, usize) + Send {
     use pficp::board::on_board::OnBoardStep;
-    let tty = std::io::stderr().is_terminal();
     let mut uploads = upload_progress();
+    let mut filter: Option<Progress> = None;
     move |step, done, total| match step {
         OnBoardStep::Upload(store) => uploads(store, done, total),
-        OnBoardStep::Filter if tty => {
-            eprint!("\rfilter on the board: iteration {done}/{total}");
-            if done == total {
-                eprintln!();
-            }
-        }
         OnBoardStep::Filter => {
+            let b = filter.get_or_insert_with(|| Progress::bar("filter on the board", total as u64, "iterations"));
+            b.set(done as u64);
             if done == total {
-                eprintln!("filter on the board: done");
+                if let Some(b) = filter.take() {
+                    b.finish("filter on the board: done");
+                }
             }
         }
     }
@@ -560,20 +598,11 @@ fn gen(a: &GenArgs) -> Result<()> {
     Ok(())
 }
 
-fn demo() -> Result<()> {
-    let id = ModelId::Model1;
-    let truth = id.table1_truth();
-    let ds = datasets::make(id, 2000, &truth, &ScanSpec { sampling: Sampling::Paper, noise: 0.0, seed: 1 });
-    eprintln!("model-1: {} model points, scan = the model's points under the Table 1 transform", ds.model.len());
-    let nn = NearestNeighbours::new(&ds.model);
-    let settings = MethodSettings { pf: PfIcpSettings::default() };
-    let pf = methods::run(Method::PfIcp, &nn, &ds.scan, &settings);
-    let icp = methods::run(Method::Icp, &nn, &ds.scan, &settings);
-    println!("PF-ICP on model-1, scan-1 (Table 1 transform), K = 100, 50 particles");
-    print!("{}", pose_table(&[("truth", &truth), ("pf-icp", &pf.registration.pose), ("icp", &icp.registration.pose)]));
-    println!("{:<12}{:>14}{:>14.3e}{:>14.3e}", "MSD", "", pf.registration.msd, icp.registration.msd);
-    println!("{:<12}{:>14}{:>14}{:>14}", "iterations", "", pf.registration.iterations, icp.registration.iterations);
-    println!("{:<12}{:>14}{:>14.3}{:>14.3}", "seconds", "", pf.elapsed.as_secs_f64(), icp.elapsed.as_secs_f64());
+fn demo(a: &DemoArgs) -> Result<()> {
+    let bar = Progress::spinner("registering model-1: the paper's scan and a realistic one");
+    let cases = pficp::demo::run(a.seed);
+    bar.clear();
+    print!("{}", pficp::demo::text(&cases));
     Ok(())
 }
 
@@ -627,13 +656,13 @@ fn eval_realistic(a: &EvalArgs) -> Result<()> {
     };
     let report = realistic::run(&opts)?;
     print!("{}", report.render());
-    eprintln!("wrote {}", a.out.join("realistic.json").display());
+    note(format_args!("wrote {}", a.out.join("realistic.json").display()));
     Ok(())
 }
 
 fn bench(a: &BenchArgs) -> Result<()> {
-    if a.runs == 0 {
-        bail!("--runs must be at least 1");
+    if a.runs == 0 || a.runs > MAX_BENCH_RUNS {
+        bail!("--runs must be 1 to {MAX_BENCH_RUNS} (got {})", a.runs);
     }
     if cfg!(debug_assertions) {
         eprintln!("warning: debug build; run `cargo run --release -p pficp-host -- bench` for real figures");
@@ -656,6 +685,7 @@ fn bench(a: &BenchArgs) -> Result<()> {
         rayon::current_num_threads()
     );
     let mut rows: Vec<[f64; 5]> = Vec::new();
+    let bar = Progress::bar("bench", a.runs as u64, "runs");
     for run in 0..a.runs {
         let start = Instant::now();
         let nn = NearestNeighbours::new(&ds.model);
@@ -669,14 +699,16 @@ fn bench(a: &BenchArgs) -> Result<()> {
             t.polish.as_secs_f64(),
             total,
         ];
-        eprintln!(
+        bar.println(format_args!(
             "run {}: total {:.3} s, rotation error {:.3} deg",
             run + 1,
             total,
             r.registration.pose.rotation_angle_to(&truth).to_degrees()
-        );
+        ));
+        bar.inc();
         rows.push(row);
     }
+    bar.clear();
     let median = |i: usize| {
         let mut v: Vec<f64> = rows.iter().map(|r| r[i]).collect();
         v.sort_by(f64::total_cmp);

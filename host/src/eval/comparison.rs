@@ -230,13 +230,20 @@ fn table(c: &Case, opts: &EvalOptions) -> ComparisonTable {
 
 /// Tables 4 to 7 (progress on stderr).
 pub fn run(opts: &EvalOptions) -> Vec<ComparisonTable> {
-    cases(opts)
+    let cases = cases(opts);
+    let start = std::time::Instant::now();
+    let bar = crate::progress::Progress::bar("[eval] Tables 4-7", cases.len() as u64, "tables");
+    let tables = cases
         .iter()
         .map(|c| {
-            eprintln!("[eval] Table {} ({})", c.no, c.model.name());
-            table(c, opts)
+            bar.message(format!("Table {} ({})", c.no, c.model.name()));
+            let t = table(c, opts);
+            bar.inc();
+            t
         })
-        .collect()
+        .collect();
+    bar.finish(format_args!("[eval] Tables 4 to 7 ({:.1} s)", start.elapsed().as_secs_f64()));
+    tables
 }
 
 impl ComparisonTable {

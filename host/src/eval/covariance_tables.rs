@@ -137,12 +137,16 @@ fn table(id: ModelId, table_no: u32, independent: bool, opts: &EvalOptions) -> C
 /// stderr).
 pub fn run(opts: &EvalOptions) -> Vec<CovarianceTable> {
     let mut out = Vec::new();
+    let start = std::time::Instant::now();
+    let bar = crate::progress::Progress::bar("[eval] Tables 2, 3", 4, "tables");
     for (id, no) in [(ModelId::Model1, 2), (ModelId::Model2, 3)] {
         for independent in [false, true] {
-            eprintln!("[eval] Table {no} ({}, {})", id.name(), if independent { "independent" } else { "paper" });
+            bar.message(format!("Table {no} ({}, {})", id.name(), if independent { "independent" } else { "paper" }));
             out.push(table(id, no, independent, opts));
+            bar.inc();
         }
     }
+    bar.finish(format_args!("[eval] Tables 2 and 3 ({:.1} s)", start.elapsed().as_secs_f64()));
     out
 }
 

@@ -142,7 +142,7 @@ pub fn run(opts: &EvalOptions) -> anyhow::Result<EvalReport> {
     if opts.plots {
         report.plots = plots::run(opts)?;
         for p in &report.plots {
-            println!("wrote {p}");
+            crate::progress::note(format_args!("wrote {p}"));
         }
     }
     let path = opts.out_dir.join("results.json");
@@ -150,7 +150,7 @@ pub fn run(opts: &EvalOptions) -> anyhow::Result<EvalReport> {
     report.seconds = start.elapsed().as_secs_f64();
     let json = serde_json::to_string_pretty(&report)?;
     std::fs::write(&path, json).with_context(|| format!("writing {}", path.display()))?;
-    println!("wrote {}", path.display());
+    crate::progress::note(format_args!("wrote {}", path.display()));
     Ok(report)
 }
 

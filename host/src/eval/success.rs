@@ -16,6 +16,7 @@ use crate::cloud::bbox_diagonal;
 use crate::datasets::{make, random_truth, ModelId, Sampling, ScanSpec};
 use crate::nn::NearestNeighbours;
 use crate::pf_icp::PfIcpSettings;
+use crate::progress::Progress;
 use crate::registration::methods::{run as run_method, MethodSettings, PoseError, Tolerance};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -106,7 +107,7 @@ pub struct SuccessReport {
     pub median_seconds: Vec<f64>,
 }
 
-fn row(id: ModelId, noise_fraction: f64, opts: &EvalOptions) -> SuccessRow {
+fn row(id: ModelId, noise_fraction: f64, opts: &EvalOptions, bar: &Progress) -> SuccessRow {
     let model_index = ModelId::ALL.iter().position(|&m| m == id).unwrap_or(0) as u64;
     let model_seed = mix(opts.seed, model_index + 1);
     let model = id.model_points(opts.model_points);
@@ -145,15 +146,15 @@ fn row(id: ModelId, noise_fraction: f64, opts: &EvalOptions) -> SuccessRow {
             })
             .collect();
         trials.push(TrialRecord { seed, truth: paper_order(&truth.to_params()), noise, results });
-        if (t + 1) % 10 == 0 || t + 1 == opts.trials {
-            eprintln!(
-                "[eval] success {} noise {:.0}%: {}/{} trials ({:.1} s)",
+        bar.inc();
+        if t + 1 == opts.trials {
+            bar.println(format_args!(
+                "[eval] success {} noise {:.0}%: {} trials ({:.1} s)",
                 id.name(),
                 100.0 * noise_fraction,
-                t + 1,
                 opts.trials,
                 start.elapsed().as_secs_f64()
-            );
+            ));
         }
     }
     let cells = opts
@@ -178,11 +179,15 @@ fn row(id: ModelId, noise_fraction: f64, opts: &EvalOptions) -> SuccessRow {
 /// Run the experiment (progress on stderr).
 pub fn run(opts: &EvalOptions) -> SuccessReport {
     let mut rows = Vec::new();
+    let total = ModelId::ALL.len() * NOISE_FRACTIONS.len() * opts.trials;
+    let bar = Progress::bar("[eval] success", total as u64, "trials");
     for id in ModelId::ALL {
         for noise in NOISE_FRACTIONS {
-            rows.push(row(id, noise, opts));
+            bar.message(format!("{} noise {:.0}%", id.name(), 100.0 * noise));
+            rows.push(row(id, noise, opts, &bar));
         }
     }
+    bar.clear();
     let median_seconds = (0..opts.methods.len())
         .map(|j| {
             let times: Vec<f64> =

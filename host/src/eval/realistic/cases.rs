@@ -2,7 +2,7 @@
 //! seed, the split, the family and its index (the parent module's documentation says what
 //! each family is).
 
-use crate::cloud::{bbox_diagonal, centroid};
+use crate::cloud::bbox_diagonal;
 use crate::geometry::Pose;
 use crate::parts::Part;
 use crate::real_shapes::RealShape;
@@ -202,10 +202,7 @@ pub fn make_case(family: Family, shape: Shape, index: usize, seed: u64) -> Case 
     // The partial view: keep the `visible` fraction of points lowest along a random direction.
     let mut view = surface;
     if partial {
-        let dir = unit_vector(&mut rng);
-        let c = centroid(&view);
-        view.sort_by(|a, b| (a - c).dot(&dir).total_cmp(&(b - c).dot(&dir)));
-        view.truncate(((view.len() as f64) * visible).round() as usize);
+        crate::datasets::cut_view(&mut view, &unit_vector(&mut rng), visible);
         view.shuffle(&mut rng);
     }
     let noise = Normal::new(0.0, NOISE_FRACTION * diag).expect("positive sigma");

@@ -42,6 +42,7 @@ use super::{median, mix};
 use crate::cloud::centroid;
 use crate::nn::NearestNeighbours;
 use crate::pf_icp::PfIcpSettings;
+use crate::progress::Progress;
 use crate::registration::methods::{run as run_method, Method, MethodSettings};
 use anyhow::Context;
 use nalgebra::Point3;
@@ -243,8 +244,12 @@ pub fn case(family: Family, index: usize, split: Split, seed: u64) -> Case {
 pub fn run(opts: &RealisticOptions) -> anyhow::Result<RealisticReport> {
     let mut exported = Vec::new();
     let mut families = Vec::new();
+    let bar = opts.progress.then(|| Progress::bar("[realistic]", (opts.families.len() * opts.cases) as u64, "cases"));
     for &family in &opts.families {
         let start = Instant::now();
+        if let Some(b) = &bar {
+            b.message(family.name());
+        }
         let mut cases = Vec::with_capacity(opts.cases);
         for i in 0..opts.cases {
             let c = case(family, i, opts.split, opts.seed);
@@ -316,14 +321,16 @@ pub fn run(opts: &RealisticOptions) -> anyhow::Result<RealisticReport> {
                 },
                 results,
             });
-            if opts.progress && ((i + 1) % 10 == 0 || i + 1 == opts.cases) {
-                eprintln!(
-                    "[realistic] {} {}/{} cases ({:.1} s)",
-                    family.name(),
-                    i + 1,
-                    opts.cases,
-                    start.elapsed().as_secs_f64()
-                );
+            if let Some(b) = &bar {
+                b.inc();
+                if i + 1 == opts.cases {
+                    b.println(format!(
+                        "[realistic] {}: {} cases ({:.1} s)",
+                        family.name(),
+                        opts.cases,
+                        start.elapsed().as_secs_f64()
+                    ));
+                }
             }
         }
         let columns = method_columns(opts);

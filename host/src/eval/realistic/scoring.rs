@@ -42,23 +42,37 @@ pub fn symmetric_truth(truth: &Pose, g: &Matrix3<f64>, centre: &Point3<f64>) -> 
     about.compose(truth)
 }
 
+/// The errors of `estimate` against `truth` as the tolerance measures them: relative
+/// rotation [deg], distance of the images of `at` (the scan's centroid) over `diag`, and
+/// relative scale.
+pub fn pose_errors(estimate: &Pose, truth: &Pose, at: &Point3<f64>, diag: f64) -> (f64, f64, f64) {
+    (
+        estimate.rotation_angle_to(truth).to_degrees(),
+        (estimate.apply(at) - truth.apply(at)).norm() / diag,
+        (estimate.scale / truth.scale - 1.0).abs(),
+    )
+}
+
+impl Tolerance {
+    /// Whether errors from [`pose_errors`] are within the tolerance.
+    pub fn accepts(&self, (rotation_deg, translation_frac, scale_frac): (f64, f64, f64)) -> bool {
+        rotation_deg <= self.rotation_deg && translation_frac <= self.translation_frac && scale_frac <= self.scale_frac
+    }
+}
+
 /// Score `estimate` on `case` (the rule of the module's doc).
 pub fn score(estimate: &Pose, case: &Case) -> Score {
     let p = centroid(&case.scan);
-    let errors = |truth: &Pose| {
-        (
-            estimate.rotation_angle_to(truth).to_degrees(),
-            (estimate.apply(&p) - truth.apply(&p)).norm() / case.diag,
-            (estimate.scale / truth.scale - 1.0).abs(),
-        )
-    };
-    let within = |(r, t, s): (f64, f64, f64)| {
-        r <= TOLERANCE.rotation_deg && t <= TOLERANCE.translation_frac && s <= TOLERANCE.scale_frac
-    };
     let mut best: Option<Score> = None;
     for (i, g) in case.shape.symmetries().iter().enumerate() {
-        let e = errors(&symmetric_truth(&case.truth, g, &case.shape.centre()));
-        let s = Score { rotation_deg: e.0, translation_frac: e.1, scale_frac: e.2, symmetry: i, success: within(e) };
+        let e = pose_errors(estimate, &symmetric_truth(&case.truth, g, &case.shape.centre()), &p, case.diag);
+        let s = Score {
+            rotation_deg: e.0,
+            translation_frac: e.1,
+            scale_frac: e.2,
+            symmetry: i,
+            success: TOLERANCE.accepts(e),
+        };
         let better = match &best {
             None => true,
             Some(b) => (s.success && !b.success) || (s.success == b.success && s.rotation_deg < b.rotation_deg),
