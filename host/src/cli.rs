@@ -361,4 +361,34 @@ mod tests {
         let tab = pose_table(&[("truth", &pose)]);
         assert!(tab.contains("scale") && tab.contains("0.5000"));
     }
+
+    #[test]
+    fn the_command_quotes_what_a_shell_would_split() {
+        let inputs = Inputs { model: "my model.ply".into(), scan: "it's.xyz".into(), model_points: 10, scan_points: 9 };
+        let settings = Settings {
+            seed: 3,
+            clusters: 4,
+            particles: 5,
+            iterations: 6,
+            init: "nearest".into(),
+            board_points: Some(200),
+        };
+        let p = Provenance::new("pf-icp", inputs, settings, Some("/dev/ttyUSB0"), false);
+        assert_eq!(
+            p.command,
+            "pficp register --model 'my model.ply' --scan 'it'\\''s.xyz' --method pf-icp --clusters 4 --particles 5 \
+             --iterations 6 --seed 3 --init nearest --board /dev/ttyUSB0 --board-points 200"
+        );
+        let v = serde_json::to_value(
+            RegisterReport::new(
+                "pf-icp",
+                &Registration { pose: Pose::identity(), msd: 0.0, iterations: 1, errors: vec![] },
+                0.1,
+            )
+            .produced_by(p),
+        )
+        .unwrap();
+        assert_eq!(v["settings"]["board_points"], 200);
+        assert_eq!(v["inputs"]["scan_points"], 9);
+    }
 }

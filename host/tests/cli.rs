@@ -367,3 +367,129 @@ fn numeric_extremes_and_absurd_options_give_one_line_errors() {
     let o = register(&dir.path().join("missing.xyz"), &good, &[]);
     assert_eq!(stderr(&o).matches("No such file").count(), 1, "{}", stderr(&o));
 }
+
+/// The long options a `--help` text lists (option lines only), without `--help`/`--version`.
+fn help_options(help: &str) -> std::collections::BTreeSet<String> {
+    help.lines()
+        .map(str::trim_start)
+        .filter(|l| l.starts_with('-'))
+        .filter_map(|l| l.split(|c: char| c == ' ' || c == ',' || c == '=' || c == '<').find(|w| w.starts_with("--")))
+        .map(String::from)
+        .filter(|o| o != "--help" && o != "--version")
+        .collect()
+}
+
+/// Every `--word` in `text`.
+fn long_options(text: &str) -> std::collections::BTreeSet<String> {
+    text.split(|c: char| !(c.is_ascii_alphanumeric() || c == '-'))
+        .filter(|w| w.len() > 2 && w.starts_with("--"))
+        .map(String::from)
+        .collect()
+}
+
+#[test]
+fn every_help_has_an_example_and_the_readme_lists_the_same_options() {
+    let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../README.md")).unwrap();
+    let section = &readme[readme.find("## The `pficp` tool").expect("the README's tool section")..];
+    let block = &section[section.find("```sh\n").unwrap() + 6..];
+    let block = &block[..block.find("```").unwrap()];
+    // The README's synopsis: a line starting with `pficp` names the subcommand, indented
+    // lines continue it; `pficp [--quiet] <command>` lists the global options.
+    let mut readme_options: std::collections::BTreeMap<String, std::collections::BTreeSet<String>> = Default::default();
+    let mut current = String::new();
+    for line in block.lines() {
+        if let Some(rest) = line.strip_prefix("pficp ") {
+            let words: Vec<&str> =
+                rest.split_whitespace().take_while(|w| w.chars().all(|c| c.is_ascii_lowercase())).collect();
+            current = if words.is_empty() { "(global)".to_string() } else { words.join(" ") };
+        }
+        let opts = long_options(line.split('#').next().unwrap_or(""));
+        readme_options.entry(current.clone()).or_default().extend(opts);
+    }
+    let global = help_options(&String::from_utf8(pficp(&["--help"]).stdout).unwrap());
+    assert!(global.contains("--quiet"), "{global:?}");
+    assert_eq!(readme_options.remove("(global)").unwrap_or_default(), global, "global options");
+    let subcommands = ["demo", "register", "gen", "eval", "bench", "board info"];
+    assert_eq!(
+        readme_options.keys().cloned().collect::<std::collections::BTreeSet<_>>(),
+        subcommands.iter().map(|s| s.to_string()).collect()
+    );
+    for sub in subcommands {
+        let mut args: Vec<&str> = sub.split(' ').collect();
+        args.push("--help");
+        let o = pficp(&args);
+        assert!(o.status.success(), "{sub}: {}", stderr(&o));
+        let help = String::from_utf8(o.stdout).unwrap();
+        let example = help.split("Example:").nth(1).unwrap_or_else(|| panic!("{sub} --help has no example:\n{help}"));
+        assert!(example.trim_start().starts_with(&format!("pficp {sub}")), "{sub}'s example: {example}");
+        let listed: std::collections::BTreeSet<String> = help_options(&help).difference(&global).cloned().collect();
+        assert_eq!(readme_options[sub], listed, "{sub}: README (left) against --help (right)");
+    }
+}
+
+#[test]
+fn the_demo_shows_both_cases_with_pf_icps_uncertainty() {
+    let o = pficp(&["--quiet", "demo"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(o.stderr.is_empty(), "--quiet leaves stderr empty: {}", stderr(&o));
+    let out = String::from_utf8(o.stdout).unwrap();
+    let realistic = out.find("\n2. a realistic scan").unwrap_or_else(|| panic!("no realistic case:\n{out}"));
+    let (paper, realistic) = out.split_at(realistic);
+    assert!(paper.contains("1. the paper's setting"), "{out}");
+    for case in [paper, realistic] {
+        let success = case.lines().find(|l| l.starts_with("success")).unwrap_or_else(|| panic!("{case}"));
+        let cols: Vec<&str> = success.split_whitespace().collect();
+        assert_eq!(cols.len(), 3, "{success}");
+        assert_eq!(cols[1], "yes", "PF-ICP within the tolerance:\n{case}");
+        assert!(case.contains("pf-icp  one sigma"), "{case}");
+        assert!(case.contains("truth        inside its 95% region"), "{case}");
+    }
+}
+
+#[test]
+fn a_json_result_reruns_from_its_own_command() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().to_str().unwrap();
+    let o = pficp(&[
+        "gen",
+        "--model",
+        "model-2",
+        "--out-dir",
+        d,
+        "--points",
+        "800",
+        "--sampling",
+        "independent",
+        "--scan-points",
+        "600",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let files: Vec<String> = String::from_utf8(o.stdout).unwrap().lines().map(String::from).collect();
+    let o = register(
+        Path::new(&files[0]),
+        Path::new(&files[1]),
+        &["--json", "--seed", "7", "--particles", "30", "--clusters", "40"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let first: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(first["inputs"]["model_points"], 800);
+    assert_eq!(first["inputs"]["scan_points"], 600);
+    assert_eq!(first["inputs"]["model"], files[0].as_str());
+    assert_eq!(first["settings"]["seed"], 7);
+    assert_eq!(first["settings"]["particles"], 30);
+    assert_eq!(first["settings"]["clusters"], 40);
+    assert_eq!(first["settings"]["iterations"], 50);
+    assert_eq!(first["settings"]["init"], "auto");
+    assert_eq!(first["version"], env!("CARGO_PKG_VERSION"));
+    let command = first["command"].as_str().unwrap();
+    let words: Vec<&str> = command.split_whitespace().collect();
+    assert_eq!(words[..2], ["pficp", "register"], "{command}");
+    let mut args = words[1..].to_vec();
+    args.push("--json");
+    let o = pficp(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let again: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    for key in ["scale", "translation", "rotation", "settings", "inputs", "command"] {
+        assert_eq!(first[key], again[key], "{key} after rerunning {command}");
+    }
+}
