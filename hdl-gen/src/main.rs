@@ -69,6 +69,32 @@ struct Cli {
     /// `ltp` on the flattened netlist; a carry chain counts one level per CARRY4).
     #[arg(long, value_name = "N", default_value_t = hdl_gen::report::DEFAULT_MAX_LEVELS)]
     max_levels: usize,
+    /// No spinners on stderr while the design is generated, linted and synthesised (they are
+    /// drawn only when stderr is a terminal).
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+/// Run `work` under a spinner labelled `label` (with the elapsed time) when stderr is a
+/// terminal and not `--quiet`; the spinner is removed when the work ends.
+fn step<T>(cli: &Cli, label: &str, work: impl FnOnce() -> Result<T>) -> Result<T> {
+    use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+    use std::io::IsTerminal;
+    let spinner = if !cli.quiet && std::io::stderr().is_terminal() {
+        let s = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr());
+        s.set_style(
+            ProgressStyle::with_template("{spinner} {msg} {elapsed}")
+                .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+        );
+        s.set_message(label.to_string());
+        s.enable_steady_tick(std::time::Duration::from_millis(120));
+        s
+    } else {
+        ProgressBar::hidden()
+    };
+    let result = work();
+    spinner.finish_and_clear();
+    result
 }
 
 /// The generated designs.
@@ -161,7 +187,7 @@ fn run(cli: &Cli) -> Result<()> {
             let v = std::fs::read_to_string(f).with_context(|| format!("could not read --verilog {}", f.display()))?;
             (v, format!("{} (top `{TOP}`)", f.display()))
         }
-        None => generated_verilog(cli.design, cli.lanes, &config)?,
+        None => step(cli, "generating the Verilog", || generated_verilog(cli.design, cli.lanes, &config))?,
     };
     let path = write_verilog(&verilog, &cli.out)?;
     println!("wrote {} ({source})", path.display());
@@ -203,7 +229,7 @@ fn run(cli: &Cli) -> Result<()> {
     }
 
     if !cli.no_lint {
-        let report = lint(&verilog, &cli.out)?;
+        let report = step(cli, "verilator --lint-only -Wall", || lint(&verilog, &cli.out))?;
         println!("lint: clean (`{}`)", report.command);
     }
     if cli.no_synth {
@@ -211,7 +237,7 @@ fn run(cli: &Cli) -> Result<()> {
     }
     // The board has real pins: keep its I/O and clock buffers.
     let opts = SynthOptions { io_pads: cli.io_pads || board, ..SynthOptions::default() };
-    let mut res = synthesise(&verilog, &cli.out, &opts)?;
+    let mut res = step(cli, "yosys synth_xilinx -family xc6s", || synthesise(&verilog, &cli.out, &opts))?;
     res.source = source;
     let limits = Limits {
         max_lut_percent: cli.max_lut_percent,
