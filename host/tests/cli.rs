@@ -373,7 +373,7 @@ fn help_options(help: &str) -> std::collections::BTreeSet<String> {
     help.lines()
         .map(str::trim_start)
         .filter(|l| l.starts_with('-'))
-        .filter_map(|l| l.split(|c: char| c == ' ' || c == ',' || c == '=' || c == '<').find(|w| w.starts_with("--")))
+        .filter_map(|l| l.split([' ', ',', '=', '<']).find(|w| w.starts_with("--")))
         .map(String::from)
         .filter(|o| o != "--help" && o != "--version")
         .collect()
