@@ -36,6 +36,15 @@ fn cloud_text(n: usize) -> String {
     (0..n).map(|i| format!("{} {} {}\n", (i as f64 * 0.7).cos(), (i as f64 * 0.3).sin(), i as f64 * 0.01)).collect()
 }
 
+/// `pficp gen --out-dir DIR EXTRA...`: the paths it printed (model, scan, truth).
+fn gen(dir: &Path, extra: &[&str]) -> Vec<String> {
+    let mut args = vec!["gen", "--out-dir", dir.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    let o = pficp(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    String::from_utf8(o.stdout).unwrap().lines().map(String::from).collect()
+}
+
 fn register(model: &Path, scan: &Path, extra: &[&str]) -> Output {
     let mut args = vec!["register", "--model", model.to_str().unwrap(), "--scan", scan.to_str().unwrap()];
     args.extend_from_slice(extra);
@@ -97,10 +106,7 @@ fn bad_settings_give_one_line_errors() {
 #[test]
 fn gen_then_register_recovers_the_truth() {
     let dir = tempfile::tempdir().unwrap();
-    let d = dir.path().to_str().unwrap();
-    let o = pficp(&["gen", "--model", "model-2", "--out-dir", d, "--points", "1200"]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let files: Vec<String> = String::from_utf8(o.stdout).unwrap().lines().map(String::from).collect();
+    let files = gen(dir.path(), &["--model", "model-2", "--points", "1200"]);
     assert_eq!(files.len(), 3);
     let truth: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&files[2]).unwrap()).unwrap();
     let aligned = dir.path().join("aligned.xyz");
@@ -127,24 +133,21 @@ fn gen_then_register_recovers_the_truth() {
 #[test]
 fn same_seed_same_json_pose() {
     let dir = tempfile::tempdir().unwrap();
-    let d = dir.path().to_str().unwrap();
-    let o = pficp(&[
-        "gen",
-        "--model",
-        "model-1",
-        "--out-dir",
-        d,
-        "--points",
-        "800",
-        "--sampling",
-        "independent",
-        "--scan-points",
-        "700",
-        "--format",
-        "csv",
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let files: Vec<String> = String::from_utf8(o.stdout).unwrap().lines().map(String::from).collect();
+    let files = gen(
+        dir.path(),
+        &[
+            "--model",
+            "model-1",
+            "--points",
+            "800",
+            "--sampling",
+            "independent",
+            "--scan-points",
+            "700",
+            "--format",
+            "csv",
+        ],
+    );
     let run = |seed: &str| {
         let o = register(Path::new(&files[0]), Path::new(&files[1]), &["--json", "--seed", seed, "--clusters", "40"]);
         assert!(o.status.success(), "{}", stderr(&o));
@@ -449,22 +452,10 @@ fn the_demo_shows_both_cases_with_pf_icps_uncertainty() {
 #[test]
 fn a_json_result_reruns_from_its_own_command() {
     let dir = tempfile::tempdir().unwrap();
-    let d = dir.path().to_str().unwrap();
-    let o = pficp(&[
-        "gen",
-        "--model",
-        "model-2",
-        "--out-dir",
-        d,
-        "--points",
-        "800",
-        "--sampling",
-        "independent",
-        "--scan-points",
-        "600",
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let files: Vec<String> = String::from_utf8(o.stdout).unwrap().lines().map(String::from).collect();
+    let files = gen(
+        dir.path(),
+        &["--model", "model-2", "--points", "800", "--sampling", "independent", "--scan-points", "600"],
+    );
     let o = register(
         Path::new(&files[0]),
         Path::new(&files[1]),
