@@ -2,6 +2,8 @@
 //! and the rust_hdl RTL (feature `rtl`).
 //!
 //! - [`format`]: the fixed-point formats shared by host, reference and RTL.
+//! - [`grid`]: the model's cell grid and the grid search's bit-exact reference (capped at
+//!   one cell; the RTL twin is to come).
 //! - [`pipeline`]: the cycle-accurate reference of the nearest-neighbour pipeline.
 //! - [`weights`]: the cycle-accurate reference of the weight stage (minimum cost, exp table).
 //! - [`particle_weights`]: the two wired together, as the RTL top of that name.
@@ -18,6 +20,7 @@
 
 pub mod board;
 pub mod format;
+pub mod grid;
 pub mod messages;
 pub mod particle_weights;
 pub mod pf;
