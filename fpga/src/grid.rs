@@ -2,12 +2,14 @@
 //! builds and the board will store, and the search's bit-exact functional reference
 //! (issue 13; the RTL twin and the protocol's upload come with the grid pipeline).
 //!
-//! **Cells.** The grid covers the cube `[-1, 1)^3` of normalised units (the host normalises
+//! **Cells.** The grid covers the cube `[-1, 1]^3` of normalised units (the host normalises
 //! the model into the unit ball, docs/fixed-point.md) with [`CELLS_PER_AXIS`] cells per
 //! axis, each [`CELL_LSBS`] coordinate LSBs (`h = 1/8`) wide. A coordinate's cell along an
 //! axis is `(c + 2^13) >> CELL_SHIFT`, an arithmetic shift; values outside `0..16` lie
-//! outside the grid and hold no points. Cells are numbered `x` fastest:
-//! `cell = (k_z * 16 + k_y) * 16 + k_x`.
+//! outside the grid and hold no points, except that a model coordinate of exactly `+1`
+//! (a point on the unit sphere's axis) is stored in the last cell ([`model_cell`]; the
+//! rule below still holds, as a query within `h` of it lies in cell 15 or 16). Cells are
+//! numbered `x` fastest: `cell = (k_z * 16 + k_y) * 16 + k_x`.
 //!
 //! **Store.** The model is stored sorted by cell (stably: upload order within a cell), and
 //! the cell table holds for each cell the index of its first point, plus one entry more,
@@ -48,7 +50,7 @@ pub const NONE: u16 = u16::MAX;
 pub enum GridError {
     /// More points than the board stores.
     TooManyPoints(usize),
-    /// A point outside `[-1, 1)^3` (upload order index).
+    /// A point outside `[-1, 1]^3` (upload order index).
     OutsideGrid(usize),
 }
 
@@ -56,7 +58,7 @@ impl std::fmt::Display for GridError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             GridError::TooManyPoints(n) => write!(f, "{n} model points: the grid holds at most {MAX_POINTS}"),
-            GridError::OutsideGrid(i) => write!(f, "model point {i} lies outside the grid's cube [-1, 1)^3"),
+            GridError::OutsideGrid(i) => write!(f, "model point {i} lies outside the grid's cube [-1, 1]^3"),
         }
     }
 }
@@ -71,6 +73,13 @@ pub fn axis_cell(c: i16) -> i32 {
 /// A point's cell coordinates.
 pub fn cell_of(p: FxPoint) -> [i32; 3] {
     [axis_cell(p[0]), axis_cell(p[1]), axis_cell(p[2])]
+}
+
+/// A model point's cell coordinates: [`cell_of`], with a coordinate of exactly `+1`
+/// (`2^13`) in the last cell; `None` outside `[-1, 1]^3`.
+pub fn model_cell(p: FxPoint) -> Option<[i32; 3]> {
+    let k = p.map(|c| if c == 1 << COORD_FRAC { CELLS_PER_AXIS as i32 - 1 } else { axis_cell(c) });
+    k.iter().all(|&a| inside(a)).then_some(k)
 }
 
 fn inside(k: i32) -> bool {
@@ -110,11 +119,7 @@ impl Grid {
         }
         let mut cells = Vec::with_capacity(model.len());
         for (i, &p) in model.iter().enumerate() {
-            let k = cell_of(p);
-            if !k.iter().all(|&a| inside(a)) {
-                return Err(GridError::OutsideGrid(i));
-            }
-            cells.push(cell_index(k));
+            cells.push(cell_index(model_cell(p).ok_or(GridError::OutsideGrid(i))?));
         }
         let mut order: Vec<u16> = (0..model.len() as u16).collect();
         order.sort_by_key(|&i| cells[i as usize]);
@@ -199,7 +204,9 @@ mod tests {
 
     #[test]
     fn a_model_outside_the_cube_or_too_big_is_refused() {
-        assert_eq!(Grid::build(&[[0, 0, 0], [0, 8192, 0]]), Err(GridError::OutsideGrid(1)));
+        assert_eq!(Grid::build(&[[0, 0, 0], [0, 8193, 0]]), Err(GridError::OutsideGrid(1)));
+        assert_eq!(Grid::build(&[[-8193, 0, 0]]), Err(GridError::OutsideGrid(0)));
+        assert_eq!(model_cell([8192, -8192, 8191]), Some([15, 0, 15]));
         assert_eq!(Grid::build(&vec![[0; 3]; MAX_POINTS + 1]), Err(GridError::TooManyPoints(MAX_POINTS + 1)));
         assert!(Grid::build(&[[-8192, -8192, -8192], [8191, 8191, 8191]]).is_ok());
     }
@@ -211,7 +218,7 @@ mod tests {
         assert_eq!(g.first[CELLS] as usize, model.len());
         assert_eq!(g.order, vec![1, 0, 2, 3]);
         for (i, &p) in g.points.iter().enumerate() {
-            let c = cell_index(cell_of(p));
+            let c = cell_index(model_cell(p).unwrap());
             assert!((g.first[c] as usize..g.first[c + 1] as usize).contains(&i));
         }
     }

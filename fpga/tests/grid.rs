@@ -9,8 +9,8 @@ use proptest::prelude::*;
 /// A coordinate inside the grid's cube, drawn near cell boundaries a third of the time.
 fn inside_coord() -> impl Strategy<Value = i16> {
     prop_oneof![
-        2 => -8192i16..8192,
-        1 => (0i16..16, -3i16..3).prop_map(|(k, d)| (-8192 + k * CELL_LSBS as i16 + d).clamp(-8192, 8191)),
+        2 => -8192i16..=8192,
+        1 => (0i16..=16, -3i16..3).prop_map(|(k, d)| (-8192 + k * CELL_LSBS as i16 + d).clamp(-8192, 8192)),
     ]
 }
 
