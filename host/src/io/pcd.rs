@@ -493,3 +493,348 @@ pub(super) fn write_binary(points: &[Point3<f64>]) -> Vec<u8> {
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn p(x: f64, y: f64, z: f64) -> Point3<f64> {
+        Point3::new(x, y, z)
+    }
+
+    fn read_all(bytes: &[u8]) -> Result<Vec<Point3<f64>>, ParseError> {
+        read(bytes, usize::MAX)
+    }
+
+    fn err(bytes: &[u8]) -> String {
+        let e = read_all(bytes).unwrap_err().to_string();
+        assert!(!e.contains('\n'), "{e}");
+        e
+    }
+
+    /// A greedy LZF encoder (longest match within liblzf's 8 KiB window, literal runs of
+    /// at most 32), to make binary_compressed bodies with back references.
+    fn lzf_compress(data: &[u8]) -> Vec<u8> {
+        fn flush(out: &mut Vec<u8>, lit: &mut Vec<u8>) {
+            for c in lit.chunks(32) {
+                out.push(c.len() as u8 - 1);
+                out.extend_from_slice(c);
+            }
+            lit.clear();
+        }
+        let (mut out, mut lit, mut i) = (Vec::new(), Vec::new(), 0);
+        while i < data.len() {
+            let mut best = (0, 0);
+            for back in 1..=i.min(8192) {
+                let from = i - back;
+                let mut n = 0;
+                while n < 264 && i + n < data.len() && data[from + n] == data[i + n] {
+                    n += 1;
+                }
+                if n > best.0 {
+                    best = (n, back);
+                }
+            }
+            let (n, back) = best;
+            if n < 3 {
+                lit.push(data[i]);
+                i += 1;
+                continue;
+            }
+            flush(&mut out, &mut lit);
+            let (len, off) = (n - 2, back - 1);
+            out.push(((len.min(7) << 5) | (off >> 8)) as u8);
+            if len >= 7 {
+                out.push((len - 7) as u8);
+            }
+            out.push((off & 0xff) as u8);
+            i += n;
+        }
+        flush(&mut out, &mut lit);
+        out
+    }
+
+    /// A binary_compressed file: `header` (up to `DATA`), the sizes and the block.
+    fn compressed_file(header: &str, field_major: &[u8]) -> Vec<u8> {
+        let block = lzf_compress(field_major);
+        let mut b = format!("{header}DATA binary_compressed\n").into_bytes();
+        b.extend_from_slice(&(block.len() as u32).to_le_bytes());
+        b.extend_from_slice(&(field_major.len() as u32).to_le_bytes());
+        b.extend_from_slice(&block);
+        b
+    }
+
+    /// `points` as our writer's fields, field-major (every x, then every y, then z).
+    fn field_major(points: &[Point3<f64>]) -> Vec<u8> {
+        (0..3).flat_map(|a| points.iter().flat_map(move |q| q[a].to_le_bytes())).collect()
+    }
+
+    /// Our binary header without its `DATA` line.
+    fn xyz_header(n: usize) -> String {
+        let h = header("binary", n);
+        h.strip_suffix("DATA binary\n").unwrap().to_string()
+    }
+
+    const ASCII: &str = "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n\
+        WIDTH 2\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA ascii\n";
+
+    #[test]
+    fn writers_round_trip_exactly_in_every_encoding() {
+        let pts = vec![p(0.1, -0.0, 5e-324), p(f64::MAX, 1e-7, 2.0 / 3.0), p(-1e300, 3.5, 1e16)];
+        assert_eq!(read_all(&write_ascii(&pts)).unwrap(), pts);
+        let bin = write_binary(&pts);
+        assert_eq!(read_all(&bin).unwrap(), pts);
+        let s = String::from_utf8_lossy(&bin);
+        assert!(s.contains("\nSIZE 8 8 8\nTYPE F F F\n") && s.contains("\nDATA binary\n"), "{s}");
+        let c = compressed_file(&xyz_header(pts.len()), &field_major(&pts));
+        assert_eq!(read_all(&c).unwrap(), pts);
+        for w in [write_ascii(&[]), write_binary(&[])] {
+            assert!(read_all(&w).unwrap().is_empty());
+        }
+    }
+
+    #[test]
+    fn ascii_honours_counts_types_and_old_headers() {
+        // rgb as a float, a descriptor of COUNT 3 before y, F 4 coordinates rounded to f32.
+        let text = "VERSION .7\nFIELDS x d y rgb z\nSIZE 4 2 8 4 4\nTYPE F U F F F\nCOUNT 1 3 1 1 1\n\
+            WIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA ascii\n0.1 1 2 3 0.25 4.2e-5 -7\n\n1 0 0 0 2 0 3 extra\n";
+        let pts = read_all(text.as_bytes()).unwrap();
+        assert_eq!(pts, vec![p(f64::from(0.1f32), 0.25, -7.0), p(1.0, 2.0, 3.0)]);
+        // PCL's v0.5 headers: COLUMNS, no SIZE/TYPE/COUNT (4, F, 1), no WIDTH/HEIGHT.
+        let old = "# .PCD v.5\nVERSION .5\nCOLUMNS x y z i\nPOINTS 1\nDATA ascii\n1.5 2 3 9\n";
+        assert_eq!(read_all(old.as_bytes()).unwrap(), vec![p(1.5, 2.0, 3.0)]);
+        // WIDTH alone gives POINTS.
+        let w = "FIELDS x y z\nWIDTH 1\nDATA ascii\n1 2 3\n";
+        assert_eq!(read_all(w.as_bytes()).unwrap(), vec![p(1.0, 2.0, 3.0)]);
+    }
+
+    #[test]
+    fn binary_with_mixed_types_and_padding() {
+        let mut b = b"VERSION 0.7\nFIELDS rgb _ z x y n\nSIZE 4 1 8 4 8 2\nTYPE U U F F F I\nCOUNT 1 3 1 1 1 2\n\
+            WIDTH 2\nHEIGHT 1\nVIEWPOINT 1 2 3 1 0 0 0\nPOINTS 2\nDATA binary\n"
+            .to_vec();
+        for (x, y, z) in [(0.5f32, -1.25f64, 1e300f64), (3.0, 4.0, -5.0)] {
+            b.extend_from_slice(&0xff00ffu32.to_le_bytes());
+            b.extend_from_slice(&[7, 7, 7]);
+            b.extend_from_slice(&z.to_le_bytes());
+            b.extend_from_slice(&x.to_le_bytes());
+            b.extend_from_slice(&y.to_le_bytes());
+            b.extend_from_slice(&[1, 2, 3, 4]);
+        }
+        assert_eq!(read_all(&b).unwrap(), vec![p(0.5, -1.25, 1e300), p(3.0, 4.0, -5.0)]);
+    }
+
+    #[test]
+    fn compressed_is_field_major_over_every_field() {
+        // FIELDS i x y z: i (U 2) for both points, then x (F 4), then y and z (F 8).
+        let mut data = vec![1, 0, 2, 0];
+        data.extend([1.5f32, -2.0].iter().flat_map(|v| v.to_le_bytes()));
+        data.extend([0.25f64, 8.0, 3.0, 3.0].iter().flat_map(|v| v.to_le_bytes()));
+        let h = "FIELDS i x y z\nSIZE 2 4 8 8\nTYPE U F F F\nCOUNT 1 1 1 1\nWIDTH 2\nHEIGHT 1\nPOINTS 2\n";
+        assert_eq!(read_all(&compressed_file(h, &data)).unwrap(), vec![p(1.5, 0.25, 3.0), p(-2.0, 8.0, 3.0)]);
+    }
+
+    #[test]
+    fn lzf_decodes_literals_and_overlapping_back_references() {
+        // "abc", then 7 bytes from 3 back (overlapping), then 10 from 1 back (long form).
+        let stream = [2, b'a', b'b', b'c', 5 << 5, 2, 7 << 5, 1, 0];
+        assert_eq!(lzf_decompress(&stream, 20).unwrap(), b"abcabcabcaaaaaaaaaaa");
+        let data: Vec<u8> = (0..5000u32).map(|i| (i % 97 + i / 1000) as u8).collect();
+        let packed = lzf_compress(&data);
+        assert!(packed.len() < data.len() / 4);
+        assert_eq!(lzf_decompress(&packed, data.len()).unwrap(), data);
+        assert_eq!(lzf_decompress(&[], 0).unwrap(), Vec::<u8>::new());
+    }
+
+    #[test]
+    fn corrupt_lzf_streams_are_errors() {
+        let e = lzf_decompress(&[2, b'a'], 3).unwrap_err();
+        assert!(e.contains("literal run of 3 bytes at input byte 0 passes the block's end"), "{e}");
+        let e = lzf_decompress(&[0, b'a', 1 << 5, 1], 4).unwrap_err();
+        assert!(e.contains("reaches 2 bytes back from output byte 1"), "{e}");
+        let e = lzf_decompress(&[0, b'a', 7 << 5], 20).unwrap_err();
+        assert!(e.contains("back reference at input byte 2 passes the block's end"), "{e}");
+        let e = lzf_decompress(&[0, b'a', 1 << 5], 20).unwrap_err();
+        assert!(e.contains("passes the block's end"), "{e}");
+        let e = lzf_decompress(&[1, b'a', b'b'], 1).unwrap_err();
+        assert!(e.contains("more than the 1 bytes"), "{e}");
+        let e = lzf_decompress(&[0, b'a', 1 << 5, 0], 2).unwrap_err();
+        assert!(e.contains("more than the 2 bytes"), "{e}");
+        let e = lzf_decompress(&[1, b'a', b'b'], 5).unwrap_err();
+        assert!(e.contains("gives 2 bytes, the file says 5"), "{e}");
+    }
+
+    #[test]
+    fn nan_points_are_skipped_and_other_values_kept() {
+        let pts =
+            vec![p(1.0, 2.0, 3.0), p(f64::NAN, f64::NAN, f64::NAN), p(4.0, f64::NAN, 6.0), p(f64::INFINITY, 0.0, 0.0)];
+        let kept = vec![p(1.0, 2.0, 3.0), p(f64::INFINITY, 0.0, 0.0)];
+        assert_eq!(read_all(&write_ascii(&pts)).unwrap(), kept);
+        assert_eq!(read_all(&write_binary(&pts)).unwrap(), kept);
+        assert_eq!(read_all(&compressed_file(&xyz_header(4), &field_major(&pts))).unwrap(), kept);
+        let organised = ASCII.replace("WIDTH 2\nHEIGHT 1", "WIDTH 1\nHEIGHT 2") + "nan nan nan\n1 2 3\n";
+        assert_eq!(read_all(organised.as_bytes()).unwrap(), vec![p(1.0, 2.0, 3.0)]);
+    }
+
+    #[test]
+    fn header_errors() {
+        assert!(err(b"").contains("missing `DATA` line"));
+        assert!(err(ASCII.replace("DATA ascii\n", "").as_bytes()).contains("missing `DATA` line"));
+        assert!(err(b"ply\nformat ascii 1.0\n").contains("malformed PCD header at line 1: `ply`"));
+        let e = err(ASCII.replace("FIELDS x y z\n", "").as_bytes());
+        assert!(e.contains("missing `FIELDS` line"), "{e}");
+        let e = err(ASCII.replace("FIELDS x y z", "FIELDS a y z").as_bytes());
+        assert!(e.contains("FIELDS has no `x`"), "{e}");
+        let e = err(ASCII.replace("FIELDS x y z", "FIELDS x y").as_bytes());
+        assert!(e.contains("line 4: SIZE has 3 entries, FIELDS has 2"), "{e}");
+        let e = err(ASCII.replace("TYPE F F F", "TYPE F F").as_bytes());
+        assert!(e.contains("line 5: TYPE has 2 entries, FIELDS has 3"), "{e}");
+        let e = err(ASCII.replace("COUNT 1 1 1", "COUNT 1 1 1 1").as_bytes());
+        assert!(e.contains("line 6: COUNT has 4 entries, FIELDS has 3"), "{e}");
+        let e = err(ASCII.replace("SIZE 4 4 4", "SIZE 4 four 4").as_bytes());
+        assert!(e.contains("line 4: bad SIZE value `four`"), "{e}");
+        let e = err(ASCII.replace("COUNT 1 1 1", "COUNT 1 -1 1").as_bytes());
+        assert!(e.contains("bad COUNT value `-1`"), "{e}");
+        let e = err(ASCII.replace("SIZE 4 4 4", "SIZE 4 2 4").as_bytes());
+        assert!(e.contains("field `y` has TYPE F SIZE 2"), "{e}");
+        let e = err(ASCII.replace("TYPE F F F", "TYPE F F Q").as_bytes());
+        assert!(e.contains("field `z` has TYPE Q SIZE 4"), "{e}");
+        let e = err(ASCII.replace("TYPE F F F", "TYPE U F F").as_bytes());
+        assert!(e.contains("`x` is TYPE U SIZE 4 COUNT 1: coordinates must be one float"), "{e}");
+        let e = err(ASCII.replace("COUNT 1 1 1", "COUNT 1 1 2").as_bytes());
+        assert!(e.contains("`z` is TYPE F SIZE 4 COUNT 2"), "{e}");
+        let e = err(ASCII.replace("POINTS 2", "POINTS 3").as_bytes());
+        assert!(e.contains("POINTS 3 is not WIDTH 2 x HEIGHT 1"), "{e}");
+        let e = err(ASCII.replace("HEIGHT 1", "HEIGHT 2").as_bytes());
+        assert!(e.contains("POINTS 2 is not WIDTH 2 x HEIGHT 2"), "{e}");
+        let e = err(ASCII.replace("WIDTH 2\n", "").replace("HEIGHT 1", "HEIGHT 2").as_bytes());
+        assert!(e.contains("missing `WIDTH` line"), "{e}");
+        let e = err(ASCII.replace("WIDTH 2", "WIDTH two").as_bytes());
+        assert!(e.contains("line 7: bad WIDTH value `two`"), "{e}");
+        let e = err(ASCII.replace("POINTS 2\n", "").replace("HEIGHT 1", &format!("HEIGHT {}", usize::MAX)).as_bytes());
+        assert!(e.contains("POINTS (absent) is not WIDTH 2 x HEIGHT"), "{e}");
+        let e = err(ASCII.replace("DATA ascii", "DATA binary_lz4").as_bytes());
+        assert!(e.contains("unsupported PCD DATA `binary_lz4`"), "{e}");
+        let e = err(ASCII.replace("VIEWPOINT 0 0 0 1 0 0 0", "VIEWPOINT 0 0 0").as_bytes());
+        assert!(e.contains("line 9: `VIEWPOINT 0 0 0`"), "{e}");
+        let e = err(ASCII.replace("VERSION 0.7", "MOOD 0.7").as_bytes());
+        assert!(e.contains("malformed PCD header at line 2: `MOOD 0.7`"), "{e}");
+    }
+
+    #[test]
+    fn body_errors() {
+        let e = err(format!("{ASCII}1 2 3\n").as_bytes());
+        assert!(e.contains("truncated PCD body: read 1 of 2 declared points"), "{e}");
+        let e = err(format!("{ASCII}1 2 3\n4 5\n").as_bytes());
+        assert!(e.contains("too few columns at line 13: found 2, need at least 3"), "{e}");
+        let e = err(format!("{ASCII}1 2 3\n4 five 6\n").as_bytes());
+        assert!(e.contains("malformed number `five` at line 13"), "{e}");
+        let bin = write_binary(&[p(1.0, 2.0, 3.0); 3]);
+        let e = err(&bin[..bin.len() - 30]);
+        assert!(e.contains("truncated PCD body: read 1 of 3"), "{e}");
+        let pts = vec![p(1.0, 2.0, 3.0); 20];
+        let c = compressed_file(&xyz_header(20), &field_major(&pts));
+        let e = err(&c[..c.len() - 1]);
+        assert!(e.contains("corrupt PCD binary_compressed body: truncated"), "{e}");
+        let body = xyz_header(20).len() + "DATA binary_compressed\n".len(); // the sizes' offset
+        let e = err(&c[..body + 5]);
+        assert!(e.contains("the body ends before its two sizes"), "{e}");
+        let mut bad = c.clone();
+        bad[body + 8] = 0x3f; // the first token: a back reference 8 KiB before the start
+        let e = err(&bad);
+        assert!(e.contains("corrupt PCD binary_compressed body: an LZF back reference at input byte 0"), "{e}");
+        let mut short = c.clone();
+        short[body + 4] -= 8; // the uncompressed size one point short
+        let e = err(&short);
+        assert!(e.contains("says 472 uncompressed bytes, but 20 points of 24 bytes are 480"), "{e}");
+    }
+
+    #[test]
+    fn absurd_sizes_are_refused_before_anything_is_allocated() {
+        // Sizes of 4 GiB and just over the limit, compressed or not, with no body behind them.
+        let h = format!("{}DATA binary_compressed\n", xyz_header(2));
+        for (c, u, what) in [
+            (u32::MAX, 48, "compressed block of 4294967295 bytes"),
+            (10, u32::MAX, "uncompressed block of 4294967295 bytes"),
+            (MAX_BODY_BYTES as u32 + 1, 48, "compressed block of 536870913 bytes"),
+        ] {
+            let mut b = h.clone().into_bytes();
+            b.extend_from_slice(&c.to_le_bytes());
+            b.extend_from_slice(&u.to_le_bytes());
+            let e = err(&b);
+            assert!(e.contains(what) && e.contains("more than the limit of 536870912"), "{e}");
+        }
+        // A compressed size the file does not hold: read as far as it goes, then refused.
+        let mut b = h.into_bytes();
+        b.extend_from_slice(&400_000_000u32.to_le_bytes());
+        b.extend_from_slice(&48u32.to_le_bytes());
+        b.extend_from_slice(&[0; 10]);
+        assert!(err(&b).contains("truncated: 10 of 400000000 compressed bytes"));
+        // A record of 10^12 bytes, POINTS of 2^64 - 1.
+        let e = err(ASCII.replace("COUNT 1 1 1", "COUNT 1 1000000000000 1").as_bytes());
+        assert!(e.contains("PCD point record of 4000000000008 bytes is more than the limit of 65536"), "{e}");
+        let huge = usize::MAX.to_string();
+        let e = err(ASCII
+            .replace("WIDTH 2", &format!("WIDTH {huge}"))
+            .replace("POINTS 2", &format!("POINTS {huge}"))
+            .as_bytes());
+        assert!(e.contains("truncated PCD body: read 0 of"), "{e}");
+    }
+
+    #[test]
+    fn a_header_declaring_more_than_the_limit_is_refused_before_the_body() {
+        for data in ["ascii", "binary", "binary_compressed"] {
+            let h = ASCII.replace("WIDTH 2", "WIDTH 11").replace("POINTS 2", "POINTS 11").replace("ascii", data);
+            assert_eq!(read(h.as_bytes(), 10), Err(ParseError::TooManyPoints { limit: 10 }));
+        }
+        assert_eq!(read(write_binary(&[p(1.0, 2.0, 3.0); 10]).as_slice(), 10).unwrap().len(), 10);
+    }
+
+    /// Any finite f64, both signs, including subnormals and zeros.
+    fn finite() -> impl Strategy<Value = f64> {
+        use proptest::num::f64::{NEGATIVE, NORMAL, POSITIVE, SUBNORMAL, ZERO};
+        POSITIVE | NEGATIVE | NORMAL | SUBNORMAL | ZERO
+    }
+
+    proptest! {
+        #[test]
+        fn random_points_round_trip_in_every_encoding(xs in proptest::collection::vec(finite(), 0..60)) {
+            let pts: Vec<_> = xs.chunks_exact(3).map(|c| p(c[0], c[1], c[2])).collect();
+            prop_assert_eq!(read_all(&write_ascii(&pts)).unwrap(), pts.clone());
+            prop_assert_eq!(read_all(&write_binary(&pts)).unwrap(), pts.clone());
+            let c = compressed_file(&xyz_header(pts.len()), &field_major(&pts));
+            prop_assert_eq!(read_all(&c).unwrap(), pts);
+        }
+
+        #[test]
+        fn lzf_round_trips(data in proptest::collection::vec(0u8..4, 0..2000)) {
+            prop_assert_eq!(lzf_decompress(&lzf_compress(&data), data.len()).unwrap(), data);
+        }
+
+        #[test]
+        fn random_lzf_streams_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..300), len in 0usize..2000) {
+            if let Ok(out) = lzf_decompress(&bytes, len) {
+                prop_assert_eq!(out.len(), len);
+            }
+        }
+
+        #[test]
+        fn random_bodies_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..512)) {
+            let _ = read_all(&bytes);
+            for data in ["ascii", "binary", "binary_compressed"] {
+                let mut b = ASCII.replace("ascii", data).into_bytes();
+                b.extend_from_slice(&bytes);
+                let _ = read_all(&b);
+            }
+        }
+
+        #[test]
+        fn random_headers_never_panic(text in "((VERSION|FIELDS|COLUMNS|SIZE|TYPE|COUNT|WIDTH|HEIGHT|POINTS|VIEWPOINT|DATA|ascii|binary|binary_compressed|x|y|z|_|F|U|I|[0-9]{1,3}|-1|#| |\n)){0,40}") {
+            let _ = read_all(text.as_bytes());
+            let mut b = text.into_bytes();
+            b.extend_from_slice(&[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16]);
+            let _ = read_all(&b);
+        }
+    }
+}
