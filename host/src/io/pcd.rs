@@ -44,9 +44,9 @@ enum Scalar {
 }
 
 impl Scalar {
-    /// The type for a `TYPE` letter and a `SIZE`.
+    /// The type for a `TYPE` letter (either case, as PCL takes it) and a `SIZE`.
     fn parse(ty: &str, size: usize) -> Option<Self> {
-        Some(match (ty, size) {
+        Some(match (ty.to_ascii_uppercase().as_str(), size) {
             ("I", 1) => Scalar::I8,
             ("U", 1) => Scalar::U8,
             ("I", 2) => Scalar::I16,
@@ -605,7 +605,7 @@ mod tests {
         let old = "# .PCD v.5\nVERSION .5\nCOLUMNS x y z i\nPOINTS 1\nDATA ascii\n1.5 2 3 9\n";
         assert_eq!(read_all(old.as_bytes()).unwrap(), vec![p(1.5, 2.0, 3.0)]);
         // WIDTH alone gives POINTS.
-        let w = "FIELDS x y z\nWIDTH 1\nDATA ascii\n1 2 3\n";
+        let w = "FIELDS x y z\nTYPE f f f\nWIDTH 1\nDATA ascii\n1 2 3\n";
         assert_eq!(read_all(w.as_bytes()).unwrap(), vec![p(1.0, 2.0, 3.0)]);
     }
 
