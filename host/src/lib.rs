@@ -1,7 +1,7 @@
 //! PF-ICP host library: point-cloud registration in f64, and the host side of the board.
 //!
 //! The tree follows the data path:
-//! - [`io`] reads and writes PLY, XYZ and CSV clouds into a [`cloud::Cloud`]; [`geometry`]
+//! - [`io`] reads and writes PLY, PCD, XYZ and CSV clouds into a [`cloud::Cloud`]; [`geometry`]
 //!   holds poses and transforms, [`nn`] the nearest-neighbour search every method uses.
 //! - [`request::Request`]: one registration (method, engine, settings), checked and run;
 //!   what the CLI's `register` calls.

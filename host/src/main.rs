@@ -193,10 +193,10 @@ impl PfArgs {
 
 #[derive(clap::Args)]
 struct RegisterArgs {
-    /// Model cloud D (PLY, XYZ or CSV).
+    /// Model cloud D (PLY, PCD, XYZ or CSV).
     #[arg(long)]
     model: PathBuf,
-    /// Scan cloud M (PLY, XYZ or CSV).
+    /// Scan cloud M (PLY, PCD, XYZ or CSV).
     #[arg(long)]
     scan: PathBuf,
     /// Registration method.
@@ -281,7 +281,7 @@ struct GenArgs {
     /// Seed for sampling, noise and the random transform.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// File format: ply, xyz or csv.
+    /// File format: ply, pcd, xyz or csv (ply and pcd are written binary).
     #[arg(long, default_value = "ply")]
     format: String,
 }
@@ -568,8 +568,8 @@ fn gen(a: &GenArgs) -> Result<()> {
         bail!("--noise must be a finite number >= 0 (got {})", a.noise);
     }
     let ext = match a.format.as_str() {
-        "ply" | "xyz" | "csv" => a.format.as_str(),
-        other => bail!("unknown --format {other:?}: use ply, xyz or csv"),
+        "ply" | "pcd" | "xyz" | "csv" => a.format.as_str(),
+        other => bail!("unknown --format {other:?}: use ply, pcd, xyz or csv"),
     };
     let truth = if a.random_transform {
         use rand::SeedableRng;

@@ -484,3 +484,30 @@ fn a_json_result_reruns_from_its_own_command() {
         assert_eq!(first[key], again[key], "{key} after rerunning {command}");
     }
 }
+
+#[test]
+fn pcd_files_go_through_gen_register_and_out_aligned() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = gen(dir.path(), &["--model", "model-2", "--points", "600", "--format", "pcd"]);
+    assert!(files[0].ends_with("model-2.pcd") && files[1].ends_with("model-2-scan.pcd"), "{files:?}");
+    let model = std::fs::read(&files[0]).unwrap();
+    assert!(String::from_utf8_lossy(&model).contains("\nSIZE 4 4 4\nTYPE F F F\n"));
+    let out = dir.path().join("aligned.pcd");
+    let o = register(Path::new(&files[0]), Path::new(&files[1]), &["--json", "--out-aligned", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let aligned = pficp::io::read_cloud(&out, "aligned").unwrap();
+    let scan = pficp::io::read_cloud(Path::new(&files[1]), "scan").unwrap();
+    assert_eq!(aligned.len(), scan.len());
+    // An organised cloud's NaN points are skipped; a bad PCD is a one-line error.
+    let mut text = String::from("FIELDS x y z\nWIDTH 2\nHEIGHT 151\nPOINTS 302\nDATA ascii\nnan nan nan\n");
+    text.push_str(&cloud_text(300));
+    text.push_str("nan nan nan\n");
+    let organised = write(dir.path(), "organised.pcd", text.as_bytes());
+    let o = register(&organised, &organised, &["--method", "icp"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let bad = write(dir.path(), "bad.pcd", b"FIELDS x y\nSIZE 4 4\nTYPE F F\nCOUNT 1 1\nPOINTS 1\nDATA ascii\n1 2\n");
+    assert_error(&register(&bad, &organised, &[]), &["bad.pcd", "FIELDS has no `z`"]);
+    let bad =
+        write(dir.path(), "lzf.pcd", b"FIELDS x y z\nPOINTS 1\nDATA binary_compressed\n\xff\xff\xff\xff\x0c\0\0\0");
+    assert_error(&register(&organised, &bad, &[]), &["lzf.pcd", "4294967295 bytes", "more than the limit"]);
+}

@@ -1,9 +1,11 @@
 //! Fuzzing the host's two doors to the outside: the point-cloud readers (proptest: valid
-//! files of every format, then bytes flipped, set, inserted or cut, and pure noise) and
+//! files of every format, PCD's binary_compressed and the PCD fixtures of independent
+//! writers among them, then bytes flipped, set, inserted or cut, and pure noise) and
 //! the board client's reply handling (seeded: the reference board on a real
 //! pseudo-terminal whose replies are corrupted, cut, renumbered, readdressed, replaced,
 //! echoed, doubled, preceded by noise or withheld, while the client makes random requests).
-//! A seeded share runs in every `cargo test`; the full counts (10^5 each) with
+//! A seeded share runs in every `cargo test`; the full counts (10^5 each, and 10^5 of PCD
+//! files only) with
 //!
 //! ```sh
 //! cargo test --release -p pficp-host --test fuzz -- --ignored --nocapture
@@ -24,9 +26,27 @@ use rand_chacha::ChaCha8Rng;
 use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
-const FORMATS: [Format; 4] = [Format::PlyAscii, Format::PlyBinary, Format::Xyz, Format::Csv];
+const FORMATS: [Format; 6] =
+    [Format::PlyAscii, Format::PlyBinary, Format::Xyz, Format::Csv, Format::PcdAscii, Format::PcdBinary];
 /// The point limit the readers get here (some generated files exceed it).
 const LIMIT: usize = 40;
+/// What a fuzz case starts from: a file of each of `FORMATS`, a binary_compressed PCD
+/// made here, or one of the PCD fixtures of the independent writers.
+const KINDS: usize = FORMATS.len() + 2;
+/// The kinds that are PCD files.
+const PCD_KINDS: std::ops::Range<usize> = 4..KINDS;
+/// The PCD fixtures (`tests/data/pcd/SOURCES.md`): real LZF streams with back references.
+const PCD_FIXTURES: [&str; 7] = [
+    "open3d_ascii",
+    "open3d_binary_normals_rgb",
+    "open3d_compressed_normals_rgb",
+    "pypcd4_fields_ascii",
+    "pypcd4_padding_f8_compressed",
+    "pypcd4_organised_nan_binary",
+    "pypcd4_organised_nan_compressed",
+];
+/// The point limit for the fixtures (up to 200 points each).
+const FIXTURE_LIMIT: usize = 400;
 
 fn runner(cases: u32, seed: u64) -> TestRunner {
     let mut s = [0u8; 32];
@@ -35,20 +55,75 @@ fn runner(cases: u32, seed: u64) -> TestRunner {
     TestRunner::new_with_rng(config, TestRng::from_seed(RngAlgorithm::ChaCha, &s))
 }
 
-/// A file of every format, mutated: no panic; at most `LIMIT` points; unmutated files read
-/// back exactly (or refuse the count); noise never panics either.
-fn fuzz_readers(cases: u32, seed: u64) {
+/// The PCD fixtures' bytes, read once.
+fn pcd_fixtures() -> &'static [Vec<u8>] {
+    static FILES: std::sync::OnceLock<Vec<Vec<u8>>> = std::sync::OnceLock::new();
+    FILES.get_or_init(|| {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/pcd");
+        PCD_FIXTURES.iter().map(|n| std::fs::read(dir.join(format!("{n}.pcd"))).unwrap()).collect()
+    })
+}
+
+/// `points` as a binary_compressed PCD: the binary writer's header and its `F 8` x y z
+/// field-major in an LZF block of literal runs and, for a byte repeated 4 times or more,
+/// a back reference of one byte.
+fn pcd_compressed(points: &[Point3<f64>]) -> Vec<u8> {
+    let binary = write_points_to_bytes(points, Format::PcdBinary);
+    let header_len = binary.len() - 24 * points.len();
+    let header = String::from_utf8_lossy(&binary[..header_len]).replace("DATA binary\n", "DATA binary_compressed\n");
+    let data: Vec<u8> = (0..3).flat_map(|a| points.iter().flat_map(move |p| p[a].to_le_bytes())).collect();
+    let (mut block, mut literal, mut i) = (Vec::new(), Vec::new(), 0);
+    let flush = |block: &mut Vec<u8>, literal: &mut Vec<u8>| {
+        for run in literal.chunks(32) {
+            block.push(run.len() as u8 - 1);
+            block.extend_from_slice(run);
+        }
+        literal.clear();
+    };
+    while i < data.len() {
+        let run = data[i..].iter().take(257).take_while(|&&b| b == data[i]).count();
+        literal.push(data[i]);
+        if run < 4 {
+            i += 1;
+            continue;
+        }
+        flush(&mut block, &mut literal);
+        let len = run - 1 - 2; // copies of the byte, less the 2 LZF adds
+        if len < 7 {
+            block.push((len << 5) as u8);
+        } else {
+            block.extend_from_slice(&[7 << 5, (len - 7) as u8]);
+        }
+        block.push(0); // one byte back
+        i += run;
+    }
+    flush(&mut block, &mut literal);
+    let mut out = header.into_bytes();
+    out.extend_from_slice(&(block.len() as u32).to_le_bytes());
+    out.extend_from_slice(&(data.len() as u32).to_le_bytes());
+    out.extend_from_slice(&block);
+    out
+}
+
+/// A file of every format (or of the PCD `kinds` only), mutated: no panic; at most the
+/// limit's points; unmutated files read back exactly (or refuse the count); noise never
+/// panics either.
+fn fuzz_readers(cases: u32, seed: u64, kinds: std::ops::Range<usize>) {
     let coords = proptest::collection::vec(-1e6f64..1e6, 0..3 * (LIMIT + 10));
     let edits = proptest::collection::vec((0u8..4, any::<usize>(), any::<u8>()), 0..6);
     let noise = proptest::collection::vec(any::<u8>(), 0..300);
     runner(cases, seed)
-        .run(&(0usize..4, coords, edits, noise), |(f, coords, edits, noise)| {
-            let format = FORMATS[f];
+        .run(&(kinds, coords, edits, noise, 0..PCD_FIXTURES.len()), |(kind, coords, edits, noise, fixture)| {
             let points: Vec<Point3<f64>> = coords.chunks_exact(3).map(|c| Point3::new(c[0], c[1], c[2])).collect();
-            let mut bytes = write_points_to_bytes(&points, format);
-            match read_points(&bytes[..], format, LIMIT) {
-                Ok(back) => prop_assert_eq!(&back, &points),
-                Err(e) => prop_assert_eq!(e, ParseError::TooManyPoints { limit: LIMIT }),
+            let (mut bytes, format, limit) = match FORMATS.get(kind) {
+                Some(&format) => (write_points_to_bytes(&points, format), format, LIMIT),
+                None if kind == FORMATS.len() => (pcd_compressed(&points), Format::PcdBinary, LIMIT),
+                None => (pcd_fixtures()[fixture].clone(), Format::PcdBinary, FIXTURE_LIMIT),
+            };
+            match read_points(&bytes[..], format, limit) {
+                Ok(back) if limit == LIMIT => prop_assert_eq!(&back, &points),
+                Ok(back) => prop_assert!(!back.is_empty()),
+                Err(e) => prop_assert_eq!(e, ParseError::TooManyPoints { limit }),
             }
             for (kind, at, byte) in edits {
                 let i = at % (bytes.len() + 1);
@@ -61,8 +136,8 @@ fn fuzz_readers(cases: u32, seed: u64) {
             }
             for b in [&bytes, &noise] {
                 for format in FORMATS {
-                    if let Ok(p) = read_points(&b[..], format, LIMIT) {
-                        prop_assert!(p.len() <= LIMIT);
+                    if let Ok(p) = read_points(&b[..], format, limit) {
+                        prop_assert!(p.len() <= limit);
                     }
                 }
             }
@@ -73,14 +148,23 @@ fn fuzz_readers(cases: u32, seed: u64) {
 
 #[test]
 fn readers_survive_mutated_files() {
-    fuzz_readers(3_000, 1);
+    fuzz_readers(3_000, 1, 0..KINDS);
 }
 
 #[test]
 #[ignore = "10^5 cases: run in release with --ignored"]
 fn readers_full() {
-    fuzz_readers(100_000, 2);
-    eprintln!("readers: 100000 cases (seed 2), no panic");
+    let t = Instant::now();
+    fuzz_readers(100_000, 2, 0..KINDS);
+    eprintln!("readers: 100000 cases (seed 2) in {:.1} s, no panic", t.elapsed().as_secs_f64());
+}
+
+#[test]
+#[ignore = "10^5 cases: run in release with --ignored"]
+fn pcd_reader_full() {
+    let t = Instant::now();
+    fuzz_readers(100_000, 3, PCD_KINDS);
+    eprintln!("PCD reader: 100000 cases (seed 3) in {:.1} s, no panic", t.elapsed().as_secs_f64());
 }
 
 /// How the fuzzing board treats one request.

@@ -1,4 +1,5 @@
-//! Point-cloud files: PLY (ascii and binary little endian), XYZ text and CSV.
+//! Point-cloud files: PLY (ascii and binary little endian), PCD (ascii, binary and, read
+//! only, binary_compressed), XYZ text and CSV.
 //!
 //! [`read_cloud`] picks the reader from the file extension and validates the
 //! points into a [`Cloud`]; [`write_cloud`] writes raw points in a chosen
@@ -10,6 +11,7 @@
 //! one-line message names the file.
 
 mod lines;
+mod pcd;
 mod ply;
 mod text;
 
@@ -17,6 +19,7 @@ use std::io::BufRead;
 use std::path::Path;
 
 pub use lines::MAX_LINE_BYTES;
+pub use pcd::{MAX_BODY_BYTES, MAX_RECORD_BYTES};
 
 use nalgebra::Point3;
 use thiserror::Error;
@@ -30,6 +33,10 @@ pub enum Format {
     PlyAscii,
     /// PLY, `format binary_little_endian 1.0` (written with `double` x y z).
     PlyBinary,
+    /// PCD (the Point Cloud Library's format), `DATA ascii`, written with `F 8` x y z.
+    PcdAscii,
+    /// PCD, `DATA binary` (little endian, `F 8` x y z).
+    PcdBinary,
     /// Whitespace-separated `x y z` per line; `#` starts a comment.
     Xyz,
     /// Comma-separated values with an optional header line.
@@ -119,6 +126,101 @@ pub enum ParseError {
     /// The file could not be read to its end.
     #[error("read error: {0}")]
     Read(String),
+    /// A PCD header line that is not understood.
+    #[error("malformed PCD header at line {line}: `{text}`")]
+    PcdBadHeaderLine {
+        /// 1-based line number.
+        line: usize,
+        /// The line (possibly shortened).
+        text: String,
+    },
+    /// A PCD header value that is not a non-negative integer.
+    #[error("malformed PCD header at line {line}: bad {key} value `{text}`")]
+    PcdBadValue {
+        /// 1-based line number.
+        line: usize,
+        /// The header key.
+        key: &'static str,
+        /// The value as written.
+        text: String,
+    },
+    /// A PCD header without a line it needs.
+    #[error("malformed PCD header: missing `{0}` line")]
+    PcdMissingLine(&'static str),
+    /// `SIZE`, `TYPE` or `COUNT` with a different number of entries than `FIELDS`.
+    #[error("malformed PCD header at line {line}: {key} has {found} entries, FIELDS has {fields}")]
+    PcdLengthMismatch {
+        /// 1-based line number.
+        line: usize,
+        /// The header key.
+        key: &'static str,
+        /// Its entries.
+        found: usize,
+        /// Entries of `FIELDS`.
+        fields: usize,
+    },
+    /// A PCD field whose `TYPE` and `SIZE` do not name a type.
+    #[error("malformed PCD header: field `{field}` has TYPE {ty} SIZE {size} (F takes 4 or 8, I and U 1, 2, 4 or 8)")]
+    PcdFieldType {
+        /// The field (possibly shortened).
+        field: String,
+        /// The type as written (possibly shortened).
+        ty: String,
+        /// The size.
+        size: usize,
+    },
+    /// `FIELDS` lacks one of x, y, z.
+    #[error("malformed PCD header: FIELDS has no `{0}`")]
+    PcdMissingField(&'static str),
+    /// x, y or z is not a single float.
+    #[error("PCD field `{axis}` is TYPE {ty} SIZE {size} COUNT {count}: coordinates must be one float (TYPE F, SIZE 4 or 8, COUNT 1)")]
+    PcdAxisType {
+        /// The coordinate.
+        axis: &'static str,
+        /// Its type letter.
+        ty: char,
+        /// Its size.
+        size: usize,
+        /// Its count.
+        count: usize,
+    },
+    /// `POINTS` is not `WIDTH` × `HEIGHT`.
+    #[error(
+        "malformed PCD header: POINTS {} is not WIDTH {width} x HEIGHT {height}",
+        .points.map_or("(absent)".to_string(), |p| p.to_string())
+    )]
+    PcdPointCount {
+        /// `POINTS`, if given.
+        points: Option<usize>,
+        /// `WIDTH`.
+        width: usize,
+        /// `HEIGHT`.
+        height: usize,
+    },
+    /// A `DATA` other than ascii, binary and binary_compressed.
+    #[error("unsupported PCD DATA `{0}` (only ascii, binary and binary_compressed are supported)")]
+    PcdUnsupportedData(String),
+    /// The body ends before all declared points were read.
+    #[error("truncated PCD body: read {read} of {declared} declared points")]
+    PcdTruncated {
+        /// Points read completely.
+        read: usize,
+        /// Points declared in the header.
+        declared: usize,
+    },
+    /// A `binary_compressed` body that cannot be decompressed to the declared points.
+    #[error("corrupt PCD binary_compressed body: {0}")]
+    PcdCompressed(String),
+    /// A size in a PCD file beyond what the reader takes.
+    #[error("PCD {what} of {bytes} bytes is more than the limit of {limit}")]
+    PcdTooLarge {
+        /// What is too large.
+        what: &'static str,
+        /// Its size as the file gives it.
+        bytes: u128,
+        /// The limit.
+        limit: usize,
+    },
     /// A line with too few fields.
     #[error("too few columns at line {line}: found {found}, need at least {needed}")]
     TooFewColumns {
@@ -151,8 +253,18 @@ pub enum IoError {
         /// The OS error (in the message only).
         error: std::io::Error,
     },
+    /// A point with a coordinate beyond the `f32` range that PCD files are written in.
+    #[error(
+        "cannot write {file}: point {index} has a coordinate beyond a PCD float's range (3.4e38); write PLY instead"
+    )]
+    PcdRange {
+        /// The file.
+        file: String,
+        /// The point's index.
+        index: usize,
+    },
     /// The extension does not name a known format.
-    #[error("{file}: unknown point-cloud format {ext} (expected .ply, .xyz, .txt, .pts or .csv)")]
+    #[error("{file}: unknown point-cloud format {ext} (expected .ply, .pcd, .xyz, .txt, .pts or .csv)")]
     UnknownFormat {
         /// The file.
         file: String,
@@ -178,12 +290,13 @@ pub enum IoError {
 }
 
 /// The format for a path's extension (case-insensitive): `.ply` gives
-/// [`Format::PlyBinary`] (readers detect the flavour from the header),
-/// `.xyz`, `.txt` and `.pts` give [`Format::Xyz`], `.csv` gives [`Format::Csv`].
+/// [`Format::PlyBinary`] and `.pcd` [`Format::PcdBinary`] (readers detect the flavour
+/// from the header), `.xyz`, `.txt` and `.pts` give [`Format::Xyz`], `.csv` gives [`Format::Csv`].
 pub fn format_from_path(path: &Path) -> Result<Format, IoError> {
     let ext = path.extension().map(|e| e.to_string_lossy().to_lowercase());
     match ext.as_deref() {
         Some("ply") => Ok(Format::PlyBinary),
+        Some("pcd") => Ok(Format::PcdBinary),
         Some("xyz" | "txt" | "pts") => Ok(Format::Xyz),
         Some("csv") => Ok(Format::Csv),
         other => Err(IoError::UnknownFormat {
@@ -208,17 +321,24 @@ pub fn read_cloud(path: &Path, name: &str) -> Result<Cloud, IoError> {
 /// Write `points` to `path` in `format`, replacing any existing file. Points
 /// are written as given (no validation).
 pub fn write_cloud(path: &Path, points: &[Point3<f64>], format: Format) -> Result<(), IoError> {
+    if matches!(format, Format::PcdAscii | Format::PcdBinary) {
+        if let Some(index) = pcd::f32_range(points) {
+            return Err(IoError::PcdRange { file: path.display().to_string(), index });
+        }
+    }
     std::fs::write(path, write_points_to_bytes(points, format))
         .map_err(|error| IoError::Write { file: path.display().to_string(), error })
 }
 
 /// Parse the points `reader` gives, at most `limit` of them (one more is
-/// [`ParseError::TooManyPoints`], as is a PLY header declaring more). Both PLY formats
-/// detect ascii or binary from the header. The points are not validated (see
-/// [`Cloud::new`]).
+/// [`ParseError::TooManyPoints`], as is a PLY or PCD header declaring more). Both PLY
+/// formats detect ascii or binary from the header, and both PCD formats read any of the
+/// three PCD encodings; PCD points with a NaN coordinate (the invalid points of an
+/// organised cloud) are skipped. The points are not validated (see [`Cloud::new`]).
 pub fn read_points(reader: impl BufRead, format: Format, limit: usize) -> Result<Vec<Point3<f64>>, ParseError> {
     match format {
         Format::PlyAscii | Format::PlyBinary => ply::read(reader, limit),
+        Format::PcdAscii | Format::PcdBinary => pcd::read(reader, limit),
         Format::Xyz => text::read_xyz(reader, limit),
         Format::Csv => text::read_csv(reader, limit),
     }
@@ -229,11 +349,14 @@ pub fn read_points_from_bytes(bytes: &[u8], format: Format) -> Result<Vec<Point3
     read_points(bytes, format, crate::cloud::MAX_POINTS)
 }
 
-/// Serialise `points` in `format`. Text formats round-trip every f64 exactly.
+/// Serialise `points` in `format`. Every format round-trips every f64 exactly (text
+/// formats write the shortest exact decimal, binary ones `double`/`F 8`).
 pub fn write_points_to_bytes(points: &[Point3<f64>], format: Format) -> Vec<u8> {
     match format {
         Format::PlyAscii => ply::write_ascii(points),
         Format::PlyBinary => ply::write_binary(points),
+        Format::PcdAscii => pcd::write_ascii(points),
+        Format::PcdBinary => pcd::write_binary(points),
         Format::Xyz => text::write_delimited(points, " ", None),
         Format::Csv => text::write_delimited(points, ",", Some("x,y,z")),
     }
@@ -297,6 +420,28 @@ mod tests {
     }
 
     #[test]
+    fn pcd_round_trips_as_f32_through_files() {
+        // PCD is written as F 4 (pcd.rs): exact for values an f32 holds, the nearest f32
+        // otherwise, and a finite value beyond the f32 range is refused before writing.
+        let dir = tempfile::tempdir().unwrap();
+        let exact: Vec<Point3<f64>> =
+            sample().iter().map(|p| p.map(|v| (v as f32).clamp(-1e38, 1e38) as f64)).collect();
+        for (format, file) in [(Format::PcdAscii, "e.pcd"), (Format::PcdBinary, "f.pcd")] {
+            let path = dir.path().join(file);
+            write_cloud(&path, &exact, format).unwrap();
+            let points = read_points_from_bytes(&std::fs::read(&path).unwrap(), format).unwrap();
+            for (a, b) in points.iter().zip(&exact) {
+                for (x, y) in a.coords.iter().zip(b.coords.iter()) {
+                    assert_eq!(x.to_bits(), y.to_bits(), "{format:?}");
+                }
+            }
+            assert_eq!(points.len(), exact.len());
+            let e = write_cloud(&path, &sample(), format).unwrap_err().to_string();
+            assert!(e.contains(file) && e.contains("point 1") && e.contains("PLY"), "{e}");
+        }
+    }
+
+    #[test]
     fn fmt_f64_round_trips() {
         for v in [0.0, -0.0, 1.0, 0.1, 1e-5, 9.99e-6, 1e16, 123.456, 5e-324, f64::MAX] {
             let s = fmt_f64(v);
@@ -309,6 +454,8 @@ mod tests {
     #[test]
     fn format_from_extension() {
         assert_eq!(format_from_path(Path::new("a.PLY")).unwrap(), Format::PlyBinary);
+        assert_eq!(format_from_path(Path::new("scan.pcd")).unwrap(), Format::PcdBinary);
+        assert_eq!(format_from_path(Path::new("scan.PCD")).unwrap(), Format::PcdBinary);
         assert_eq!(format_from_path(Path::new("a.txt")).unwrap(), Format::Xyz);
         assert_eq!(format_from_path(Path::new("a.pts")).unwrap(), Format::Xyz);
         assert_eq!(format_from_path(Path::new("d/a.Csv")).unwrap(), Format::Csv);
