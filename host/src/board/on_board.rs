@@ -259,6 +259,7 @@ pub fn finish(
             polish: polish_time,
         },
         filter_history: Vec::new(),
+        filter_poses: Vec::new(),
     }
 }
 

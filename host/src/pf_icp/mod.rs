@@ -150,6 +150,9 @@ pub struct PfIcpResult {
     pub times: StageTimes,
     /// The filter's per-iteration records.
     pub filter_history: Vec<crate::pf_icp::particle_filter::IterationRecord>,
+    /// The filter's estimate after each iteration as a pose (one per `filter_history`
+    /// record; empty where there is no history).
+    pub filter_poses: Vec<Pose>,
 }
 
 /// The filter's scale stays within these factors of its start's.
@@ -488,6 +491,11 @@ pub fn register_with(
         conclusion,
         covariance,
         filter_pose,
+        filter_poses: filtered
+            .history
+            .iter()
+            .filter_map(|h| <&Params>::try_from(h.estimate.as_slice()).ok().map(|p| frame.pose(p)))
+            .collect(),
         filter_history: filtered.history.clone(),
         times: StageTimes {
             clustering: clustering_time,

@@ -148,6 +148,8 @@ pub struct IterationRecord {
     pub particles: usize,
     /// Propagation sigma after the iteration.
     pub sigma: Vec<f64>,
+    /// The estimate after the iteration (the state whose cost is `cost`).
+    pub estimate: Vec<f64>,
 }
 
 /// Filter output.
@@ -310,6 +312,7 @@ pub fn try_run(
             ess,
             particles: n,
             sigma: sigma.clone(),
+            estimate: estimate.clone(),
         });
         let (avg, max) = obj.distances(&best.1);
         if avg < settings.threshold_avg && max < settings.threshold_max {
