@@ -79,17 +79,23 @@ type Series = (String, Vec<(f64, f64)>);
 
 /// Write all figures into `opts.out_dir`; returns their paths.
 pub fn run(opts: &EvalOptions) -> anyhow::Result<Vec<String>> {
+    let start = std::time::Instant::now();
+    let bar = crate::progress::Progress::bar("[eval] figures", 3, "figures");
     let mut out = Vec::new();
-    eprintln!("[eval] Fig. 15");
+    bar.message("Fig. 15");
     out.push(fig15(opts)?);
-    eprintln!("[eval] Figs. 9 and 12");
+    bar.inc();
+    bar.message("Fig. 9");
     out.push(drift_figure(
         ModelId::Model1,
         9,
         &[&[param::PHI, param::C], &[param::PSI, param::PHI, param::A], &[param::PSI]],
         opts,
     )?);
+    bar.inc();
+    bar.message("Fig. 12");
     out.push(drift_figure(ModelId::Model2, 12, &[&[param::THETA], &[param::THETA, param::PSI, param::S]], opts)?);
+    bar.finish(format_args!("[eval] Figs. 15, 9 and 12 ({:.1} s)", start.elapsed().as_secs_f64()));
     Ok(out)
 }
 
