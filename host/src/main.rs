@@ -434,7 +434,7 @@ fn register(a: &RegisterArgs) -> Result<()> {
         None => None,
     };
     note(format_args!("registering {} scan points to {} model points with {}", scan.len(), model.len(), method.name()));
-    let progress = BoardProgress { upload: &mut upload_progress(), on_board: &mut on_board_progress() };
+    let progress = BoardProgress { on_board: &mut on_board_progress() };
     let Registered { outcome, board } = request.run(&model, &scan, client.as_mut(), progress)?;
     match &board {
         Some(BoardRun::OnBoard(b)) => note(format_args!(
@@ -528,7 +528,7 @@ fn upload_progress() -> impl FnMut(pficp::board::Upload, usize, usize) + Send {
     }
 }
 
-/// The on-board registration's progress on stderr: the uploads as [`upload_progress`],
+/// A board registration's progress on stderr (either mode): the uploads as [`upload_progress`],
 /// then a bar over the filter's iterations (one line when it is done).
 fn on_board_progress() -> impl FnMut(pficp::board::on_board::OnBoardStep, usize, usize) + Send {
     use pficp::board::on_board::OnBoardStep;

@@ -6,7 +6,7 @@
 
 use crate::board::host_driven::{self, BoardReport};
 use crate::board::on_board::{self, OnBoardReport, OnBoardStep, DEFAULT_BOARD_POINTS};
-use crate::board::{BoardClient, Upload, DEFAULT_POLL};
+use crate::board::{BoardClient, DEFAULT_POLL};
 use crate::cloud::Cloud;
 use crate::nn::NearestNeighbours;
 use crate::pf_icp::PfIcpSettings;
@@ -77,11 +77,10 @@ pub struct Registered {
     pub board: Option<BoardRun>,
 }
 
-/// Progress of a board engine: the uploads (both modes) and the on-board run.
+/// Progress of a board engine, `(step, done, total)`: the uploads and the filter's
+/// iterations, in both modes (the host-driven filter may stop before the iteration cap).
 pub struct BoardProgress<'a> {
-    /// A store's upload: `(store, points sent, points in all)`.
-    pub upload: &'a mut (dyn FnMut(Upload, usize, usize) + Send),
-    /// The on-board filter's steps: `(step, done, total)`.
+    /// The steps of the run.
     pub on_board: &'a mut (dyn FnMut(OnBoardStep, usize, usize) + Send),
 }
 
@@ -160,7 +159,7 @@ impl Request {
                 Registered { board: Some(BoardRun::OnBoard(Box::new(r.board))), outcome: board_outcome(r.pf) }
             }
             (Engine::HostDriven, Some(c)) => {
-                let r = host_driven::register(c, &nn, scan.points(), &self.settings, progress.upload)?;
+                let r = host_driven::register_reporting(c, &nn, scan.points(), &self.settings, progress.on_board)?;
                 Registered { board: Some(BoardRun::HostDriven(r.board)), outcome: board_outcome(r.pf) }
             }
         })

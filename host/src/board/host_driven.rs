@@ -23,6 +23,7 @@
 //! nothing has to be un-normalised at the end but the costs.
 
 use super::fixed::{normalised_pose, quantise_pose, Normalisation};
+use super::on_board::OnBoardStep;
 use super::{board_model, BoardClient, BoardError, ClientStats, Upload, MAX_PARTICLES, MAX_POINTS};
 use crate::geometry::Pose;
 use crate::nn::NearestNeighbours;
@@ -63,7 +64,9 @@ pub struct BoardPfResult {
 /// The board as the filter's [`ParticleWeights`] source.
 struct BoardWeights<'a> {
     client: Mutex<&'a mut BoardClient>,
-    progress: Mutex<&'a mut (dyn FnMut(Upload, usize, usize) + Send)>,
+    progress: Mutex<&'a mut (dyn FnMut(OnBoardStep, usize, usize) + Send)>,
+    /// The filter's iteration cap (the progress total).
+    cap: usize,
     model_norm: Normalisation,
     scan_norm: Normalisation,
     model: Vec<FxPoint>,
@@ -92,8 +95,8 @@ impl ParticleWeights for BoardWeights<'_> {
             ))));
         }
         let scan = self.scan_norm.quantise(sample);
-        client.load_model(&self.model, |done, total| progress(Upload::Model, done, total))?;
-        client.load_scan(&scan, |done, total| progress(Upload::Scan, done, total))?;
+        client.load_model(&self.model, |done, total| progress(OnBoardStep::Upload(Upload::Model), done, total))?;
+        client.load_scan(&scan, |done, total| progress(OnBoardStep::Upload(Upload::Scan), done, total))?;
         client.set_sizes(self.model.len(), scan.len())?;
         *self.sample.lock().expect("not poisoned") = scan.len();
         Ok(())
@@ -108,7 +111,9 @@ impl ParticleWeights for BoardWeights<'_> {
             let costs: Vec<f64> = raw.iter().map(|&c| c as f64 * to_msd).collect();
             WeightScale::for_two_q(2.0 * tempered_q(&costs, q) / to_msd)
         })?;
-        *self.iterations.lock().expect("not poisoned") += 1;
+        let mut iterations = self.iterations.lock().expect("not poisoned");
+        *iterations += 1;
+        (self.progress.lock().expect("not poisoned"))(OnBoardStep::Filter, (*iterations).min(self.cap), self.cap);
         let total = summary.w_sum as f64;
         Ok(Weighed {
             costs: raw.iter().map(|&c| c as f64 * to_msd).collect(),
@@ -125,6 +130,24 @@ pub fn register(
     scan: &[Point3<f64>],
     settings: &PfIcpSettings,
     progress: &mut (dyn FnMut(Upload, usize, usize) + Send),
+) -> Result<BoardPfResult, BoardError> {
+    register_reporting(client, nn, scan, settings, &mut |step, done, total| {
+        if let OnBoardStep::Upload(store) = step {
+            progress(store, done, total)
+        }
+    })
+}
+
+/// [`register`], with the filter's iterations reported too: `progress(step, done, total)`
+/// gets the uploads ([`OnBoardStep::Upload`]) and each weighed iteration
+/// ([`OnBoardStep::Filter`], with the iteration cap as the total; the filter may stop
+/// before it).
+pub fn register_reporting(
+    client: &mut BoardClient,
+    nn: &NearestNeighbours,
+    scan: &[Point3<f64>],
+    settings: &PfIcpSettings,
+    progress: &mut (dyn FnMut(OnBoardStep, usize, usize) + Send),
 ) -> Result<BoardPfResult, BoardError> {
     let identity = client.identify()?;
     // Version 2 only added Run, Status and Result: the host-driven commands are version 1's.
@@ -157,6 +180,7 @@ pub fn register(
         model: model_norm.quantise(&board_points),
         client: Mutex::new(client),
         progress: Mutex::new(progress),
+        cap: settings.iterations,
         model_norm,
         scan_norm,
         sample: Mutex::new(0),
