@@ -424,6 +424,7 @@ impl<R: Rtl> LockstepOf<R> {
     /// For the drivers below, after the reset comparison: the block's outputs now, and a
     /// step that applies the block's inputs for one clock in lockstep and returns the
     /// block's outputs after it.
+    #[allow(clippy::type_complexity)] // (outputs, step): the two things every driver takes
     fn driver<I, O>(&mut self) -> Result<(O, impl FnMut(&I) -> Result<O, Mismatch> + '_), Mismatch>
     where
         R: Contains<I, O>,
