@@ -14,6 +14,7 @@
 //! - [`protocol`]: the wire protocol (COBS framing, CRC-16, commands, error codes).
 //! - [`messages`]: each command's data layout, encoded and decoded.
 //! - [`board`]: the board's configuration and the byte-level reference board (`BoardModel`).
+//! - [`splitmix`]: the seeded generator of the tests' and fuzzers' stimulus.
 //! - `rtl` (feature `rtl`): the rust_hdl RTL of the pipeline, the weight stage, the board
 //!   top and its blocks, and their Verilog.
 #![warn(missing_docs)]
@@ -30,4 +31,5 @@ pub mod protocol;
 pub mod rtl;
 pub mod seq_state;
 pub mod sequencer;
+pub mod splitmix;
 pub mod weights;

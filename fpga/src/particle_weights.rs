@@ -69,7 +69,7 @@ impl ParticleWeightModel {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::format::{pack_point, FxPose, WeightScale};
+    use crate::format::{FxPose, WeightScale};
     use crate::pipeline::evaluate;
     use crate::weights::weights;
 
@@ -79,10 +79,7 @@ mod tests {
         let scan: Vec<[i16; 3]> = (0..7).map(|k| [k * 500 - 1000, k * 100, 50]).collect();
         let mut m = ParticleWeightModel::new(4);
         for (a, &p) in model.iter().enumerate() {
-            m.step(&PwInputs {
-                nn: Inputs { model_we: true, model_waddr: a as u16, model_wdata: pack_point(p), ..Default::default() },
-                ..Default::default()
-            });
+            m.step(&PwInputs { nn: Inputs::write_model(a, p), ..Default::default() });
         }
         m.step(&PwInputs { clear: true, ..Default::default() });
         let poses: Vec<FxPose> = (0..3)
@@ -90,20 +87,12 @@ mod tests {
             .collect();
         let mut costs = Vec::new();
         for pose in &poses {
-            m.step(&PwInputs {
-                nn: Inputs { start: true, pose: *pose, model_count: 20, ..Default::default() },
-                ..Default::default()
-            });
+            m.step(&PwInputs { nn: Inputs::start(pose, 20), ..Default::default() });
             let mut next = 0;
             loop {
                 let o = m.outputs();
                 let offer = next < scan.len();
-                let i = Inputs {
-                    scan_valid: offer,
-                    scan_data: if offer { pack_point(scan[next]) } else { 0 },
-                    scan_last: offer && next + 1 == scan.len(),
-                    ..Default::default()
-                };
+                let i = Inputs::offer(&scan, next, offer);
                 if offer && o.nn.scan_ready {
                     next += 1;
                 }

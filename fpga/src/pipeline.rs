@@ -36,6 +36,29 @@ pub struct Inputs {
     pub scan_last: bool,
 }
 
+impl Inputs {
+    /// Write model point `p` at address `addr`.
+    pub fn write_model(addr: usize, p: FxPoint) -> Inputs {
+        Inputs { model_we: true, model_waddr: addr as u16, model_wdata: pack_point(p), ..Default::default() }
+    }
+
+    /// Begin a particle with `pose` on the first `model_count` model points.
+    pub fn start(pose: &FxPose, model_count: usize) -> Inputs {
+        Inputs { start: true, pose: *pose, model_count: model_count as u16, ..Default::default() }
+    }
+
+    /// If `offer`, offer scan point `next` of `scan` (`scan_last` on the last one);
+    /// otherwise nothing.
+    pub fn offer(scan: &[FxPoint], next: usize, offer: bool) -> Inputs {
+        Inputs {
+            scan_valid: offer,
+            scan_data: if offer { pack_point(scan[next]) } else { 0 },
+            scan_last: offer && next + 1 == scan.len(),
+            ..Default::default()
+        }
+    }
+}
+
 /// Output ports (after an edge).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Outputs {
@@ -334,20 +357,15 @@ pub fn run_particle(
 ) -> (Evaluation, u64) {
     assert!(!scan.is_empty() && !model.is_empty() && model.len() <= MAX_POINTS);
     for (a, &p) in model.iter().enumerate() {
-        pipe.step(&Inputs { model_we: true, model_waddr: a as u16, model_wdata: pack_point(p), ..Default::default() });
+        pipe.step(&Inputs::write_model(a, p));
     }
-    pipe.step(&Inputs { start: true, pose: *pose, model_count: model.len() as u16, ..Default::default() });
+    pipe.step(&Inputs::start(pose, model.len()));
     let mut next = 0;
     let mut nearest = Vec::with_capacity(scan.len());
     let mut clocks = 1u64;
     loop {
         let offer = next < scan.len() && !gap(clocks);
-        let inputs = Inputs {
-            scan_valid: offer,
-            scan_data: if offer { pack_point(scan[next]) } else { 0 },
-            scan_last: offer && next + 1 == scan.len(),
-            ..Default::default()
-        };
+        let inputs = Inputs::offer(scan, next, offer);
         let took = offer && pipe.outputs().scan_ready;
         pipe.step(&inputs);
         clocks += 1;

@@ -14,27 +14,24 @@ use pficp_fpga::messages::{
 use pficp_fpga::pf::{self, PfConfig, PfOutcome, RUN_BYTES};
 use pficp_fpga::pipeline::evaluate;
 use pficp_fpga::protocol::{Deframer, ErrorCode, Frame, MAX_FRAME};
+use pficp_fpga::splitmix::SplitMix64;
 use pficp_fpga::weights::weights;
 use proptest::prelude::*;
 
 /// SplitMix64: a small deterministic generator (seed from `PFICP_FUZZ_SEED`).
-struct Rng(u64);
+struct Rng(SplitMix64);
 
 impl Rng {
     fn from_env() -> Rng {
         let seed = std::env::var("PFICP_FUZZ_SEED").ok().and_then(|s| s.parse().ok()).unwrap_or(0x5eed_b0a2d);
         eprintln!("fuzz seed {seed} (PFICP_FUZZ_SEED)");
-        Rng(seed)
+        Rng(SplitMix64(seed))
     }
     fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
+        self.0.next_u64()
     }
     fn below(&mut self, n: u64) -> u64 {
-        self.next() % n
+        self.0.below(n)
     }
     fn range(&mut self, lo: u64, hi: u64) -> u64 {
         lo + self.below(hi - lo + 1)
@@ -488,7 +485,7 @@ fn fuzz_the_board() {
 #[test]
 #[ignore = "over 10^6 frames: run in release with --ignored"]
 fn fuzz_the_board_full() {
-    let z = fuzz_rounds(60_000, Rng(2));
+    let z = fuzz_rounds(60_000, Rng(SplitMix64(2)));
     assert!(z.frames_out > 1_000_000, "{} reply frames", z.frames_out);
 }
 

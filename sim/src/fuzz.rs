@@ -16,6 +16,7 @@ use pficp_fpga::format::{FxPoint, FxPose, WeightScale};
 use pficp_fpga::messages::{self, EvaluateRequest, NearestRequest};
 use pficp_fpga::pf::{PfConfig, PARAMS, SCALE_FRAC};
 use pficp_fpga::protocol::{Command, Frame, MAX_FRAME};
+use pficp_fpga::splitmix::SplitMix64;
 
 /// Most particles a fuzzed Run asks for.
 pub const MAX_RUN_PARTICLES: u16 = 6;
@@ -52,23 +53,19 @@ pub struct Drawn {
 
 /// A seeded source of board frames.
 pub struct FrameFuzzer {
-    state: u64,
+    rng: SplitMix64,
     seq: u8,
 }
 
 impl FrameFuzzer {
     /// A fuzzer with `seed` (the same seed draws the same frames).
     pub fn new(seed: u64) -> Self {
-        FrameFuzzer { state: seed ^ 0x9e37_79b9_7f4a_7c15, seq: 0 }
+        FrameFuzzer { rng: SplitMix64(seed ^ 0x9e37_79b9_7f4a_7c15), seq: 0 }
     }
 
     /// The next 64 random bits (SplitMix64).
     pub fn next_u64(&mut self) -> u64 {
-        self.state = self.state.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
+        self.rng.next_u64()
     }
 
     /// A number below `n` (`n` > 0).

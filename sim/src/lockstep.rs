@@ -2,8 +2,8 @@
 //! harness that runs both clock for clock and compares every output port.
 
 use crate::wrappers::*;
-use pficp_fpga::format::{pack_point, FxPoint, FxPose, WeightScale, MAX_POINTS};
-use pficp_fpga::particle_weights::PwInputs;
+use pficp_fpga::format::{FxPoint, FxPose, WeightScale, MAX_POINTS};
+use pficp_fpga::particle_weights::{PwInputs, PwOutputs};
 use pficp_fpga::pipeline::{Evaluation, Inputs, Outputs};
 use pficp_fpga::weights::{WeightInputs, WeightOutputs, MAX_PARTICLES};
 use std::fmt;
@@ -386,23 +386,71 @@ impl<R: Rtl> LockstepOf<R> {
     }
 }
 
-impl LockstepOf<VerilatedPipeline> {
-    /// The `lanes`-lane RTL and `PipelineModel::new(lanes)`, both after reset; VCD (on
-    /// mismatch) under the system temp directory; see [`vcd`](Self::vcd).
-    pub fn new(lanes: usize) -> Self {
-        Self::from_rtl(VerilatedPipeline::new(lanes))
-    }
+/// A design whose ports include those of a block with inputs `I` and outputs `O` (the
+/// pipeline's [`Inputs`] and [`Outputs`], or the weight stage's [`WeightInputs`] and
+/// [`WeightOutputs`]): what the drivers of that block ([`LockstepOf::load_model`] and
+/// [`LockstepOf::particle`], or [`LockstepOf::clear`] and [`LockstepOf::weigh`]) step.
+pub trait Contains<I, O>: Rtl {
+    /// The design's inputs for the block's (the design's other inputs low).
+    const INPUTS: fn(&I) -> Self::Inputs;
+    /// The block's outputs among the design's.
+    const OUTPUTS: fn(Self::Outputs) -> O;
+}
 
-    /// Write the model RAM, one point a clock from address 0.
+impl Contains<Inputs, Outputs> for VerilatedPipeline {
+    const INPUTS: fn(&Inputs) -> Inputs = |i| *i;
+    const OUTPUTS: fn(Outputs) -> Outputs = |o| o;
+}
+
+impl Contains<WeightInputs, WeightOutputs> for VerilatedWeightStage {
+    const INPUTS: fn(&WeightInputs) -> WeightInputs = |i| *i;
+    const OUTPUTS: fn(WeightOutputs) -> WeightOutputs = |o| o;
+}
+
+impl Contains<Inputs, Outputs> for VerilatedParticleWeights {
+    const INPUTS: fn(&Inputs) -> PwInputs = |i| PwInputs { nn: *i, ..Default::default() };
+    const OUTPUTS: fn(PwOutputs) -> Outputs = |o| o.nn;
+}
+
+/// The weight stage's controls (`clear`, `weigh`, `pre_shift`, `q_mul`; the costs come from
+/// the pipeline).
+impl Contains<WeightInputs, WeightOutputs> for VerilatedParticleWeights {
+    const INPUTS: fn(&WeightInputs) -> PwInputs =
+        |i| PwInputs { clear: i.clear, weigh: i.weigh, pre_shift: i.pre_shift, q_mul: i.q_mul, ..Default::default() };
+    const OUTPUTS: fn(PwOutputs) -> WeightOutputs = |o| o.w;
+}
+
+impl<R: Rtl> LockstepOf<R> {
+    /// For the drivers below, after the reset comparison: the block's outputs now, and a
+    /// step that applies the block's inputs for one clock in lockstep and returns the
+    /// block's outputs after it.
+    #[allow(clippy::type_complexity)] // (outputs, step): the two things every driver takes
+    fn driver<I, O>(&mut self) -> Result<(O, impl FnMut(&I) -> Result<O, Mismatch> + '_), Mismatch>
+    where
+        R: Contains<I, O>,
+    {
+        self.check_reset()?;
+        let now = (R::OUTPUTS)(self.outputs());
+        Ok((now, move |i: &I| {
+            self.step(&(R::INPUTS)(i))?;
+            Ok((R::OUTPUTS)(self.outputs()))
+        }))
+    }
+}
+
+impl<R: Contains<Inputs, Outputs>> LockstepOf<R> {
+    /// Write the model RAM, one point a clock from address 0 (other inputs low).
     pub fn load_model(&mut self, model: &[FxPoint]) -> Result<(), Mismatch> {
-        load_model(|i| self.step(i), model)
+        load_model(|i| self.step(&(R::INPUTS)(i)), model)
     }
 
     /// One particle on the loaded model of `model_count` points: wait for `busy` to drop,
     /// `start` with `pose`, then stream `scan`, offering a point on the clocks (counted from
     /// the start edge = 1) where `gap(clock)` is false (the pipeline's `scan_ready` is the
     /// back-pressure); collect the results until `cost_valid`. Returns the evaluation and the
-    /// clocks from `start` to `cost_valid` (as `pficp_fpga::pipeline::run_particle`).
+    /// clocks from `start` to `cost_valid` (as `pficp_fpga::pipeline::run_particle`). In the
+    /// particle-weight pipeline the particle's cost goes into the weight stage at the edge
+    /// after `cost_valid` (if the stage is idle and not full).
     pub fn particle(
         &mut self,
         model_count: usize,
@@ -410,19 +458,16 @@ impl LockstepOf<VerilatedPipeline> {
         pose: &FxPose,
         gap: impl FnMut(u64) -> bool,
     ) -> Result<(Evaluation, u64), Mismatch> {
-        self.check_reset()?;
-        let now = self.outputs();
-        drive_particle(
-            |i| {
-                self.step(i)?;
-                Ok(self.outputs())
-            },
-            now,
-            model_count,
-            scan,
-            pose,
-            gap,
-        )
+        let (now, step) = self.driver::<Inputs, Outputs>()?;
+        drive_particle(step, now, model_count, scan, pose, gap)
+    }
+}
+
+impl LockstepOf<VerilatedPipeline> {
+    /// The `lanes`-lane RTL and `PipelineModel::new(lanes)`, both after reset; VCD (on
+    /// mismatch) under the system temp directory; see [`vcd`](Self::vcd).
+    pub fn new(lanes: usize) -> Self {
+        Self::from_rtl(VerilatedPipeline::new(lanes))
     }
 
     /// [`load_model`](Self::load_model) then [`particle`](Self::particle), all in lockstep.
@@ -453,69 +498,27 @@ pub struct WeightPass {
     pub clocks: u64,
 }
 
-impl LockstepOf<VerilatedParticleWeights> {
-    /// The `lanes`-lane particle-weight RTL and `ParticleWeightModel::new(lanes)`, both after
-    /// reset; VCD (on mismatch) under the system temp directory; see [`vcd`](Self::vcd).
-    pub fn new(lanes: usize) -> Self {
-        Self::from_rtl(VerilatedParticleWeights::new(lanes))
-    }
-
-    /// Write the model RAM, one point a clock from address 0 (weight controls low).
-    pub fn load_model(&mut self, model: &[FxPoint]) -> Result<(), Mismatch> {
-        load_model(|i| self.step(&PwInputs { nn: *i, ..Default::default() }), model)
-    }
-
-    /// [`Lockstep::particle`] with the weight controls low: the particle's cost goes into
-    /// the weight stage at the edge after `cost_valid` (if the stage is idle and not full).
-    pub fn particle(
-        &mut self,
-        model_count: usize,
-        scan: &[FxPoint],
-        pose: &FxPose,
-        gap: impl FnMut(u64) -> bool,
-    ) -> Result<(Evaluation, u64), Mismatch> {
-        self.check_reset()?;
-        let now = self.outputs().nn;
-        drive_particle(
-            |i| {
-                self.step(&PwInputs { nn: *i, ..Default::default() })?;
-                Ok(self.outputs().nn)
-            },
-            now,
-            model_count,
-            scan,
-            pose,
-            gap,
-        )
-    }
-
+impl<R: Contains<WeightInputs, WeightOutputs>> LockstepOf<R> {
     /// Wait for the weight stage to be idle, then `clear` for one clock.
     pub fn clear(&mut self) -> Result<(), Mismatch> {
-        self.check_reset()?;
-        let now = self.outputs().w;
-        drive_clear(
-            |i| {
-                self.step(&PwInputs { clear: i.clear, ..Default::default() })?;
-                Ok(self.outputs().w)
-            },
-            now,
-        )
+        let (now, step) = self.driver::<WeightInputs, WeightOutputs>()?;
+        drive_clear(step, now)
     }
 
     /// Wait for the weight stage to be idle, hold `weigh` with `scale` until the pass starts
     /// (a cost stored at the same edge has priority), and collect the weights until
     /// `w_done`. Panics if the pass does not start (no cost stored).
     pub fn weigh(&mut self, scale: &WeightScale) -> Result<WeightPass, Mismatch> {
-        self.check_reset()?;
-        let now = self.outputs().w;
-        drive_weigh(
-            |i| {
-                self.step(&PwInputs { weigh: i.weigh, pre_shift: i.pre_shift, q_mul: i.q_mul, ..Default::default() })?;
-                Ok(self.outputs().w)
-            },
-            now,
-            scale,
-        )
+        let (now, step) = self.driver::<WeightInputs, WeightOutputs>()?;
+        drive_weigh(step, now, scale)
+    }
+}
+
+impl LockstepOf<VerilatedParticleWeights> {
+    /// The `lanes`-lane particle-weight RTL and `ParticleWeightModel::new(lanes)`, both after
+    /// reset; VCD (on mismatch) under the system temp directory; see [`vcd`](Self::vcd).
+    pub fn new(lanes: usize) -> Self {
+        Self::from_rtl(VerilatedParticleWeights::new(lanes))
     }
 }
 
@@ -526,45 +529,13 @@ impl LockstepOf<VerilatedWeightStage> {
         Self::from_rtl(VerilatedWeightStage::new())
     }
 
-    /// Wait for the stage to be idle, then `clear` for one clock.
-    pub fn clear(&mut self) -> Result<(), Mismatch> {
-        self.check_reset()?;
-        let now = self.outputs();
-        drive_clear(
-            |i| {
-                self.step(i)?;
-                Ok(self.outputs())
-            },
-            now,
-        )
-    }
-
     /// Wait for the stage to be idle, then offer `cost` for one clock (stored unless 256
     /// costs are stored).
     pub fn push_cost(&mut self, cost: u64) -> Result<(), Mismatch> {
-        self.check_reset()?;
-        let now = self.outputs();
-        let mut step = |i: &WeightInputs| {
-            self.step(i)?;
-            Ok(self.outputs())
-        };
+        let (now, mut step) = self.driver::<WeightInputs, WeightOutputs>()?;
         wait_weight_idle(&mut step, now)?;
         step(&WeightInputs { cost_valid: true, cost, ..Default::default() })?;
         Ok(())
-    }
-
-    /// As [`PwLockstep::weigh`].
-    pub fn weigh(&mut self, scale: &WeightScale) -> Result<WeightPass, Mismatch> {
-        self.check_reset()?;
-        let now = self.outputs();
-        drive_weigh(
-            |i| {
-                self.step(i)?;
-                Ok(self.outputs())
-            },
-            now,
-            scale,
-        )
     }
 }
 
@@ -673,7 +644,7 @@ impl VerilatedPipeline {
 pub(crate) fn load_model<E>(mut step: impl FnMut(&Inputs) -> Result<(), E>, model: &[FxPoint]) -> Result<(), E> {
     assert!(model.len() <= MAX_POINTS);
     for (a, &p) in model.iter().enumerate() {
-        step(&Inputs { model_we: true, model_waddr: a as u16, model_wdata: pack_point(p), ..Default::default() })?;
+        step(&Inputs::write_model(a, p))?;
     }
     Ok(())
 }
@@ -696,7 +667,7 @@ pub(crate) fn drive_particle<E>(
         wait += 1;
         assert!(wait < 1 << 32, "the pipeline never became idle");
     }
-    now = step(&Inputs { start: true, pose: *pose, model_count: model_count as u16, ..Default::default() })?;
+    now = step(&Inputs::start(pose, model_count))?;
     let mut next = 0;
     let mut nearest = Vec::with_capacity(scan.len());
     let mut clocks = 1u64;
@@ -704,12 +675,7 @@ pub(crate) fn drive_particle<E>(
     let limit = 1000 + (scan.len() as u64 + 1) * (model_count as u64 + 100) * 4;
     loop {
         let offer = next < scan.len() && !gap(clocks);
-        let inputs = Inputs {
-            scan_valid: offer,
-            scan_data: if offer { pack_point(scan[next]) } else { 0 },
-            scan_last: offer && next + 1 == scan.len(),
-            ..Default::default()
-        };
+        let inputs = Inputs::offer(scan, next, offer);
         let took = offer && now.scan_ready;
         now = step(&inputs)?;
         clocks += 1;

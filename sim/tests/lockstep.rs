@@ -1,10 +1,15 @@
 //! The Verilated pipeline in lockstep with the reference, and proof that the checker fails
 //! when the two differ.
 
-use pficp_fpga::format::{pack_point, FxPoint, FxPose};
+use pficp_fpga::format::{FxPoint, FxPose};
 use pficp_fpga::pipeline::{clocks_per_particle, evaluate, Inputs, Outputs, PipelineModel};
-use pficp_sim::{verilated_lanes, Lockstep, Mismatch, TraceMode, VerilatedPipeline, OUTPUT_PORTS};
-use std::path::PathBuf;
+use pficp_sim::{verilated_lanes, Lockstep, TraceMode, VerilatedPipeline, OUTPUT_PORTS};
+
+mod support;
+use support::{assert_vcd, vcd};
+
+/// The signals every VCD of a pipeline run has.
+const TRACED: [&str; 3] = ["nn_dist", "scan_ready", "clock"];
 
 fn lcg(seed: &mut u64) -> u64 {
     *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
@@ -17,10 +22,6 @@ fn cloud(n: usize, seed: &mut u64, range: i64) -> Vec<FxPoint> {
 
 fn pose() -> FxPose {
     FxPose::from_f64(&[0.9, -0.3, 0.1, 0.3, 0.9, 0.0, -0.1, 0.05, 0.95], &[0.1, -0.2, 0.05])
-}
-
-fn vcd(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("{name}.vcd"))
 }
 
 #[test]
@@ -150,32 +151,18 @@ fn lockstep_p4_random_inputs() {
 /// The inputs `drive` produces for a particle when run on the reference alone (the same
 /// driver as `Lockstep::run_particle`, so the sequences are identical up to a mismatch).
 fn particle_inputs(lanes: usize, model: &[FxPoint], scan: &[FxPoint], pose: &FxPose) -> Vec<Inputs> {
-    let mut seq: Vec<Inputs> = model
-        .iter()
-        .enumerate()
-        .map(|(a, &p)| Inputs {
-            model_we: true,
-            model_waddr: a as u16,
-            model_wdata: pack_point(p),
-            ..Default::default()
-        })
-        .collect();
+    let mut seq: Vec<Inputs> = model.iter().enumerate().map(|(a, &p)| Inputs::write_model(a, p)).collect();
     let mut m = PipelineModel::new(lanes);
     for i in &seq {
         m.step(i);
     }
-    let start = Inputs { start: true, pose: *pose, model_count: model.len() as u16, ..Default::default() };
+    let start = Inputs::start(pose, model.len());
     m.step(&start);
     seq.push(start);
     let mut next = 0;
     while !m.outputs().cost_valid {
         let offer = next < scan.len();
-        let i = Inputs {
-            scan_valid: offer,
-            scan_data: if offer { pack_point(scan[next]) } else { 0 },
-            scan_last: offer && next + 1 == scan.len(),
-            ..Default::default()
-        };
+        let i = Inputs::offer(scan, next, offer);
         if offer && m.outputs().scan_ready {
             next += 1;
         }
@@ -215,17 +202,6 @@ fn first_difference(
     None
 }
 
-fn assert_vcd(m: &Mismatch) {
-    let path = m.vcd.as_ref().expect("a VCD");
-    let text = std::fs::read_to_string(path).unwrap();
-    assert!(text.contains(" nn_dist ") && text.contains(" scan_ready ") && text.contains(" clock "), "{path:?}");
-    let times: Vec<u64> = text.lines().filter_map(|l| l.strip_prefix('#')).map(|t| t.parse().unwrap()).collect();
-    assert_eq!(times[0], 10 * m.vcd_from, "the VCD starts at vcd_from");
-    assert_eq!(*times.last().unwrap(), 10 * m.cycle, "the VCD ends at the mismatch");
-    let text = m.to_string();
-    assert!(text.contains(&format!("VCD (cycles {}..={}): {}", m.vcd_from, m.cycle, path.display())), "{text}");
-}
-
 /// The reference holds a model point the RTL never got: the first nearest-neighbour result
 /// that uses it differs, at the cycle and on the port the two references predict.
 #[test]
@@ -236,7 +212,7 @@ fn checker_reports_a_wrong_model() {
     // The reference's RAM also has address 4 = the first scan point; run with model_count 5
     // so the sweep reads it (the RTL reads 0 there).
     let mut wrong = PipelineModel::new(4);
-    wrong.step(&Inputs { model_we: true, model_waddr: 4, model_wdata: pack_point(scan[0]), ..Default::default() });
+    wrong.step(&Inputs::write_model(4, scan[0]));
     let mut model5 = model.clone();
     model5.push([0, 0, 0]); // what the RTL holds at address 4 (reset value)
     let seq = particle_inputs(4, &model5, &scan, &id);
@@ -262,18 +238,18 @@ fn checker_reports_a_wrong_model() {
         assert!(text.contains(&part), "{text:?} lacks {part:?}");
     }
     assert_eq!(m.vcd_from, 0);
-    assert_vcd(&m);
+    assert_vcd(&m, &TRACED);
     // A failed lockstep stays failed.
     assert_eq!(ls.step(&Inputs::default()).unwrap_err(), m);
 
     // The same with a 5-cycle VCD window.
     let mut wrong = PipelineModel::new(4);
-    wrong.step(&Inputs { model_we: true, model_waddr: 4, model_wdata: pack_point(scan[0]), ..Default::default() });
+    wrong.step(&Inputs::write_model(4, scan[0]));
     let mut ls2 = Lockstep::new(4).with_reference(wrong).vcd(vcd("wrong_model_window")).vcd_window(Some(5));
     ls2.load_model(&model).unwrap();
     let m2 = ls2.particle(5, &scan, &id, |_| false).unwrap_err();
     assert_eq!((m2.cycle, m2.signal, m2.vcd_from), (cycle, signal, cycle - 5));
-    assert_vcd(&m2);
+    assert_vcd(&m2, &TRACED);
 }
 
 /// RTL with 4 lanes against a 16-lane reference: `scan_ready` drops after 4 points in the
@@ -294,7 +270,7 @@ fn checker_reports_a_wrong_lane_count() {
     let m = ls.run_particle(&model, &scan, &pose(), |_| false).unwrap_err();
     println!("{m}");
     assert_eq!((m.cycle, m.signal, m.expected, m.actual), (cycle, signal, expected, actual));
-    assert_vcd(&m);
+    assert_vcd(&m, &TRACED);
 }
 
 /// A reference that is already busy: caught by the comparison after reset (cycle 0).
@@ -309,7 +285,7 @@ fn checker_compares_the_reset_state() {
     assert_eq!(m.also, vec!["busy"]);
     assert_eq!(ls.clocks_compared(), 0);
     assert_eq!(ls.rtl().cycle(), 0, "no edge before the reset comparison");
-    assert_vcd(&m);
+    assert_vcd(&m, &TRACED);
 }
 
 #[test]

@@ -7,41 +7,14 @@ use pficp_fpga::particle_weights::{ParticleWeightModel, PwInputs, PwOutputs};
 use pficp_fpga::pipeline::{evaluate, Inputs};
 use pficp_fpga::weights::{weights, WeightInputs, WeightModel, WeightOutputs, COST_MAX, MAX_PARTICLES};
 use pficp_sim::{
-    verilated_models, LockstepOf, Mismatch, PwLockstep, Rtl, TraceMode, VerilatedParticleWeights, VerilatedWeightStage,
+    verilated_models, LockstepOf, PwLockstep, Rtl, TraceMode, VerilatedParticleWeights, VerilatedWeightStage,
     WeightLockstep, PW_OUTPUT_PORTS, WEIGHT_OUTPUT_PORTS,
 };
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
-/// splitmix64.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-    fn below(&mut self, n: u64) -> u64 {
-        self.next() % n
-    }
-    /// True with probability `p`.
-    fn chance(&mut self, p: f64) -> bool {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64 <= p
-    }
-    fn uniform(&mut self, a: f64, b: f64) -> f64 {
-        a + (b - a) * (self.next() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn coord(&mut self, range: i64) -> i16 {
-        (self.below(2 * range as u64 + 1) as i64 - range) as i16
-    }
-}
-
-fn vcd(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("{name}.vcd"))
-}
+mod support;
+use support::{assert_vcd, vcd, Rng};
 
 /// A rotation by small angles about x, y, z (radians) and a translation (normalised units).
 fn pose_near_identity(rng: &mut Rng) -> FxPose {
@@ -61,19 +34,6 @@ fn pose_near_identity(rng: &mut Rng) -> FxPose {
     ];
     let t = [0; 3].map(|_: i32| rng.uniform(-0.05, 0.05));
     FxPose::from_f64(&m, &t)
-}
-
-fn assert_vcd(m: &Mismatch, signals: &[&str]) {
-    let path = m.vcd.as_ref().expect("a VCD");
-    let text = std::fs::read_to_string(path).unwrap();
-    for s in signals {
-        assert!(text.contains(&format!(" {s} ")), "{path:?} lacks {s}");
-    }
-    let times: Vec<u64> = text.lines().filter_map(|l| l.strip_prefix('#')).map(|t| t.parse().unwrap()).collect();
-    assert_eq!(times[0], 10 * m.vcd_from, "the VCD starts at vcd_from");
-    assert_eq!(*times.last().unwrap(), 10 * m.cycle, "the VCD ends at the mismatch");
-    let text = m.to_string();
-    assert!(text.contains(&format!("VCD (cycles {}..={}): {}", m.vcd_from, m.cycle, path.display())), "{text}");
 }
 
 #[test]
@@ -109,7 +69,7 @@ fn every_design_is_verilated() {
 /// against `evaluate`, every weight against `weights`, `w_sum` against their sum.
 fn whole_flow(lanes: usize) {
     let t0 = Instant::now();
-    let mut rng = Rng(0x9f1c_0000 + lanes as u64);
+    let mut rng = Rng::new(0x9f1c_0000 + lanes as u64);
     let model: Vec<FxPoint> = (0..300).map(|_| [rng.coord(12000), rng.coord(12000), rng.coord(6000)]).collect();
     let mut ls = PwLockstep::new(lanes).vcd(vcd(&format!("pw_flow_p{lanes}")));
     ls.load_model(&model).unwrap_or_else(|m| panic!("{m}"));
@@ -179,7 +139,7 @@ fn whole_flow_in_lockstep_p4() {
 #[test]
 fn weight_stage_random_lockstep() {
     const CLOCKS: u64 = 30_000;
-    let mut rng = Rng(2024);
+    let mut rng = Rng::new(2024);
     let mut ls = WeightLockstep::new().vcd(vcd("weights_random"));
     #[derive(Default, Debug)]
     struct Seen {
@@ -386,7 +346,7 @@ fn checker_reports_a_wrong_weight() {
 /// drops after 4 points in the RTL only (model writes, clear, start, 4 points taken).
 #[test]
 fn checker_reports_a_wrong_lane_count_pw() {
-    let mut rng = Rng(9);
+    let mut rng = Rng::new(9);
     let model: Vec<FxPoint> = (0..6).map(|_| [rng.coord(9000), rng.coord(9000), rng.coord(9000)]).collect();
     let scan: Vec<FxPoint> = (0..7).map(|_| [rng.coord(9000), rng.coord(9000), rng.coord(9000)]).collect();
     let mut ls = PwLockstep::new(4)
@@ -422,7 +382,7 @@ fn checker_compares_the_pw_reset_state() {
 #[test]
 fn pw_random_inputs_lockstep_p4() {
     const CLOCKS: u64 = 24_000;
-    let mut rng = Rng(77);
+    let mut rng = Rng::new(77);
     let mut ls = PwLockstep::new(4).vcd(vcd("pw_random"));
     let model: Vec<FxPoint> = (0..12).map(|_| [rng.coord(20000), rng.coord(20000), rng.coord(20000)]).collect();
     ls.load_model(&model).unwrap_or_else(|m| panic!("{m}"));

@@ -7,23 +7,11 @@ use pficp_fpga::format::{FxPoint, FxPose};
 use pficp_fpga::pipeline::evaluate;
 use pficp_sim::Lockstep;
 
-struct Rng(u64);
+mod support;
+use support::Rng;
 
+/// The random cases' points and poses.
 impl Rng {
-    fn next(&mut self) -> u64 {
-        // splitmix64
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-    fn below(&mut self, n: u64) -> u64 {
-        self.next() % n
-    }
-    fn coord(&mut self, range: i64) -> i16 {
-        (self.below(2 * range as u64 + 1) as i64 - range) as i16
-    }
     fn point(&mut self) -> FxPoint {
         match self.below(20) {
             0 => [i16::MIN, i16::MAX, i16::MIN],
@@ -60,7 +48,7 @@ fn env(name: &str, default: u64) -> u64 {
 fn random_cases_in_lockstep() {
     let seed = env("PFICP_COSIM_SEED", 1);
     let cases = env("PFICP_COSIM_CASES", 1000);
-    let mut rng = Rng(seed);
+    let mut rng = Rng::new(seed);
     let mut clocks = 0u64;
     let mut results = 0usize;
     for lanes in [4usize, 16] {
@@ -101,7 +89,7 @@ fn random_cases_in_lockstep() {
 fn full_model_memory_and_format_limits() {
     // All 4,096 model words, extremes at both ends of the address range, one- and
     // seventeen-point scans, the identity and a saturating pose.
-    let mut rng = Rng(11);
+    let mut rng = Rng::new(11);
     let mut model: Vec<FxPoint> = (0..pficp_fpga::format::MAX_POINTS).map(|_| rng.point()).collect();
     model[0] = [i16::MIN; 3];
     model[4095] = [i16::MAX; 3];

@@ -12,13 +12,13 @@
 //! [`Tolerance::PAPER`] and [`Tolerance::SUCCESS`].
 
 use super::text_table::{num, TextTable};
-use super::{paper_order, EvalOptions, ROW_DECIMALS, ROW_LABELS};
+use super::{judge, paper_order, EvalOptions, Judged, ROW_DECIMALS, ROW_LABELS};
 use crate::cloud::bbox_diagonal;
 use crate::datasets::{make, ModelId, Sampling, ScanSpec};
 use crate::geometry::PoseRecord;
 use crate::nn::NearestNeighbours;
 use crate::pf_icp::PfIcpSettings;
-use crate::registration::methods::{run as run_method, Method, MethodSettings, PoseError, Tolerance};
+use crate::registration::methods::{Method, MethodSettings, Tolerance};
 use serde::Serialize;
 
 /// One method's column.
@@ -184,9 +184,8 @@ fn table(c: &Case, opts: &EvalOptions) -> ComparisonTable {
         .methods
         .iter()
         .map(|&m| {
-            let o = run_method(m, &nn, &ds.scan, &settings);
+            let Judged { outcome: o, success, error: e } = judge(m, &nn, &ds.scan, &settings, &truth, diag);
             let p = o.registration.pose;
-            let e = PoseError::between(&p, &truth, diag);
             MethodEstimate {
                 method: m.name().to_string(),
                 label: label(m, c),
@@ -196,7 +195,7 @@ fn table(c: &Case, opts: &EvalOptions) -> ComparisonTable {
                 iterations: o.registration.iterations,
                 seconds: o.elapsed.as_secs_f64(),
                 within_paper: Tolerance::PAPER.accepts(&p, &truth, diag),
-                within_success: Tolerance::SUCCESS.accepts(&p, &truth, diag),
+                within_success: success,
                 rotation_error_deg: e.rotation_deg,
                 max_euler_error_deg: e.max_euler_deg,
                 translation_error_frac: e.translation_frac,

@@ -18,9 +18,11 @@ pub mod realistic;
 pub mod success;
 mod text_table;
 
-use crate::geometry::{param, Params};
-use crate::registration::methods::Method;
+use crate::geometry::{param, Params, Pose};
+use crate::nn::NearestNeighbours;
+use crate::registration::methods::{run as run_method, Method, MethodSettings, Outcome, PoseError, Tolerance};
 use anyhow::Context;
+use nalgebra::Point3;
 use serde::Serialize;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -173,6 +175,31 @@ pub fn paper_order(p: &Params) -> [f64; 7] {
         p[param::C],
         p[param::S],
     ]
+}
+
+/// One method's run on a scan, judged against the truth (as the tables and the trials
+/// record it).
+pub(crate) struct Judged {
+    /// The run.
+    pub outcome: Outcome,
+    /// Within [`Tolerance::SUCCESS`].
+    pub success: bool,
+    /// The estimate's errors.
+    pub error: PoseError,
+}
+
+/// Run `method` on `scan` and judge its pose against `truth` (`diag`: the model's diagonal).
+pub(crate) fn judge(
+    method: Method,
+    nn: &NearestNeighbours,
+    scan: &[Point3<f64>],
+    settings: &MethodSettings,
+    truth: &Pose,
+    diag: f64,
+) -> Judged {
+    let outcome = run_method(method, nn, scan, settings);
+    let p = outcome.registration.pose;
+    Judged { success: Tolerance::SUCCESS.accepts(&p, truth, diag), error: PoseError::between(&p, truth, diag), outcome }
 }
 
 /// Mix two numbers into a seed (splitmix64 of their combination).

@@ -11,13 +11,13 @@
 //! so the counts are a function of the seed.
 
 use super::text_table::TextTable;
-use super::{median, mix, paper_order, EvalOptions};
+use super::{judge, median, mix, paper_order, EvalOptions, Judged};
 use crate::cloud::bbox_diagonal;
 use crate::datasets::{make, random_truth, ModelId, Sampling, ScanSpec};
 use crate::nn::NearestNeighbours;
 use crate::pf_icp::PfIcpSettings;
 use crate::progress::Progress;
-use crate::registration::methods::{run as run_method, MethodSettings, PoseError, Tolerance};
+use crate::registration::methods::{MethodSettings, Tolerance};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
@@ -131,17 +131,15 @@ fn row(id: ModelId, noise_fraction: f64, opts: &EvalOptions, bar: &Progress) -> 
             .methods
             .iter()
             .map(|&m| {
-                let o = run_method(m, &nn, &ds.scan, &settings);
-                let p = o.registration.pose;
-                let e = PoseError::between(&p, &truth, diag);
+                let Judged { outcome, success, error: e } = judge(m, &nn, &ds.scan, &settings, &truth, diag);
                 TrialMethodResult {
                     method: m.name().to_string(),
-                    success: Tolerance::SUCCESS.accepts(&p, &truth, diag),
+                    success,
                     rotation_error_deg: e.rotation_deg,
                     max_euler_error_deg: e.max_euler_deg,
                     translation_error_frac: e.translation_frac,
                     scale_error_frac: e.scale_frac,
-                    seconds: o.elapsed.as_secs_f64(),
+                    seconds: outcome.elapsed.as_secs_f64(),
                 }
             })
             .collect();

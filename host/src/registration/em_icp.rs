@@ -28,6 +28,7 @@
 //! a variance of 0.1 mm on their data); it is exposed in model units as
 //! [`EmIcpSettings::sigma_final`].
 
+use crate::cloud::bbox_diagonal;
 use crate::geometry::Pose;
 use crate::nn::{Closest, NearestNeighbours};
 use crate::registration::icp::Registration;
@@ -95,19 +96,6 @@ const PARALLEL_MIN: usize = 512;
 
 /// Changes in MSD below this are rounding noise (units^2).
 const MSD_FLOOR: f64 = 1e-24;
-
-/// Length of the bounding-box diagonal of `pts` (`0.0` if empty).
-fn bbox_diagonal(pts: &[Point3<f64>]) -> f64 {
-    let Some(first) = pts.first() else {
-        return 0.0;
-    };
-    let (mut lo, mut hi) = (first.coords, first.coords);
-    for p in pts {
-        lo = lo.inf(&p.coords);
-        hi = hi.sup(&p.coords);
-    }
-    (hi - lo).norm()
-}
 
 /// The `k` nearest model points of every query (deterministic; parallel for big batches).
 fn neighbours_all(nn: &NearestNeighbours, queries: &[Point3<f64>], k: usize) -> Vec<Vec<Closest>> {
@@ -208,6 +196,7 @@ mod tests {
     use rand::{Rng, SeedableRng};
 
     use crate::test_support::spiral as curve;
+    use crate::test_support::{assert_deterministic, rot_deg, scale_err};
 
     fn random_unit(rng: &mut impl Rng) -> Vector3<f64> {
         Vector3::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0)).normalize()
@@ -232,14 +221,6 @@ mod tests {
             rotation: Rotation3::from_axis_angle(&axis, deg.to_radians()).into_inner(),
             translation: Vector3::new(0.1, -0.05, 0.08),
         }
-    }
-
-    fn rot_deg(p: &Pose, t: &Pose) -> f64 {
-        p.rotation_angle_to(t).to_degrees()
-    }
-
-    fn scale_err(p: &Pose, t: &Pose) -> f64 {
-        (p.scale / t.scale - 1.0).abs()
     }
 
     #[test]
@@ -328,12 +309,7 @@ mod tests {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(8);
         let scan = scan_of(&model, &truth_at(20.0, &mut rng), 0.01, 9);
         let s = EmIcpSettings::default();
-        let a = em_icp(&nn, &scan, &Pose::identity(), &s);
-        let b = em_icp(&nn, &scan, &Pose::identity(), &s);
-        assert_eq!(a.pose, b.pose);
-        assert_eq!(a.iterations, b.iterations);
-        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-        assert_eq!(bits(&a.errors), bits(&b.errors));
+        assert_deterministic(|| em_icp(&nn, &scan, &Pose::identity(), &s));
     }
 
     #[test]

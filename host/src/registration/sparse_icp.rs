@@ -42,6 +42,7 @@
 //! tests about 3 to 5 times ICP's rotation error), and its ADMM does not settle on noisy
 //! data, so it then runs to [`SparseIcpSettings::max_iterations`].
 
+use crate::cloud::bbox_diagonal;
 use crate::geometry::Pose;
 use crate::nn::NearestNeighbours;
 use crate::registration::icp::{median, Registration};
@@ -138,19 +139,6 @@ pub fn shrink(h: &Vector3<f64>, mu: f64, p: f64) -> Vector3<f64> {
     h * a.clamp(0.0, 1.0)
 }
 
-/// Length of the bounding-box diagonal of `pts` (`0.0` if empty).
-fn bbox_diagonal(pts: &[Point3<f64>]) -> f64 {
-    let Some(first) = pts.first() else {
-        return 0.0;
-    };
-    let (mut lo, mut hi) = (first.coords, first.coords);
-    for p in pts {
-        lo = lo.inf(&p.coords);
-        hi = hi.sup(&p.coords);
-    }
-    (hi - lo).norm()
-}
-
 /// Run Sparse ICP from `init`.
 ///
 /// The returned [`Registration::msd`] is the plain mean squared closest-point distance of
@@ -241,6 +229,7 @@ mod tests {
     use rand::{Rng, SeedableRng};
 
     use crate::test_support::spiral as curve;
+    use crate::test_support::{assert_deterministic, rot_deg, scale_err};
 
     /// Every second model point, mapped into the scan frame, plus uniform noise.
     fn scan_of(model: &[Point3<f64>], truth: &Pose, noise: f64, seed: u64) -> Vec<Point3<f64>> {
@@ -271,14 +260,6 @@ mod tests {
     /// About 4 deg of rotation, 8% of scale, 0.1 of translation: a near start.
     fn truth() -> Pose {
         Pose::from_params(&[0.1, -0.08, 0.06, 1.08, 0.04, -0.03, 0.05])
-    }
-
-    fn rot_deg(p: &Pose, t: &Pose) -> f64 {
-        p.rotation_angle_to(t).to_degrees()
-    }
-
-    fn scale_err(p: &Pose, t: &Pose) -> f64 {
-        (p.scale / t.scale - 1.0).abs()
     }
 
     #[test]
@@ -368,12 +349,7 @@ mod tests {
         let scan = with_outliers(&scan_of(&model, &truth(), 0.005, 6), 7);
         let nn = NearestNeighbours::new(&model);
         let s = SparseIcpSettings::default();
-        let a = sparse_icp(&nn, &scan, &Pose::identity(), &s);
-        let b = sparse_icp(&nn, &scan, &Pose::identity(), &s);
-        assert_eq!(a.pose, b.pose);
-        assert_eq!(a.iterations, b.iterations);
-        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-        assert_eq!(bits(&a.errors), bits(&b.errors));
+        assert_deterministic(|| sparse_icp(&nn, &scan, &Pose::identity(), &s));
     }
 
     #[test]
