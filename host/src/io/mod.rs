@@ -362,11 +362,12 @@ pub fn write_points_to_bytes(points: &[Point3<f64>], format: Format) -> Vec<u8> 
     }
 }
 
-/// Shortest text that parses back to exactly `v`: plain decimals for
-/// moderate magnitudes, scientific notation for very large or small ones.
-fn fmt_f64(v: f64) -> String {
-    let a = v.abs();
-    if a == 0.0 || (1e-5..1e16).contains(&a) || !v.is_finite() {
+/// Shortest text that parses back to exactly `v` (an `f64`, or an `f32` read as one):
+/// plain decimals for moderate magnitudes, scientific notation for very large or small
+/// ones.
+fn fmt_float<T: Copy + Into<f64> + std::fmt::Display + std::fmt::LowerExp>(v: T) -> String {
+    let a = v.into().abs();
+    if a == 0.0 || (1e-5..1e16).contains(&a) || !v.into().is_finite() {
         format!("{v}")
     } else {
         format!("{v:e}")
@@ -442,13 +443,13 @@ mod tests {
     }
 
     #[test]
-    fn fmt_f64_round_trips() {
+    fn fmt_float_round_trips() {
         for v in [0.0, -0.0, 1.0, 0.1, 1e-5, 9.99e-6, 1e16, 123.456, 5e-324, f64::MAX] {
-            let s = fmt_f64(v);
+            let s = fmt_float(v);
             assert_eq!(s.parse::<f64>().unwrap().to_bits(), v.to_bits(), "{s}");
         }
-        assert_eq!(fmt_f64(1.5), "1.5");
-        assert_eq!(fmt_f64(1e300), "1e300");
+        assert_eq!(fmt_float(1.5), "1.5");
+        assert_eq!(fmt_float(1e300), "1e300");
     }
 
     #[test]

@@ -21,7 +21,7 @@ use std::io::{BufRead, Read};
 use nalgebra::Point3;
 
 use super::lines::{read_error, Lines};
-use super::{shorten, ParseError};
+use super::{fmt_float, shorten, ParseError};
 
 /// The largest `binary_compressed` block (compressed or not) read: 512 MiB, room for
 /// [`crate::cloud::MAX_POINTS`] points of 53 bytes.
@@ -487,20 +487,10 @@ pub fn f32_range(points: &[Point3<f64>]) -> Option<usize> {
 pub(super) fn write_ascii(points: &[Point3<f64>]) -> Vec<u8> {
     let mut out = header("ascii", points.len(), 4);
     for p in points {
-        let [x, y, z] = [p.x, p.y, p.z].map(|v| fmt_f32(v as f32));
+        let [x, y, z] = [p.x, p.y, p.z].map(|v| fmt_float(v as f32));
         out.push_str(&format!("{x} {y} {z}\n"));
     }
     out.into_bytes()
-}
-
-/// Shortest text that reads back as exactly `v` as an `f32` (scientific for extremes).
-fn fmt_f32(v: f32) -> String {
-    let a = v.abs();
-    if a == 0.0 || (1e-5..1e16).contains(&a) || !v.is_finite() {
-        format!("{v}")
-    } else {
-        format!("{v:e}")
-    }
 }
 
 /// A binary PCD of `points` as `F 4` x y z (little endian, as PCL writes on every

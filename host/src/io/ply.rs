@@ -9,7 +9,7 @@ use std::io::{BufRead, Read};
 use nalgebra::Point3;
 
 use super::lines::{read_error, Lines};
-use super::{fmt_f64, parse_f64, shorten, ParseError};
+use super::{fmt_float, parse_f64, shorten, ParseError};
 
 /// A PLY scalar type.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -333,7 +333,7 @@ fn header(format: &str, n: usize) -> String {
 pub(super) fn write_ascii(points: &[Point3<f64>]) -> Vec<u8> {
     let mut out = header("ascii", points.len());
     for p in points {
-        out.push_str(&format!("{} {} {}\n", fmt_f64(p.x), fmt_f64(p.y), fmt_f64(p.z)));
+        out.push_str(&format!("{} {} {}\n", fmt_float(p.x), fmt_float(p.y), fmt_float(p.z)));
     }
     out.into_bytes()
 }

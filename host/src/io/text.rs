@@ -5,7 +5,7 @@ use std::io::BufRead;
 use nalgebra::Point3;
 
 use super::lines::{check_limit, Lines};
-use super::{fmt_f64, parse_f64, ParseError};
+use super::{fmt_float, parse_f64, ParseError};
 
 /// Read whitespace-separated `x y z` lines, at most `limit` points. Everything after `#`
 /// is a comment, blank lines are skipped and columns after the third are ignored.
@@ -88,11 +88,11 @@ pub(super) fn write_delimited(points: &[Point3<f64>], sep: &str, header: Option<
         out.push('\n');
     }
     for p in points {
-        out.push_str(&fmt_f64(p.x));
+        out.push_str(&fmt_float(p.x));
         out.push_str(sep);
-        out.push_str(&fmt_f64(p.y));
+        out.push_str(&fmt_float(p.y));
         out.push_str(sep);
-        out.push_str(&fmt_f64(p.z));
+        out.push_str(&fmt_float(p.z));
         out.push('\n');
     }
     out.into_bytes()
