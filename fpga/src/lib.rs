@@ -3,7 +3,9 @@
 //!
 //! - [`format`]: the fixed-point formats shared by host, reference and RTL.
 //! - [`grid`]: the model's cell grid and the grid search's bit-exact reference (capped at
-//!   one cell; the RTL twin is to come).
+//!   one cell).
+//! - [`grid_pipeline`]: the cycle-accurate reference of the grid pipeline (the
+//!   nearest-neighbour pipeline sweeping only the rows of cells around a batch).
 //! - [`pipeline`]: the cycle-accurate reference of the nearest-neighbour pipeline.
 //! - [`weights`]: the cycle-accurate reference of the weight stage (minimum cost, exp table).
 //! - [`particle_weights`]: the two wired together, as the RTL top of that name.
@@ -22,6 +24,7 @@
 pub mod board;
 pub mod format;
 pub mod grid;
+pub mod grid_pipeline;
 pub mod messages;
 pub mod particle_weights;
 pub mod pf;

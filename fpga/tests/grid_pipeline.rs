@@ -1,0 +1,99 @@
+//! The grid pipeline's cycle model (`fpga::grid_pipeline`) against the grid search's
+//! reference: every scan point's result is `grid::nearest_capped` over the stored model
+//! (capped as index 0, distance `CAP_D2`) and agrees with `Grid::nearest`; on random models
+//! in the cube, scans under poses that put points outside it, gaps in the scan stream,
+//! several particles back to back and model rewrites between them.
+
+use pficp_fpga::format::{FxPoint, FxPose};
+use pficp_fpga::grid::{Grid, CAP_D2, CELL_LSBS, NONE};
+use pficp_fpga::grid_pipeline::{evaluate_grid, run_particle, upload, GridInputs, GridPipelineModel};
+use proptest::prelude::*;
+
+fn inside_coord() -> impl Strategy<Value = i16> {
+    prop_oneof![
+        2 => -8192i16..=8192,
+        1 => (0i16..=16, -3i16..3).prop_map(|(k, d)| (-8192 + k * CELL_LSBS as i16 + d).clamp(-8192, 8192)),
+    ]
+}
+
+fn model() -> impl Strategy<Value = Vec<FxPoint>> {
+    prop::collection::vec([inside_coord(), inside_coord(), inside_coord()], 1..200)
+}
+
+fn pose() -> impl Strategy<Value = FxPose> {
+    // Rotations about z by any angle with a translation of up to 1.5 (points leave the cube).
+    (-3.2f64..3.2, [-1.5f64..1.5, -1.5f64..1.5, -1.5f64..1.5]).prop_map(|(a, t)| {
+        let (s, c) = a.sin_cos();
+        FxPose::from_f64(&[c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0], &t)
+    })
+}
+
+fn check(
+    pipe: &mut GridPipelineModel,
+    g: &Grid,
+    scan: &[FxPoint],
+    pose: &FxPose,
+    gaps: bool,
+) -> Result<(), TestCaseError> {
+    let want = evaluate_grid(g, scan, pose);
+    let got = run_particle(pipe, scan, pose, |c| gaps && c % 3 == 1).evaluation;
+    prop_assert_eq!(&got, &want);
+    for (k, &(i, d)) in got.nearest.iter().enumerate() {
+        let n = g.nearest(pficp_fpga::format::transform(pose, scan[k]));
+        prop_assert_eq!((if n.index == NONE { 0 } else { n.index }, n.d2), (i, d));
+        prop_assert_eq!(d == CAP_D2, n.index == NONE);
+    }
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 120, failure_persistence: None, ..ProptestConfig::default() })]
+
+    #[test]
+    fn the_cycle_model_is_the_capped_search(
+        lanes in prop::sample::select(vec![1usize, 3, 4, 16]),
+        m1 in model(),
+        m2 in model(),
+        scan in prop::collection::vec([inside_coord(), inside_coord(), inside_coord()], 1..60),
+        p1 in pose(),
+        p2 in pose(),
+    ) {
+        let mut pipe = GridPipelineModel::new(lanes);
+        let g1 = Grid::build(&m1).unwrap();
+        for w in upload(&g1) {
+            pipe.step(&w);
+        }
+        check(&mut pipe, &g1, &scan, &p1, false)?;
+        check(&mut pipe, &g1, &scan, &p2, true)?;
+        // Rewrite model and table, then back to back again.
+        let g2 = Grid::build(&m2).unwrap();
+        for w in upload(&g2) {
+            pipe.step(&w);
+        }
+        check(&mut pipe, &g2, &scan, &p2, false)?;
+        check(&mut pipe, &g2, &scan, &p1, false)?;
+    }
+}
+
+#[test]
+fn a_lone_point_and_an_empty_box() {
+    let g = Grid::build(&[[0, 0, 0]]).unwrap();
+    let mut pipe = GridPipelineModel::new(4);
+    for w in upload(&g) {
+        pipe.step(&w);
+    }
+    let id = FxPose::from_f64(&[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0], &[0.0; 3]);
+    // Near, exactly one cell away (capped), and far outside the cube (no rows at all).
+    let scan = [[100, 0, 0], [1024, 0, 0], [-1023, 0, 0], [30000, -30000, 30000]];
+    let r = run_particle(&mut pipe, &scan, &id, |_| false);
+    assert_eq!(r.evaluation.nearest, vec![(0, 10000), (0, CAP_D2), (0, 1023 * 1023), (0, CAP_D2)]);
+    assert_eq!(r.evaluation, evaluate_grid(&g, &scan, &id));
+    // A batch entirely outside: no row, no address.
+    let r = run_particle(&mut pipe, &[[30000, 30000, 30000]], &id, |_| false);
+    assert_eq!((r.evaluation.nearest.clone(), r.swept), (vec![(0, CAP_D2)], 0));
+    // start while busy is ignored.
+    pipe.step(&GridInputs { start: true, pose: id, ..Default::default() });
+    assert!(pipe.outputs().busy);
+    pipe.step(&GridInputs { start: true, ..Default::default() });
+    assert!(pipe.outputs().scan_ready);
+}
