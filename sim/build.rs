@@ -3,6 +3,8 @@
 //! - `pipeline`: `NnPipeline<P>` from `pficp_fpga::rtl::pipeline_verilog(P)` (prefix `VpipeP`);
 //! - `particle_weights`: `ParticleWeightPipeline<P>` from
 //!   `pficp_fpga::rtl::particle_weights_verilog(P)` (prefix `VpwP`);
+//! - `grid_pipeline`: `GridPipeline<P>` from `pficp_fpga::rtl::grid_pipeline_verilog(P)`
+//!   (prefix `VgridP`);
 //! - `weight_stage`: `WeightStage` from `pficp_fpga::rtl::weight_stage_verilog()` (prefix
 //!   `Vweights`);
 //! - `sequencer`: `PfSequencer` alone, from `pficp_fpga::rtl::sequencer_verilog()`;
@@ -62,7 +64,7 @@ struct Design {
 }
 
 /// Every design that is verilated.
-const DESIGNS: [Design; 6] = [
+const DESIGNS: [Design; 7] = [
     Design {
         name: "pipeline",
         prefix: "Vpipe",
@@ -78,6 +80,14 @@ const DESIGNS: [Design; 6] = [
         verilog: pficp_fpga::rtl::particle_weights_verilog,
         ports: &[PIPELINE_PORTS, PW_EXTRA_PORTS],
         spec: "fpga/src/rtl/particle_weights.rs (sim/src/ports.rs PIPELINE_PORTS + PW_EXTRA_PORTS)",
+    },
+    Design {
+        name: "grid_pipeline",
+        prefix: "Vgrid",
+        per_lane: true,
+        verilog: pficp_fpga::rtl::grid_pipeline_verilog,
+        ports: &[GRID_PIPELINE_PORTS],
+        spec: "docs/pipeline.md (sim/src/ports.rs GRID_PIPELINE_PORTS)",
     },
     Design {
         name: "weight_stage",

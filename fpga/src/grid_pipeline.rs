@@ -121,8 +121,10 @@ pub struct GridPipelineModel {
     reduce_at: usize,
     cost: u64,
     out: Outputs,
-    /// Model addresses issued so far (for the utilisation figures; not a register).
+    /// Model addresses issued so far and lane distances they fed (the batch's lanes each);
+    /// for the utilisation figures, not registers.
     issued: u64,
+    distances: u64,
 }
 
 impl GridPipelineModel {
@@ -173,6 +175,7 @@ impl GridPipelineModel {
             cost: 0,
             out: Outputs::default(),
             issued: 0,
+            distances: 0,
         }
     }
 
@@ -181,9 +184,15 @@ impl GridPipelineModel {
         self.lanes
     }
 
-    /// Model addresses swept since reset (each is one distance in every lane).
+    /// Model addresses swept since reset.
     pub fn issued(&self) -> u64 {
         self.issued
+    }
+
+    /// Distances computed since reset in lanes that hold a scan point (a swept address
+    /// counts once for each of its batch's points).
+    pub fn distances(&self) -> u64 {
+        self.distances
     }
 
     /// Output ports now.
@@ -264,6 +273,7 @@ impl GridPipelineModel {
         if issue {
             next.addr = self.addr + 1;
             next.issued += 1;
+            next.distances += self.n_lanes as u64;
         }
         if consume {
             next.addr = self.plo;
@@ -426,8 +436,8 @@ pub fn upload(grid: &Grid) -> Vec<GridInputs> {
     v
 }
 
-/// What one particle took: the results, clocks from `start` to `cost_valid`, and the model
-/// addresses swept (each one distance in every lane).
+/// What one particle took: the results, clocks from `start` to `cost_valid`, the model
+/// addresses swept and the distances computed in the lanes that hold a point.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct GridRun {
     /// Results and cost.
@@ -436,6 +446,8 @@ pub struct GridRun {
     pub clocks: u64,
     /// Model addresses swept.
     pub swept: u64,
+    /// Distances computed in lanes holding a scan point (`swept` times the batch's points).
+    pub distances: u64,
 }
 
 /// Drive a [`GridPipelineModel`] (its model and table already written) through one
@@ -447,7 +459,7 @@ pub fn run_particle(
     mut gap: impl FnMut(u64) -> bool,
 ) -> GridRun {
     assert!(!scan.is_empty());
-    let issued0 = pipe.issued;
+    let (issued0, distances0) = (pipe.issued, pipe.distances);
     pipe.step(&GridInputs { start: true, pose: *pose, ..Default::default() });
     let mut next = 0;
     let mut nearest = Vec::with_capacity(scan.len());
@@ -471,8 +483,8 @@ pub fn run_particle(
             nearest.push((o.nn_index, o.nn_dist));
         }
         if o.cost_valid {
-            let swept = pipe.issued - issued0;
-            return GridRun { evaluation: Evaluation { cost: o.cost, nearest }, clocks, swept };
+            let (swept, distances) = (pipe.issued - issued0, pipe.distances - distances0);
+            return GridRun { evaluation: Evaluation { cost: o.cost, nearest }, clocks, swept, distances };
         }
         assert!(clocks < 1 << 40, "pipeline never finished");
     }

@@ -3,13 +3,14 @@
 //! | RTL (`build.rs` verilates it) | wrapper | reference | lockstep |
 //! |---|---|---|---|
 //! | `pipeline_verilog(P)` (docs/pipeline.md), P in [`verilated_lanes`] | [`VerilatedPipeline`] | [`PipelineModel`](pficp_fpga::pipeline::PipelineModel) | [`Lockstep`] |
+//! | `grid_pipeline_verilog(P)` (docs/pipeline.md, the grid pipeline), the same P | [`VerilatedGridPipeline`] | [`GridPipelineModel`](pficp_fpga::grid_pipeline::GridPipelineModel) | [`GridLockstep`] |
 //! | `particle_weights_verilog(P)`, the same P | [`VerilatedParticleWeights`] | [`ParticleWeightModel`](pficp_fpga::particle_weights::ParticleWeightModel) | [`PwLockstep`] |
 //! | `weight_stage_verilog()` (docs/weights.md) | [`VerilatedWeightStage`] | [`WeightModel`](pficp_fpga::weights::WeightModel) | [`WeightLockstep`] |
 //! | the sequencer `PfSequencer` alone (docs/sequencer.md) | [`VerilatedSequencer`] | [`SequencerModel`](pficp_fpga::sequencer::SequencerModel) | [`SeqLockstep`] |
 //! | `board_verilog` (the whole board top, default and fast builds) | [`VerilatedBoard`] | `BoardModel` (byte level) | [`serial::SerialBoard`] |
 //!
 //! - The wrappers run the Verilated RTL one clock at a time, with an optional VCD.
-//! - [`LockstepOf`] (the four lockstep types are its instances) drives the RTL and the
+//! - [`LockstepOf`] (the five lockstep types are its instances) drives the RTL and the
 //!   reference with the same inputs and compares every output port after reset and after
 //!   every rising edge; a difference is a [`Mismatch`] that names the cycle, the signal,
 //!   both values and a VCD of the RTL run. By default the first one stops the run;
@@ -27,11 +28,13 @@
 #[macro_use]
 mod core;
 pub mod fuzz;
+mod grid_lockstep;
 mod lockstep;
 pub mod ports;
 pub mod serial;
 mod wrappers;
 
 pub use crate::core::{verilated_lanes, verilated_models, verilog_path, BUILD_REPORT};
+pub use grid_lockstep::GridLockstep;
 pub use lockstep::*;
 pub use wrappers::*;

@@ -5,6 +5,7 @@ use crate::core::*;
 use crate::lockstep::Rtl;
 use crate::ports;
 use pficp_fpga::board::BoardConfig;
+use pficp_fpga::grid_pipeline::{GridInputs, GridPipelineModel};
 use pficp_fpga::particle_weights::ParticleWeightModel;
 use pficp_fpga::particle_weights::{PwInputs, PwOutputs};
 use pficp_fpga::pipeline::PipelineModel;
@@ -71,6 +72,54 @@ impl VerilatedPipeline {
     /// Values are masked to the port widths.
     pub fn set_inputs(&mut self, i: &Inputs) {
         self.core.set_inputs(&pipeline_input_words(i))
+    }
+
+    /// The output ports now.
+    pub fn outputs(&self) -> Outputs {
+        pipeline_outputs(&self.core.outputs::<7>())
+    }
+}
+
+/// The Verilated grid pipeline (`GridPipeline<P>`: the nearest-neighbour pipeline with the
+/// grid search; its outputs are the nearest-neighbour pipeline's).
+pub struct VerilatedGridPipeline {
+    pub(crate) core: Core,
+}
+
+verilated_common!(VerilatedGridPipeline, GridInputs);
+
+impl VerilatedGridPipeline {
+    /// The `lanes`-lane grid pipeline after reset.
+    ///
+    /// Panics if no model was verilated for `lanes` (see [`verilated_lanes`]).
+    pub fn new(lanes: usize) -> Self {
+        VerilatedGridPipeline { core: Core::new(GRID_PIPELINE, lanes, 14, &GRID_OUTPUT_PORTS) }
+    }
+
+    /// Number of lanes.
+    pub fn lanes(&self) -> usize {
+        self.core.model.lanes
+    }
+
+    /// Drive the input ports (masked to the port widths).
+    pub fn set_inputs(&mut self, i: &GridInputs) {
+        let pose = i.pose.pack();
+        self.core.set_inputs(&[
+            i.model_we as u64,
+            i.model_waddr as u64,
+            i.model_wdata,
+            i.table_we as u64,
+            i.table_waddr as u64,
+            i.table_wdata as u64,
+            i.start as u64,
+            pose[0],
+            pose[1],
+            pose[2],
+            pose[3],
+            i.scan_valid as u64,
+            i.scan_data,
+            i.scan_last as u64,
+        ])
     }
 
     /// The output ports now.
@@ -287,6 +336,9 @@ impl Default for VerilatedWeightStage {
 /// Output port names of the pipeline in the order [`Lockstep`](crate::Lockstep) compares them.
 pub const OUTPUT_PORTS: [&str; 7] = ports::outputs(&[ports::PIPELINE_PORTS]);
 
+/// Output port names of the grid pipeline in the order [`GridLockstep`](crate::GridLockstep) compares them.
+pub const GRID_OUTPUT_PORTS: [&str; 7] = ports::outputs(&[ports::GRID_PIPELINE_PORTS]);
+
 /// Output port names of the particle-weight pipeline in the order [`PwLockstep`](crate::PwLockstep) compares
 /// them (the pipeline's, then the weight stage's).
 pub const PW_OUTPUT_PORTS: [&str; 15] = ports::outputs(&[ports::PIPELINE_PORTS, ports::PW_EXTRA_PORTS]);
@@ -363,6 +415,29 @@ impl Rtl for VerilatedPipeline {
         Self::new(self.lanes())
     }
     rtl_common!(Inputs);
+}
+
+impl Rtl for VerilatedGridPipeline {
+    type Inputs = GridInputs;
+    type Outputs = Outputs;
+    type Reference = GridPipelineModel;
+    const OUTPUT_PORTS: &'static [&'static str] = &GRID_OUTPUT_PORTS;
+    fn port_values(o: &Outputs) -> Vec<u64> {
+        port_values(o).to_vec()
+    }
+    fn new_reference(&self) -> GridPipelineModel {
+        GridPipelineModel::new(self.lanes())
+    }
+    fn reference_outputs(r: &GridPipelineModel) -> Outputs {
+        r.outputs()
+    }
+    fn reference_step(r: &mut GridPipelineModel, i: &GridInputs) {
+        r.step(i)
+    }
+    fn fresh(&self) -> Self {
+        Self::new(self.lanes())
+    }
+    rtl_common!(GridInputs);
 }
 
 impl Rtl for VerilatedParticleWeights {

@@ -28,7 +28,8 @@ pub struct Lane {
     pub model: Signal<In, Bits<48>>,
     /// `model` is a swept model point (the s0 valid bit of the shared delay line).
     pub model_valid: Signal<In, Bit>,
-    /// Reset the minimum to `2^34 - 1` and its index to 0 at this edge (has priority).
+    /// Reset the minimum to its initial value (`2^34 - 1`, or the grid pipeline's cap) and
+    /// its index to 0 at this edge (has priority).
     pub init: Signal<In, Bit>,
     /// The s4 stage holds a distance (shared delay line).
     pub s4_valid: Signal<In, Bit>,
@@ -60,9 +61,17 @@ pub struct Lane {
 }
 
 impl Lane {
-    /// Lane number `id` (its position in scan order within a batch).
+    /// Lane number `id` (its position in scan order within a batch), minimum reset to
+    /// `2^34 - 1` ([`DIST_INIT`]).
     pub fn new(id: usize) -> Lane {
+        Lane::with_init(id, DIST_INIT)
+    }
+
+    /// Lane number `id` whose minimum is reset to `init` (the grid pipeline's
+    /// [`crate::grid::CAP_D2`]): a distance `>= init` never updates it.
+    pub fn with_init(id: usize, init: u64) -> Lane {
         assert!(id < 256, "lane number fits 8 bits");
+        assert!(init <= DIST_INIT, "the initial minimum fits 34 bits");
         Lane {
             clock: Default::default(),
             wr_en: Default::default(),
@@ -79,7 +88,7 @@ impl Lane {
             min: Default::default(),
             arg: Default::default(),
             id: Constant::new((id as u64).into()),
-            dist_init: Constant::new(DIST_INIT.into()),
+            dist_init: Constant::new(init.into()),
             x: Default::default(),
             d1: Default::default(),
             d1b: Default::default(),

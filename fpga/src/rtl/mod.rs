@@ -7,6 +7,8 @@
 //! - [`lane`]: `Lane`, one scan point's distance pipeline and running minimum (3 `Mul18`);
 //! - [`pipeline`]: `NnPipeline<P>`, the nearest-neighbour top: state machine, model RAM,
 //!   `P` lanes, Reduce ([`crate::pipeline::PipelineModel`]);
+//! - [`grid_pipeline`]: `GridPipeline<P>`, the same with the grid search: model sorted by
+//!   cell, cell table, rows around a batch ([`crate::grid_pipeline::GridPipelineModel`]);
 //! - [`weights`]: `WeightStage`, minimum cost and exp-table weights
 //!   ([`crate::weights::WeightModel`]);
 //! - [`particle_weights`]: the two wired together ([`crate::particle_weights`]);
@@ -17,6 +19,7 @@
 //! simulator, sim/tests under Verilator). The `*_verilog` functions give the Verilog.
 
 pub mod board;
+pub mod grid_pipeline;
 pub mod lane;
 pub mod mul18;
 pub mod particle_weights;
@@ -24,6 +27,7 @@ pub mod pipeline;
 pub mod transform;
 pub mod weights;
 
+pub use grid_pipeline::GridPipeline;
 pub use lane::Lane;
 pub use mul18::{Mul18, MUL18_MODULE};
 pub use pipeline::NnPipeline;
@@ -127,6 +131,27 @@ pub fn pipeline_verilog(lanes: usize) -> String {
         8 => verilog_of::<8>(),
         16 => verilog_of::<16>(),
         _ => panic!("pipeline_verilog: {lanes} lanes is not supported; use one of {SUPPORTED_LANES:?}"),
+    }
+}
+
+fn grid_of<const P: usize>() -> String {
+    let mut uut = GridPipeline::<P>::new();
+    uut.connect_all();
+    dedup_modules(&generate_verilog(&uut))
+}
+
+/// The Verilog of `GridPipeline<lanes>` (the nearest-neighbour pipeline with the grid search,
+/// docs/pipeline.md), top module `top`.
+///
+/// Panics unless `lanes` is one of [`SUPPORTED_LANES`].
+pub fn grid_pipeline_verilog(lanes: usize) -> String {
+    match lanes {
+        1 => grid_of::<1>(),
+        2 => grid_of::<2>(),
+        4 => grid_of::<4>(),
+        8 => grid_of::<8>(),
+        16 => grid_of::<16>(),
+        _ => panic!("grid_pipeline_verilog: {lanes} lanes is not supported; use one of {SUPPORTED_LANES:?}"),
     }
 }
 
