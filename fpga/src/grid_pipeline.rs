@@ -269,7 +269,7 @@ impl GridPipelineModel {
         let last = issue && self.addr + 1 == self.end;
         let consume = self.pv && (!issue || last);
         let tq_full = self.tq_valid && self.tq_lo < self.tq_hi;
-        let tadv = sweep && self.rmore && !tq_full && !(self.pv && !consume);
+        let tadv = sweep && self.rmore && !tq_full && (!self.pv || consume);
         if issue {
             next.addr = self.addr + 1;
             next.issued += 1;

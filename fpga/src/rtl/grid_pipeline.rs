@@ -372,7 +372,7 @@ impl<const P: usize> Logic for GridPipeline<P> {
         self.consume.next = self.pv.q.val() && (!self.issue.val() || self.last.val());
         self.tq_full.next = self.tq_valid.q.val() && (self.lo_ram.read_data.val() < self.hi_ram.read_data.val());
         self.tadv.next =
-            self.sweep.val() && self.rmore.q.val() && !self.tq_full.val() && !(self.pv.q.val() && !self.consume.val());
+            self.sweep.val() && self.rmore.q.val() && !self.tq_full.val() && (!self.pv.q.val() || self.consume.val());
         self.s0_valid.d.next = self.issue.val();
         self.s0_index.d.next = self.addr.q.val().get_bits::<12>(0);
         if self.issue.val() {

@@ -1,0 +1,128 @@
+//! The grid pipeline on the paper's models 1 to 3 as the host quantises them (2,000 model
+//! points): the Verilated `GridPipeline<16>` in lockstep with its cycle model on every clock,
+//! each result the capped search; and the figures (docs/decisions.md, the grid pipeline):
+//! clocks per particle, distances a clock and lane use, against the brute-force pipeline,
+//! with the scan sample in random order and sorted by cell.
+//! `cargo test --release -p pficp-tests --test grid_pipeline_models -- --nocapture`
+
+use pficp::board::fixed::{normalised_pose, quantise_pose, Normalisation};
+use pficp::datasets::{make, ModelId, Sampling, ScanSpec};
+use pficp::geometry::Pose;
+use pficp_fpga::format::{transform, FxPoint, FxPose};
+use pficp_fpga::grid::{cell_of, Grid};
+use pficp_fpga::grid_pipeline::{clocks_per_particle, evaluate_grid};
+use pficp_fpga::pipeline;
+use pficp_sim::GridLockstep;
+
+const LANES: usize = 16;
+
+/// Model `id` (2,000 points) and `n` scan points as the host quantises them, with the pose
+/// at the truth and 5 deg and 0.05 off it.
+fn case(id: ModelId, n: usize) -> (Grid, Vec<FxPoint>, [FxPose; 2]) {
+    let truth = id.table1_truth();
+    let ds = make(id, 2000, &truth, &ScanSpec { sampling: Sampling::Independent { points: n }, noise: 0.0, seed: 3 });
+    let (nm, nd) = (Normalisation::of(&ds.scan), Normalisation::of(&ds.model));
+    let (scan_q, model_q) = (nm.quantise(&ds.scan), nd.quantise(&ds.model));
+    let grid = Grid::build(&model_q).unwrap_or_else(|e| panic!("{}: {e}", id.name()));
+    let poses = [[0.0; 7], [0.05, 0.0, 0.0, 0.0, 0.087, 0.0, 0.0]].map(|offset| {
+        let mut p = truth.to_params();
+        for (x, d) in p.iter_mut().zip(offset) {
+            *x += d;
+        }
+        quantise_pose(&normalised_pose(&Pose::from_params(&p), &nm, &nd))
+    });
+    (grid, scan_q, poses)
+}
+
+/// The scan sorted by the cell of its image under `pose` (`z`, `y`, `x`; stable).
+fn sorted_by_cell(scan: &[FxPoint], pose: &FxPose) -> Vec<FxPoint> {
+    let mut s = scan.to_vec();
+    s.sort_by_key(|&p| {
+        let k = cell_of(transform(pose, p));
+        (k[2], k[1], k[0])
+    });
+    s
+}
+
+/// The scan sorted by the Morton (Z-order) key of that cell (clipped to the grid): batches
+/// of `P` consecutive points are compact along all three axes.
+fn sorted_by_morton(scan: &[FxPoint], pose: &FxPose) -> Vec<FxPoint> {
+    let mut s = scan.to_vec();
+    s.sort_by_key(|&p| {
+        let k = cell_of(transform(pose, p)).map(|c| c.clamp(0, 15) as u32);
+        (0..4).map(|b| ((k[0] >> b & 1) | (k[1] >> b & 1) << 1 | (k[2] >> b & 1) << 2) << (3 * b)).sum::<u32>()
+    });
+    s
+}
+
+/// A deterministic shuffle (the sample's order is the generator's; shuffle it anyway).
+fn shuffled(scan: &[FxPoint]) -> Vec<FxPoint> {
+    let mut s = scan.to_vec();
+    let mut x = 0x2545_f491_4f6c_dd1du64;
+    for i in (1..s.len()).rev() {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        s.swap(i, (x % (i as u64 + 1)) as usize);
+    }
+    s
+}
+
+#[test]
+fn models_in_lockstep_at_16_lanes() {
+    let mut ls = GridLockstep::new(LANES);
+    for id in ModelId::ALL {
+        let (grid, scan, poses) = case(id, 300);
+        ls.upload(&grid).unwrap_or_else(|m| panic!("{}: {m}", id.name()));
+        for (k, pose) in poses.iter().enumerate() {
+            for (order, s) in [("random", shuffled(&scan)), ("sorted", sorted_by_cell(&scan, &poses[0]))] {
+                let (got, clocks) = ls
+                    .particle(&s, pose, |c| k == 1 && c % 7 == 0, |_, _| {})
+                    .unwrap_or_else(|m| panic!("{} pose {k} {order}: {m}", id.name()));
+                assert_eq!(got, evaluate_grid(&grid, &s, pose), "{} pose {k} {order}", id.name());
+                if k == 0 {
+                    assert_eq!(clocks, clocks_per_particle(&grid, &s, pose, LANES).clocks);
+                }
+            }
+        }
+    }
+    eprintln!("models 1-3: {} clocks compared in lockstep (P = 16)", ls.clocks_compared());
+}
+
+#[test]
+fn figures() {
+    eprintln!(
+        "| model | N_M | pose | order | clocks | brute force | speed-up | swept a batch | distances/clock (of P) | in the point's 27 cells |"
+    );
+    eprintln!("|---|---|---|---|---|---|---|---|---|---|");
+    for n in [300, 1000] {
+        for id in ModelId::ALL {
+            let (grid, scan, poses) = case(id, n);
+            let brute = pipeline::clocks_per_particle(n, grid.points.len(), LANES);
+            for (pose_name, pose) in [("truth", &poses[0]), ("off", &poses[1])] {
+                for (order, s) in [
+                    ("random", shuffled(&scan)),
+                    ("sorted", sorted_by_cell(&scan, &poses[0])),
+                    ("Morton", sorted_by_morton(&scan, &poses[0])),
+                ] {
+                    let r = clocks_per_particle(&grid, &s, pose, LANES);
+                    assert_eq!(r.evaluation, evaluate_grid(&grid, &s, pose));
+                    let batches = n.div_ceil(LANES) as f64;
+                    let candidates: usize = s.iter().map(|&p| grid.candidates(transform(pose, p))).sum();
+                    let per_clock = r.distances as f64 / r.clocks as f64;
+                    eprintln!(
+                        "| {} | {n} | {pose_name} | {order} | {} | {brute} | {:.1} | {:.0} | {:.2} ({:.1}%) | {:.1}% |",
+                        id.name(),
+                        r.clocks,
+                        brute as f64 / r.clocks as f64,
+                        r.swept as f64 / batches,
+                        per_clock,
+                        100.0 * per_clock / LANES as f64,
+                        100.0 * candidates as f64 / r.distances as f64,
+                    );
+                    assert!(r.clocks < brute);
+                }
+            }
+        }
+    }
+}
