@@ -72,10 +72,9 @@ impl Rng {
         if self.below(12) == 0 {
             // Anything the 18-bit fields hold (the transform saturates).
             let max = (1i64 << 17) - 1;
-            let mut p = FxPose::default();
-            p.m = [0; 9].map(|_| self.coord(-max - 1, max) as i32);
-            p.t = [0; 3].map(|_| self.coord(-max - 1, max) as i32);
-            return p;
+            let m = [0; 9].map(|_| self.coord(-max - 1, max) as i32);
+            let t = [0; 3].map(|_| self.coord(-max - 1, max) as i32);
+            return FxPose { m, t };
         }
         let a = (self.below(6283) as f64) / 1000.0;
         let t = [0; 3].map(|_| (self.below(3001) as f64 - 1500.0) / 1000.0);
