@@ -55,6 +55,20 @@ pub struct GridInputs {
     pub scan_last: bool,
 }
 
+impl GridInputs {
+    /// Begin a particle with `pose`.
+    pub fn start(pose: &FxPose) -> GridInputs {
+        GridInputs { start: true, pose: *pose, ..Default::default() }
+    }
+
+    /// If `offer`, offer scan point `next` of `scan` (`scan_last` on the last one);
+    /// otherwise nothing.
+    pub fn offer(scan: &[FxPoint], next: usize, offer: bool) -> GridInputs {
+        let i = crate::pipeline::Inputs::offer(scan, next, offer);
+        GridInputs { scan_valid: i.scan_valid, scan_data: i.scan_data, scan_last: i.scan_last, ..Default::default() }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum State {
     Idle,
@@ -460,18 +474,13 @@ pub fn run_particle(
 ) -> GridRun {
     assert!(!scan.is_empty());
     let (issued0, distances0) = (pipe.issued, pipe.distances);
-    pipe.step(&GridInputs { start: true, pose: *pose, ..Default::default() });
+    pipe.step(&GridInputs::start(pose));
     let mut next = 0;
     let mut nearest = Vec::with_capacity(scan.len());
     let mut clocks = 1u64;
     loop {
         let offer = next < scan.len() && !gap(clocks);
-        let inputs = GridInputs {
-            scan_valid: offer,
-            scan_data: if offer { pack_point(scan[next]) } else { 0 },
-            scan_last: offer && next + 1 == scan.len(),
-            ..Default::default()
-        };
+        let inputs = GridInputs::offer(scan, next, offer);
         let took = offer && pipe.outputs().scan_ready;
         pipe.step(&inputs);
         clocks += 1;

@@ -3,7 +3,7 @@
 
 use crate::lockstep::{LockstepOf, Mismatch};
 use crate::wrappers::VerilatedGridPipeline;
-use pficp_fpga::format::{pack_point, FxPoint, FxPose};
+use pficp_fpga::format::{FxPoint, FxPose};
 use pficp_fpga::grid::Grid;
 use pficp_fpga::grid_pipeline::{upload, GridInputs};
 use pficp_fpga::pipeline::Evaluation;
@@ -41,19 +41,14 @@ impl LockstepOf<VerilatedGridPipeline> {
             wait += 1;
             assert!(wait < 1 << 32, "the pipeline never became idle");
         }
-        self.step(&GridInputs { start: true, pose: *pose, ..Default::default() })?;
+        self.step(&GridInputs::start(pose))?;
         let (mut next, mut clocks) = (0, 1u64);
         let mut nearest = Vec::with_capacity(scan.len());
         // Generous bound: every batch sweeps 256 rows of at most 8,191 addresses (any table).
         let limit = 1000 + (scan.len() as u64 + 1) * (256 * 8192 + 300);
         loop {
             let offer = next < scan.len() && !gap(clocks);
-            let mut inputs = GridInputs {
-                scan_valid: offer,
-                scan_data: if offer { pack_point(scan[next]) } else { 0 },
-                scan_last: offer && next + 1 == scan.len(),
-                ..Default::default()
-            };
+            let mut inputs = GridInputs::offer(scan, next, offer);
             extra(clocks, &mut inputs);
             let took = offer && self.outputs().scan_ready;
             self.step(&inputs)?;
