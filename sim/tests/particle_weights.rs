@@ -45,6 +45,8 @@ fn every_design_is_verilated() {
             ("pipeline", 16, "Vpipe16"),
             ("particle_weights", 4, "Vpw4"),
             ("particle_weights", 16, "Vpw16"),
+            ("grid_pipeline", 4, "Vgrid4"),
+            ("grid_pipeline", 16, "Vgrid16"),
             ("weight_stage", 0, "Vweights"),
             ("board", 0, "Vboard"),
             ("sequencer", 0, "Vseq"),
