@@ -24,9 +24,9 @@
 //! [`GridPipelineModel::step`] is one rising edge, [`GridPipelineModel::outputs`] the
 //! output ports after it, as for [`crate::pipeline::PipelineModel`].
 
-use crate::format::{pack_point, transform, unpack_point, FxPoint, FxPose, MATRIX_FRAC, MAX_POINTS};
+use crate::format::{pack_point, transform, unpack_point, FxPoint, FxPose, MAX_POINTS};
 use crate::grid::{nearest_capped, Grid, CAP_D2, CELLS, CELL_SHIFT, NONE};
-use crate::pipeline::{Evaluation, Outputs, COST_MASK};
+use crate::pipeline::{transform_products, transform_result, transform_sums, Evaluation, Outputs, COST_MASK};
 
 /// Input ports (before an edge).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -249,25 +249,14 @@ impl GridPipelineModel {
         // Transform pipeline (as the brute-force pipeline's).
         next.t1_valid = take;
         if take {
-            let p = unpack_point(i.scan_data);
-            for r in 0..3 {
-                for c in 0..3 {
-                    next.t1_prod[3 * r + c] = self.pose.m[3 * r + c] as i64 * p[c] as i64;
-                }
-            }
+            next.t1_prod = transform_products(&self.pose, i.scan_data);
         }
         next.t2_valid = self.t1_valid;
         if self.t1_valid {
-            for r in 0..3 {
-                next.t2_acc[r] = self.t1_prod[3 * r]
-                    + self.t1_prod[3 * r + 1]
-                    + self.t1_prod[3 * r + 2]
-                    + ((self.pose.t[r] as i64) << MATRIX_FRAC)
-                    + (1 << (MATRIX_FRAC - 1));
-            }
+            next.t2_acc = transform_sums(&self.pose, &self.t1_prod);
         }
         if self.t2_valid && self.lane_wr < self.lanes {
-            let x = self.t2_acc.map(|a| (a >> MATRIX_FRAC).clamp(i16::MIN as i64, i16::MAX as i64) as i16);
+            let x = transform_result(&self.t2_acc);
             next.lane_x[self.lane_wr] = x;
             next.lane_wr = self.lane_wr + 1;
             // The batch's bounding box of query cells (the first write of a batch sets it).

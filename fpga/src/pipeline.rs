@@ -197,26 +197,14 @@ impl PipelineModel {
         // Transform pipeline (runs in every state; only Load feeds it).
         next.t1_valid = take;
         if take {
-            let p = unpack_point(i.scan_data);
-            for r in 0..3 {
-                for c in 0..3 {
-                    next.t1_prod[3 * r + c] = self.pose.m[3 * r + c] as i64 * p[c] as i64;
-                }
-            }
+            next.t1_prod = transform_products(&self.pose, i.scan_data);
         }
         next.t2_valid = self.t1_valid;
         if self.t1_valid {
-            for r in 0..3 {
-                next.t2_acc[r] = self.t1_prod[3 * r]
-                    + self.t1_prod[3 * r + 1]
-                    + self.t1_prod[3 * r + 2]
-                    + ((self.pose.t[r] as i64) << MATRIX_FRAC)
-                    + (1 << (MATRIX_FRAC - 1));
-            }
+            next.t2_acc = transform_sums(&self.pose, &self.t1_prod);
         }
         if self.t2_valid && self.lane_wr < self.lanes {
-            next.lane_x[self.lane_wr] =
-                self.t2_acc.map(|a| (a >> MATRIX_FRAC).clamp(i16::MIN as i64, i16::MAX as i64) as i16);
+            next.lane_x[self.lane_wr] = transform_result(&self.t2_acc);
             next.lane_wr = self.lane_wr + 1;
         }
         // Sweep pipeline (stages advance every clock).
@@ -314,6 +302,26 @@ impl PipelineModel {
         }
         *self = next;
     }
+}
+
+/// The transform pipeline's first stage (the edge after a take): the nine products
+/// `m_ij * p_j` of the scan word `point` (docs/pipeline.md, Load). Shared by the cycle
+/// models of both pipelines; [`crate::format::transform`] is the same arithmetic at once.
+pub fn transform_products(pose: &FxPose, point: u64) -> [i64; 9] {
+    let p = unpack_point(point);
+    std::array::from_fn(|k| pose.m[k] as i64 * p[k % 3] as i64)
+}
+
+/// The second stage: each row's sum with the translation and the rounding half.
+pub fn transform_sums(pose: &FxPose, prod: &[i64; 9]) -> [i64; 3] {
+    std::array::from_fn(|r| {
+        prod[3 * r] + prod[3 * r + 1] + prod[3 * r + 2] + ((pose.t[r] as i64) << MATRIX_FRAC) + (1 << (MATRIX_FRAC - 1))
+    })
+}
+
+/// The third stage: the shift and the saturation to a coordinate.
+pub fn transform_result(acc: &[i64; 3]) -> FxPoint {
+    acc.map(|a| (a >> MATRIX_FRAC).clamp(i16::MIN as i64, i16::MAX as i64) as i16)
 }
 
 /// What the pipeline computes for one particle.
