@@ -416,6 +416,57 @@ pub fn evaluate_grid(grid: &Grid, scan: &[FxPoint], pose: &FxPose) -> Evaluation
     Evaluation { cost, nearest }
 }
 
+/// The functional reference over the board's raw stores, whatever they hold: the model
+/// RAM (`ram`, [`MAX_POINTS`] packed words) and the cell table as written (`first`, the
+/// [`CELLS`]` + 1` entries of 13 bits; the RTL's low port reads `first[c]`, its high port
+/// `first[c + 1]`). What the RTL computes, without its clocks: the scan in batches of
+/// `lanes` points in order; per batch the box of its query cells grown by one and clipped;
+/// its rows `z`, then `y`, each the range `first[(z, y, x_lo)] .. first[(z, y, x_hi) + 1]`
+/// (empty unless the start is below the end), addresses taken modulo [`MAX_POINTS`]; each
+/// lane keeps the first strictly smaller distance, starting at [`CAP_D2`] with index 0.
+/// With a table built by [`Grid::build`] over the stored points this equals
+/// [`evaluate_grid`] (the module doc's rule), whatever `lanes`; the board's byte-level
+/// reference uses this so that it also agrees with the RTL on a table that does not
+/// describe the model.
+pub fn evaluate_stored(ram: &[u64], first: &[u16], lanes: usize, scan: &[FxPoint], pose: &FxPose) -> Evaluation {
+    assert!(ram.len() == MAX_POINTS && first.len() == CELLS + 1 && lanes > 0);
+    let mut nearest = Vec::with_capacity(scan.len());
+    for batch in scan.chunks(lanes) {
+        let queries: Vec<FxPoint> = batch.iter().map(|&p| transform(pose, p)).collect();
+        let mut best: Vec<(u16, u64)> = vec![(0, CAP_D2); queries.len()];
+        let mut lo = [0i32; 3];
+        let mut hi = [0i32; 3];
+        let mut rows = true;
+        for k in 0..3 {
+            let cmin = queries.iter().map(|q| shifted_cell(q[k])).min().unwrap_or(0);
+            let cmax = queries.iter().map(|q| shifted_cell(q[k])).max().unwrap_or(0);
+            lo[k] = (cmin + 7).max(0);
+            hi[k] = (cmax + 9).min(15);
+            rows &= lo[k] <= hi[k];
+        }
+        if rows {
+            for z in lo[2]..=hi[2] {
+                for y in lo[1]..=hi[1] {
+                    let row = ((z as usize) << 8) | ((y as usize) << 4);
+                    let (start, end) = (first[row | lo[0] as usize] & 0x1fff, first[(row | hi[0] as usize) + 1] & 0x1fff);
+                    for a in start..end {
+                        let d = unpack_point(ram[a as usize % MAX_POINTS]);
+                        for (b, q) in best.iter_mut().zip(&queries) {
+                            let e = crate::format::dist2(*q, d);
+                            if e < b.1 {
+                                *b = (a & 0xfff, e);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        nearest.extend(best);
+    }
+    let cost = nearest.iter().fold(0u64, |c, n| (c + n.1) & COST_MASK);
+    Evaluation { cost, nearest }
+}
+
 /// The input words that upload `grid` (model words, then the 4,097 table entries), one a
 /// clock, as the co-simulation and the benches drive them.
 pub fn upload(grid: &Grid) -> Vec<GridInputs> {

@@ -6,7 +6,9 @@
 
 use pficp_fpga::format::{FxPoint, FxPose};
 use pficp_fpga::grid::{Grid, CAP_D2, CELL_LSBS, NONE};
-use pficp_fpga::grid_pipeline::{evaluate_grid, run_particle, upload, GridInputs, GridPipelineModel};
+use pficp_fpga::format::{pack_point, MAX_POINTS};
+use pficp_fpga::grid::CELLS;
+use pficp_fpga::grid_pipeline::{evaluate_grid, evaluate_stored, run_particle, upload, GridInputs, GridPipelineModel};
 use proptest::prelude::*;
 
 fn inside_coord() -> impl Strategy<Value = i16> {
@@ -72,6 +74,46 @@ proptest! {
         }
         check(&mut pipe, &g2, &scan, &p2, false)?;
         check(&mut pipe, &g2, &scan, &p1, false)?;
+    }
+
+    /// The board's reference over raw stores equals the cycle model on any store and any
+    /// table (entries up to 8,191, ranges reversed or past the model, addresses wrapping),
+    /// and equals the capped search when the table is the model's.
+    #[test]
+    fn the_stored_reference_is_the_cycle_model_on_any_table(
+        lanes in prop::sample::select(vec![1usize, 3, 4, 16]),
+        m in model(),
+        entries in prop::collection::vec((0usize..=CELLS, prop_oneof![0u16..300, 3900u16..4400, 0u16..8192]), 0..400),
+        scan in prop::collection::vec([inside_coord(), inside_coord(), inside_coord()], 1..40),
+        p in pose(),
+    ) {
+        let g = Grid::build(&m).unwrap();
+        let mut pipe = GridPipelineModel::new(lanes);
+        let mut ram = vec![0u64; MAX_POINTS];
+        let mut first = vec![0u16; CELLS + 1];
+        for w in upload(&g) {
+            pipe.step(&w);
+        }
+        for (a, &q) in g.points.iter().enumerate() {
+            ram[a] = pack_point(q);
+        }
+        first.copy_from_slice(&g.first);
+        let want = run_particle(&mut pipe, &scan, &p, |_| false).evaluation;
+        prop_assert_eq!(&evaluate_stored(&ram, &first, lanes, &scan, &p), &want);
+        prop_assert_eq!(&evaluate_grid(&g, &scan, &p), &want);
+        // Overwrite table entries with anything, and some model words past the model.
+        for &(a, v) in &entries {
+            pipe.step(&GridInputs { table_we: true, table_waddr: a as u16, table_wdata: v, ..Default::default() });
+            first[a] = v;
+        }
+        for k in 0..entries.len().min(60) {
+            let a = (4096 - 1 - k * 7) % MAX_POINTS;
+            let q = [entries[k].1 as i16 - 4096, (k as i16) * 100 - 3000, 17];
+            pipe.step(&GridInputs { model_we: true, model_waddr: a as u16, model_wdata: pack_point(q), ..Default::default() });
+            ram[a] = pack_point(q);
+        }
+        let got = run_particle(&mut pipe, &scan, &p, |c| c % 5 == 2).evaluation;
+        prop_assert_eq!(&evaluate_stored(&ram, &first, lanes, &scan, &p), &got);
     }
 }
 
