@@ -41,10 +41,11 @@ use crate::format::{unpack_point, FxPoint, WeightScale, MAX_POINTS};
 use crate::messages::{
     pose_from_bytes, two_u16, EvaluateReply, Identity, NearestReply, ResultReply, RunState, StatusReply, WeightSummary,
     EVALUATE_HEADER_BYTES, FLAG_FIRST, FLAG_LAST, LOAD_HEADER_BYTES, MAX_LOAD_POINTS, MAX_NEAREST, MAX_POSES,
-    NEAREST_REQUEST_BYTES, POINT_BYTES, POSE_BYTES, RUN_REPLY_BYTES, TWO_U16_BYTES, W_SUM_MASK,
+    MAX_LOAD_ENTRIES, NEAREST_REQUEST_BYTES, POINT_BYTES, POSE_BYTES, RUN_REPLY_BYTES, TABLE_ENTRIES, TABLE_ENTRY_BYTES,
+    TABLE_ENTRY_MASK, TWO_U16_BYTES, W_SUM_MASK,
 };
 use crate::pf::{PfConfig, PfOutcome};
-use crate::pipeline::evaluate;
+use crate::grid_pipeline::evaluate_stored;
 use crate::protocol::{Command, Deframer, ErrorCode, Frame};
 use crate::weights::{weights, COST_MAX, MAX_PARTICLES};
 
@@ -59,6 +60,7 @@ use crate::weights::{weights, COST_MAX, MAX_PARTICLES};
 pub struct BoardModel {
     config: BoardConfig,
     model: Vec<u64>,
+    table: Vec<u16>,
     scan: Vec<u64>,
     model_count: u16,
     scan_count: u16,
@@ -77,6 +79,7 @@ impl BoardModel {
         BoardModel {
             config,
             model: vec![0; MAX_POINTS],
+            table: vec![0; TABLE_ENTRIES],
             scan: vec![0; MAX_POINTS],
             model_count: 0,
             scan_count: 0,
@@ -129,6 +132,11 @@ impl BoardModel {
         &self.model
     }
 
+    /// The cell table (4,097 entries of 13 bits, `grid::Grid::first`).
+    pub fn table_store(&self) -> &[u16] {
+        &self.table
+    }
+
     /// The scan store (4,096 packed points).
     pub fn scan_store(&self) -> &[u64] {
         &self.scan
@@ -162,14 +170,20 @@ impl BoardModel {
         store[range].iter().map(|&w| unpack_point(w)).collect()
     }
 
+    /// The grid search over the stores as they are (docs/pipeline.md, "The grid pipeline"):
+    /// what the RTL computes for `scan` at `pose`, whatever the table holds.
+    fn search(&self, scan: &[FxPoint], pose: &crate::format::FxPose) -> crate::pipeline::Evaluation {
+        evaluate_stored(&self.model, &self.table, self.config.lanes, scan, pose)
+    }
+
     /// The command engine: checks in the order of docs/protocol.md (code, lengths,
     /// capacities), then the effect and the reply data.
     fn run(&mut self, f: &Frame) -> Result<Vec<u8>, ErrorCode> {
         use ErrorCode::{BadLength, OverCapacity, UnknownCommand};
-        // Only the request codes 0x01..=0x09: not 0x00, not Error (0x7F), not bit 7 set.
+        // Only the request codes 0x01..=0x0A: not 0x00, not Error (0x7F), not bit 7 set.
         // (Never running a filter, the model never answers Busy; the RTL does, while one runs.)
         let command = match f.code {
-            0x01..=0x09 => Command::from_code(f.code).ok_or(UnknownCommand)?,
+            0x01..=0x0a => Command::from_code(f.code).ok_or(UnknownCommand)?,
             _ => return Err(UnknownCommand),
         };
         let d = &f.data[..];
@@ -206,6 +220,22 @@ impl BoardModel {
                 }
                 Ok(two_u16(offset as u16, count as u16))
             }
+            Command::LoadTable => {
+                if d.len() < LOAD_HEADER_BYTES {
+                    return Err(BadLength);
+                }
+                let (offset, count) = (le(&d[0..2]) as usize, le(&d[2..4]) as usize);
+                if count == 0 || count > MAX_LOAD_ENTRIES || d.len() != LOAD_HEADER_BYTES + TABLE_ENTRY_BYTES * count {
+                    return Err(BadLength);
+                }
+                if offset + count > TABLE_ENTRIES {
+                    return Err(OverCapacity);
+                }
+                for (k, e) in d[LOAD_HEADER_BYTES..].chunks_exact(TABLE_ENTRY_BYTES).enumerate() {
+                    self.table[offset + k] = le(e) as u16 & TABLE_ENTRY_MASK;
+                }
+                Ok(two_u16(offset as u16, count as u16))
+            }
             Command::SetSizes => {
                 if d.len() != TWO_U16_BYTES {
                     return Err(BadLength);
@@ -235,10 +265,9 @@ impl BoardModel {
                 }
                 let mut costs = Vec::with_capacity(n);
                 if n > 0 {
-                    let model = Self::points(&self.model, 0..self.model_count as usize);
                     let scan = Self::points(&self.scan, 0..self.scan_count as usize);
                     for p in d[EVALUATE_HEADER_BYTES..].chunks_exact(POSE_BYTES) {
-                        costs.push(evaluate(&model, &scan, &pose_from_bytes(p)).cost & COST_MAX);
+                        costs.push(self.search(&scan, &pose_from_bytes(p)).cost & COST_MAX);
                     }
                 }
                 self.costs.extend_from_slice(&costs);
@@ -264,9 +293,8 @@ impl BoardModel {
                 if self.model_count == 0 || self.scan_count == 0 || first + count > self.scan_count as usize {
                     return Err(OverCapacity);
                 }
-                let model = Self::points(&self.model, 0..self.model_count as usize);
                 let scan = Self::points(&self.scan, first..first + count);
-                let e = evaluate(&model, &scan, &pose_from_bytes(&d[4..]));
+                let e = self.search(&scan, &pose_from_bytes(&d[4..]));
                 Ok(NearestReply { first: first as u16, cost: e.cost, results: e.nearest }.encode())
             }
             Command::Run => {
@@ -277,9 +305,9 @@ impl BoardModel {
                 if self.model_count == 0 || self.scan_count == 0 {
                     return Err(OverCapacity);
                 }
-                let model = Self::points(&self.model, 0..self.model_count as usize);
                 let scan = Self::points(&self.scan, 0..self.scan_count as usize);
-                self.outcome = Some(crate::pf::run(&cfg, |pose| crate::pf::evaluate(&model, &scan, pose)));
+                let outcome = crate::pf::run(&cfg, |pose| crate::pf::Evaluated::of(&self.search(&scan, pose)));
+                self.outcome = Some(outcome);
                 Ok(d[..RUN_REPLY_BYTES].to_vec())
             }
             Command::Status => {

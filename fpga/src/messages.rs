@@ -13,6 +13,14 @@ pub const POINT_BYTES: usize = 6;
 pub const POSE_BYTES: usize = 27;
 /// Most points in one LoadModel / LoadScan frame.
 pub const MAX_LOAD_POINTS: usize = 170;
+/// Bytes of a cell-table entry on the wire (13 bits used).
+pub const TABLE_ENTRY_BYTES: usize = 2;
+/// Most entries in one LoadTable frame (as long as a full LoadModel frame).
+pub const MAX_LOAD_ENTRIES: usize = MAX_LOAD_POINTS * POINT_BYTES / TABLE_ENTRY_BYTES;
+/// Entries of the cell table: one a cell, and the point count.
+pub const TABLE_ENTRIES: usize = crate::grid::CELLS + 1;
+/// Mask of a stored table entry.
+pub const TABLE_ENTRY_MASK: u16 = (1 << 13) - 1;
 /// Most poses in one Evaluate frame.
 pub const MAX_POSES: usize = 37;
 /// Most results in one Nearest frame.
@@ -226,6 +234,17 @@ pub fn load_request(offset: u16, points: &[FxPoint]) -> Vec<u8> {
     put(&mut out, points.len() as u64, 2);
     for &p in points {
         out.extend_from_slice(&point_bytes(p));
+    }
+    out
+}
+
+/// LoadTable request data: offset, count, entries.
+pub fn table_request(offset: u16, entries: &[u16]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(LOAD_HEADER_BYTES + TABLE_ENTRY_BYTES * entries.len());
+    put(&mut out, offset as u64, 2);
+    put(&mut out, entries.len() as u64, 2);
+    for &e in entries {
+        put(&mut out, e as u64, TABLE_ENTRY_BYTES);
     }
     out
 }

@@ -371,10 +371,18 @@ pub struct Evaluated {
     pub max_d2: u64,
 }
 
-/// The pipeline's answer for a pose, by the functional reference.
-pub fn evaluate(model: &[crate::format::FxPoint], scan: &[crate::format::FxPoint], pose: &FxPose) -> Evaluated {
-    let e = crate::pipeline::evaluate(model, scan, pose);
-    Evaluated { cost: e.cost, max_d2: e.nearest.iter().map(|n| n.1).max().unwrap_or(0) }
+impl Evaluated {
+    /// The cost and the largest squared distance of a pipeline's evaluation.
+    pub fn of(e: &crate::pipeline::Evaluation) -> Evaluated {
+        Evaluated { cost: e.cost, max_d2: e.nearest.iter().map(|n| n.1).max().unwrap_or(0) }
+    }
+}
+
+/// The board's answer for a pose, by the functional reference: the grid search over the
+/// gridded model (the stored points and their table), every distance capped at
+/// `grid::CAP_D2` (docs/pipeline.md, "The grid pipeline").
+pub fn evaluate(grid: &crate::grid::Grid, scan: &[crate::format::FxPoint], pose: &FxPose) -> Evaluated {
+    Evaluated::of(&crate::grid_pipeline::evaluate_grid(grid, scan, pose))
 }
 
 /// One iteration, as the sequencer leaves it.
@@ -709,7 +717,7 @@ mod tests {
     #[test]
     fn the_filter_finds_a_shifted_cloud() {
         // A small model and the same points shifted: the filter must bring the cost down.
-        let model = example_cloud(60, [0, 0, 0], 0.0);
+        let model = crate::grid::Grid::build(&example_cloud(60, [0, 0, 0], 0.0)).unwrap();
         let shift = 400i16;
         let scan = example_cloud(60, [shift, 0, 0], 0.0);
         let cfg = example_config(24, 15, 7);

@@ -20,7 +20,7 @@ pub const MAX_FRAME: usize = MAX_BODY + 2 + (MAX_BODY + 2) / 254 + 2;
 /// The frame delimiter.
 pub const DELIMITER: u8 = 0x00;
 /// Protocol version reported by `Identify`.
-pub const VERSION: u16 = 2;
+pub const VERSION: u16 = 3;
 
 /// CRC-16/CCITT-FALSE: polynomial 0x1021, initial value 0xFFFF, no reflection, no final XOR.
 pub fn crc16(data: &[u8]) -> u16 {
@@ -101,6 +101,8 @@ pub enum Command {
     Status = 0x08,
     /// The finished filter's best particle, its cost and pose.
     Result = 0x09,
+    /// Write cell-table entries at an offset (the grid search's table, `grid::Grid::first`).
+    LoadTable = 0x0a,
     /// Error reply (board to host only).
     Error = 0x7f,
 }
@@ -118,6 +120,7 @@ impl Command {
             0x07 => Command::Run,
             0x08 => Command::Status,
             0x09 => Command::Result,
+            0x0a => Command::LoadTable,
             0x7f => Command::Error,
             _ => return None,
         })
