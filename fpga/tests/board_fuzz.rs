@@ -12,7 +12,8 @@ use pficp_fpga::messages::{
     StatusReply, FLAG_FIRST, FLAG_LAST,
 };
 use pficp_fpga::pf::{self, PfConfig, PfOutcome, RUN_BYTES};
-use pficp_fpga::pipeline::evaluate;
+use pficp_fpga::grid_pipeline::evaluate_stored;
+use pficp_fpga::pipeline::Evaluation;
 use pficp_fpga::protocol::{Deframer, ErrorCode, Frame, MAX_FRAME};
 use pficp_fpga::splitmix::SplitMix64;
 use pficp_fpga::weights::weights;
@@ -57,6 +58,7 @@ impl Rng {
 #[derive(Clone, PartialEq, Eq)]
 struct Snapshot {
     model: Vec<u64>,
+    table: Vec<u16>,
     scan: Vec<u64>,
     sizes: (u16, u16),
     costs: Vec<u64>,
@@ -67,6 +69,7 @@ impl Snapshot {
     fn of(b: &BoardModel) -> Snapshot {
         Snapshot {
             model: b.model_store().to_vec(),
+            table: b.table_store().to_vec(),
             scan: b.scan_store().to_vec(),
             sizes: b.sizes(),
             costs: b.stored_costs().to_vec(),
@@ -78,7 +81,13 @@ impl Snapshot {
             && self.costs == b.stored_costs()
             && self.outcome.as_ref() == b.pf_outcome()
             && self.model == b.model_store()
+            && self.table == b.table_store()
             && self.scan == b.scan_store()
+    }
+
+    /// The grid search over the stores before the command (the lanes of the default board).
+    fn search(&self, scan: &[FxPoint], pose: &pficp_fpga::format::FxPose) -> Evaluation {
+        evaluate_stored(&self.model, &self.table, BoardConfig::default().lanes, scan, pose)
     }
 }
 
@@ -101,7 +110,7 @@ fn replies(out: &[u8]) -> Vec<Frame> {
             let e = ErrorCode::from_byte(f.data[0]).expect("unknown error code");
             assert_ne!(e, ErrorCode::Busy, "a waiting host never sees Busy");
         } else {
-            assert!((0x81..=0x89).contains(&f.code), "{f:?}");
+            assert!((0x81..=0x8a).contains(&f.code), "{f:?}");
         }
     }
     frames
@@ -121,6 +130,15 @@ fn verdict(sizes: (u16, u16), stored: usize, ran: bool, code: u8, d: &[u8]) -> R
             if d.len() < 4 || !(1..=170).contains(&field(2)) || d.len() != 4 + 6 * field(2) {
                 Err(BadLength)
             } else if field(0) + field(2) > 4096 {
+                Err(OverCapacity)
+            } else {
+                Ok(())
+            }
+        }
+        0x0a => {
+            if d.len() < 4 || !(1..=510).contains(&field(2)) || d.len() != 4 + 2 * field(2) {
+                Err(BadLength)
+            } else if field(0) + field(2) > 4097 {
                 Err(OverCapacity)
             } else {
                 Ok(())
@@ -199,8 +217,24 @@ fn check_reply(request: &Frame, reply: &Frame, before: &Snapshot, b: &BoardModel
                 assert_eq!(store[k], want, "word {k}");
             }
             assert!(other == &old_other[..]);
+            assert!(b.table_store() == &before.table[..]);
             assert_eq!(b.sizes(), before.sizes);
             assert_eq!(b.stored_costs(), &before.costs[..]);
+        }
+        0x0a => {
+            assert_eq!(&r[..], &d[..4]);
+            let (offset, count) = parse_two_u16(&d[..4]).unwrap();
+            let (offset, count) = (offset as usize, count as usize);
+            for k in 0..4097 {
+                let want = if (offset..offset + count).contains(&k) {
+                    (d[4 + 2 * (k - offset)] as u16 | (d[5 + 2 * (k - offset)] as u16) << 8) & 0x1fff
+                } else {
+                    before.table[k]
+                };
+                assert_eq!(b.table_store()[k], want, "entry {k}");
+            }
+            assert!(before.model == b.model_store() && before.scan == b.scan_store());
+            assert_eq!((b.sizes(), b.stored_costs()), (before.sizes, &before.costs[..]));
         }
         0x04 => {
             assert_eq!(&r[..], &d[..]);
@@ -210,11 +244,8 @@ fn check_reply(request: &Frame, reply: &Frame, before: &Snapshot, b: &BoardModel
         0x05 => {
             let (n, first, last) = (d[5] as usize, d[0] & FLAG_FIRST != 0, d[0] & FLAG_LAST != 0);
             let reply = EvaluateReply::decode(r, n, last).expect("Evaluate reply layout");
-            let model: Vec<FxPoint> =
-                before.model[..before.sizes.0 as usize].iter().map(|&w| unpack_point(w)).collect();
             let scan: Vec<FxPoint> = before.scan[..before.sizes.1 as usize].iter().map(|&w| unpack_point(w)).collect();
-            let costs: Vec<u64> =
-                d[6..].chunks(27).map(|p| evaluate(&model, &scan, &pose_from_bytes(p)).cost).collect();
+            let costs: Vec<u64> = d[6..].chunks(27).map(|p| before.search(&scan, &pose_from_bytes(p)).cost).collect();
             assert_eq!(reply.costs, costs);
             let stored = [if first { &[][..] } else { &before.costs[..] }, &costs[..]].concat();
             assert_eq!(b.stored_costs(), &stored[..]);
@@ -236,24 +267,20 @@ fn check_reply(request: &Frame, reply: &Frame, before: &Snapshot, b: &BoardModel
                 pose: pose_from_bytes(&d[4..]),
             };
             let reply = NearestReply::decode(r, &q).expect("Nearest reply layout");
-            let model: Vec<FxPoint> =
-                before.model[..before.sizes.0 as usize].iter().map(|&w| unpack_point(w)).collect();
             let part: Vec<FxPoint> =
                 before.scan[q.first as usize..(q.first + q.count) as usize].iter().map(|&w| unpack_point(w)).collect();
-            let e = evaluate(&model, &part, &q.pose);
+            let e = before.search(&part, &q.pose);
             assert_eq!((reply.cost, reply.results), (e.cost, e.nearest));
             assert!(before.same_as(b));
         }
         0x07 => {
             assert_eq!(&r[..], &d[..4], "particles and iterations echoed");
             let cfg = PfConfig::decode(d).expect("a Run the doc accepts decodes");
-            let model: Vec<FxPoint> =
-                before.model[..before.sizes.0 as usize].iter().map(|&w| unpack_point(w)).collect();
             let scan: Vec<FxPoint> = before.scan[..before.sizes.1 as usize].iter().map(|&w| unpack_point(w)).collect();
-            let want = pf::run(&cfg, |pose| pf::evaluate(&model, &scan, pose));
+            let want = pf::run(&cfg, |pose| pf::Evaluated::of(&before.search(&scan, pose)));
             assert_eq!(b.pf_outcome(), Some(&want));
             assert!(before.sizes == b.sizes() && before.costs == b.stored_costs(), "Run changed the stores");
-            assert!(before.model == b.model_store() && before.scan == b.scan_store());
+            assert!(before.model == b.model_store() && before.scan == b.scan_store() && before.table == b.table_store());
         }
         0x08 => {
             let s = StatusReply::decode(r).expect("Status reply layout");
@@ -284,7 +311,7 @@ fn le16(v: u64) -> [u8; 2] {
 /// small so Evaluate stays cheap).
 fn random_request(r: &mut Rng, scan_count: u16) -> Frame {
     let any = r.byte();
-    let code = if r.chance(85) { r.range(1, 9) as u8 } else { r.pick(&[0x00, 0x0a, 0x7f, 0x80, 0x85, 0x87, any]) };
+    let code = if r.chance(85) { r.range(1, 10) as u8 } else { r.pick(&[0x00, 0x0b, 0x7f, 0x80, 0x85, 0x8a, any]) };
     let seq = r.byte();
     let shape = r.below(100);
     let mut d = match code {
@@ -299,6 +326,24 @@ fn random_request(r: &mut Rng, scan_count: u16) -> Frame {
             };
             let mut d = [le16(offset), le16(count)].concat();
             d.extend(r.bytes(6 * count.min(171) as usize));
+            d
+        }
+        0x0a => {
+            // Entries mostly small and increasing (a table), sometimes anything.
+            let any = r.range(0, 0xffff);
+            let count = if r.chance(90) { r.range(1, 510) } else { r.pick(&[0, 511, 0xffff, any]) };
+            let offset = match r.below(10) {
+                0..=6 => r.range(0, 4097 - count.min(4097)),
+                7 => 4097 - count.min(4097) + r.range(0, 3),
+                _ => r.range(0, 0xffff),
+            };
+            let mut d = [le16(offset), le16(count)].concat();
+            let mut at = r.range(0, 64);
+            for _ in 0..count.min(511) {
+                let e = if r.chance(95) { at } else { r.range(0, 0xffff) };
+                d.extend(le16(e));
+                at += r.range(0, 2);
+            }
             d
         }
         0x04 => {
@@ -499,6 +544,12 @@ fn fuzz_rounds(rounds: u32, mut r: Rng) -> Fuzz {
         let pts: Vec<u8> = (0..170 * 6).map(|k| if k % 2 == 1 { (k % 7) as u8 * 17 } else { r.byte() }).collect();
         z.request(&Frame { code, seq: 0, data: [&le16(0)[..], &le16(170), &pts].concat() });
     }
+    // A table that spreads the 170 points over the cells, so rows hold points.
+    for at in (0..4097u64).step_by(510) {
+        let n = 510.min(4097 - at);
+        let entries: Vec<u8> = (at..at + n).flat_map(|k| le16(k * 170 / 4096)).collect();
+        z.request(&Frame { code: 0x0a, seq: 0, data: [&le16(at)[..], &le16(n), &entries].concat() });
+    }
     z.request(&Frame { code: 0x04, seq: 0, data: [le16(64), le16(48)].concat() });
     for round in 0..rounds {
         let seq = round as u8;
@@ -586,8 +637,11 @@ fn loaded_board() -> BoardModel {
     for code in [0x02, 0x03] {
         b.execute(&Frame { code, seq: 0, data: [&le16(0)[..], &le16(40), &pts].concat() });
     }
+    let entries: Vec<u8> = (0..510u64).flat_map(|k| le16(k * 40 / 510)).collect();
+    b.execute(&Frame { code: 0x0a, seq: 0, data: [&le16(3000)[..], &le16(510), &entries].concat() });
     b.execute(&Frame { code: 0x04, seq: 0, data: [le16(40), le16(30)].concat() });
     assert_eq!(b.sizes(), (40, 30));
+    assert_eq!(b.table_store()[3509], 39);
     b
 }
 
@@ -612,7 +666,7 @@ proptest! {
     /// Any well-framed request: the reply the doc's checks predict, echoing the sequence.
     #[test]
     fn any_request_gets_the_predicted_reply(
-        code in prop_oneof![4 => 1u8..=6, 1 => any::<u8>()],
+        code in prop_oneof![4 => 1u8..=6, 1 => Just(0x0au8), 1 => any::<u8>()],
         seq in any::<u8>(),
         head in proptest::collection::vec(any::<u8>(), 0..8),
         n in 0usize..5,
@@ -628,6 +682,12 @@ proptest! {
                 data[2] = n as u8;
                 data[3] = 0;
                 data.extend(&body[..6 * n]);
+            }
+            0x0a if data.len() >= 4 => {
+                data.truncate(4);
+                data[2] = 20 * n as u8;
+                data[3] = 0;
+                data.extend(&body[..40 * n]);
             }
             0x05 if data.len() >= 6 => {
                 data.truncate(6);

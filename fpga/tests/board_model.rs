@@ -7,15 +7,17 @@ mod support;
 
 use support::*;
 
+use pficp_fpga::grid_pipeline::{run_particle as grid_run, upload, GridPipelineModel};
+
 #[test]
 fn wire_bytes_are_exact() {
     // Computed independently (a separate CRC-16/CCITT-FALSE and COBS in Python) for a
-    // 16-lane board at 100 MHz and 921,600 baud, protocol version 2.
+    // 16-lane board at 100 MHz and 921,600 baud, protocol version 3.
     let mut b = BoardModel::new(BoardConfig { lanes: 16, clock_hz: 100_000_000, baud: 921_600 });
     let request = [0x05, 0x01, 0x05, 0x9b, 0x7e, 0x00];
     let reply = [
-        0x04, 0x81, 0x05, 0x02, 0x02, 0x10, 0x02, 0x10, 0x02, 0x10, 0x05, 0x01, 0x25, 0xaa, 0x90, 0x04, 0xe1, 0xf5,
-        0x05, 0x03, 0x10, 0x0e, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x03, 0x41, 0x17, 0x00,
+        0x04, 0x81, 0x05, 0x03, 0x02, 0x10, 0x02, 0x10, 0x02, 0x10, 0x05, 0x01, 0x25, 0xaa, 0x90, 0x04, 0xe1, 0xf5,
+        0x05, 0x03, 0x10, 0x0e, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x03, 0x20, 0xbb, 0x00,
     ];
     for (k, &byte) in request.iter().enumerate() {
         let out = b.receive(byte);
@@ -45,7 +47,7 @@ fn identify_reports_config_limits_and_sizes() {
         .iter()
         .map(|&(at, n)| le_at(&d, at, n))
         .collect();
-    assert_eq!(fields, vec![2, 4, 4096, 4096, 256, 37, 170, 144, 50_000_000, 115_200]);
+    assert_eq!(fields, vec![3, 4, 4096, 4096, 256, 37, 170, 144, 50_000_000, 115_200]);
     assert_eq!(&d[20..26], &[0; 6], "sizes and stored costs are 0 after power-up");
     ok(&mut b, req(LOAD_MODEL, 1, load_data(0, 1, &[[1, 2, 3]])));
     ok(&mut b, req(SET_SIZES, 2, u16s(1000, 4096)));
@@ -116,20 +118,25 @@ fn evaluate_and_nearest_match_the_cycle_accurate_pipeline() {
         s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
         ((s >> 33) as i64 % (2 * r + 1) - r) as i16
     };
-    let model: Vec<FxPoint> = (0..150).map(|_| [rnd(9000), rnd(9000), rnd(9000)]).collect();
+    // Dense enough that most points find a neighbour within the cap, some not.
+    let model: Vec<FxPoint> = (0..1500).map(|_| [rnd(8000), rnd(8000), rnd(8000)]).collect();
     let scan: Vec<FxPoint> = (0..40).map(|_| [rnd(9000), rnd(9000), rnd(9000)]).collect();
     let pose = FxPose::from_f64(&[0.9, -0.3, 0.1, 0.3, 0.9, 0.0, -0.1, 0.05, 0.95], &[0.1, -0.2, 0.05]);
     let mut b = BoardModel::new(BoardConfig::default());
-    ok(&mut b, req(LOAD_MODEL, 0, load_data(0, 150, &model)));
+    let g = load_grid(&mut b, &model);
     ok(&mut b, req(LOAD_SCAN, 0, load_data(0, 40, &scan)));
-    ok(&mut b, req(SET_SIZES, 0, u16s(150, 40)));
-    let mut pipe = PipelineModel::new(b.config().lanes);
-    let (want, _) = run_particle(&mut pipe, &model, &scan, &pose, |_| false);
+    ok(&mut b, req(SET_SIZES, 0, u16s(1500, 40)));
+    let mut pipe = GridPipelineModel::new(b.config().lanes);
+    for w in upload(&g) {
+        pipe.step(&w);
+    }
+    let want = grid_run(&mut pipe, &scan, &pose, |_| false).evaluation;
+    let capped = want.nearest.iter().filter(|n| n.1 == pficp_fpga::grid::CAP_D2).count();
+    assert!((1..30).contains(&capped), "{capped} of 40 capped");
     let d = ok(&mut b, req(EVALUATE, 0, eval_data(FLAG_FIRST, 0, 0, 1, &[pose])));
     assert_eq!(parse_eval(&d, 1, false).0, vec![want.cost]);
     let d = ok(&mut b, req(NEAREST, 0, nearest_data(10, 25, &pose)));
-    let mut pipe = PipelineModel::new(b.config().lanes);
-    let (part, _) = run_particle(&mut pipe, &model, &scan[10..35], &pose, |_| false);
+    let part = grid_run(&mut pipe, &scan[10..35], &pose, |_| false).evaluation;
     assert_eq!(le_at(&d, 4, 6), part.cost);
     let got: Vec<(u16, u64)> = (0..25).map(|k| (le_at(&d, 10 + 7 * k, 2) as u16, le_at(&d, 12 + 7 * k, 5))).collect();
     assert_eq!(got, part.nearest);
@@ -148,16 +155,9 @@ fn fifty_costs(n_scan: usize) -> Vec<u64> {
             if k != 31 {
                 return hand_cost(n_scan, t_of(k));
             }
-            // x saturates at 32767: the nearest grid points have x = 3000 and the home's y, z.
-            (0..n_scan)
-                .map(|i| {
-                    let dx = 32767 - 3000i64;
-                    let dy = offset(i)[1] as i64;
-                    let dz = offset(i)[2] as i64;
-                    assert!(g[home(i)][0] <= 3000);
-                    (dx * dx + dy * dy + dz * dz) as u64
-                })
-                .sum()
+            // x saturates at 32767, far outside the grid: every point costs the cap.
+            assert!(g.iter().all(|p| p[0] <= 3000));
+            n_scan as u64 * pficp_fpga::grid::CAP_D2
         })
         .collect()
 }
@@ -184,7 +184,9 @@ fn fifty_particles_in_two_frames_first_37_then_last_13() {
     assert_eq!(min, *want.iter().min().unwrap());
     assert_eq!(w_sum, w.iter().map(|&x| x as u32).sum::<u32>());
     assert_eq!(w[want.iter().position(|&c| c == min).unwrap()], 65535, "the best particle weighs 1");
-    assert_eq!(w[31], pficp_fpga::format::exp_table()[255], "the far particle gets the smallest weight");
+    // The far particle's cost is capped (20 x CAP_D2), yet still the largest.
+    assert_eq!(w[31], *w.iter().min().unwrap(), "the far particle gets the smallest weight");
+    assert!(w.iter().enumerate().all(|(k, &x)| k == 31 || x > w[31]));
     assert!(w.iter().filter(|&&x| x > 1000).count() > 10, "a scale that spreads the weights");
     assert_eq!(b.stored_costs(), &want[..]);
 }
@@ -250,7 +252,7 @@ fn nearest_returns_indices_distances_and_their_cost() {
 #[test]
 fn unknown_commands_are_checked_first() {
     let mut b = loaded(20);
-    for code in [0x00, 0x0a, 0x0b, 0x42, 0x7e, 0x7f, 0x80, 0x81, 0x84, 0x85, 0x86, 0x87, 0x88, 0x89, 0xff] {
+    for code in [0x00, 0x0b, 0x0c, 0x42, 0x7e, 0x7f, 0x80, 0x81, 0x84, 0x85, 0x86, 0x87, 0x88, 0x89, 0xff] {
         for data in [vec![], vec![0; 4], vec![1; 31], vec![0x11; 1029]] {
             rejects(&mut b, req(code, 0x5a, data), ErrorCode::UnknownCommand);
         }
@@ -428,7 +430,7 @@ fn bodies_longer_than_max_body_that_fit_max_frame_reach_the_command_checks() {
     let before = snap(&b);
     // 1,029 zero data bytes: body 1,031 bytes plus CRC, COBS adds 1 byte: 1,034 on the wire.
     for (code, e) in
-        [(0x0a, ErrorCode::UnknownCommand), (LOAD_MODEL, ErrorCode::BadLength), (EVALUATE, ErrorCode::BadLength)]
+        [(0x0b, ErrorCode::UnknownCommand), (LOAD_MODEL, ErrorCode::BadLength), (EVALUATE, ErrorCode::BadLength)]
     {
         let w = wire(&[vec![code, 6], vec![0; 1029]].concat());
         assert_eq!(w.len(), MAX_FRAME + 1);

@@ -27,7 +27,9 @@ fn direct_run(b: &BoardModel, cfg: &PfConfig) -> PfOutcome {
     let (m, s) = b.sizes();
     let model = b.model_store()[..m as usize].iter().map(|&w| unpack_point(w)).collect::<Vec<FxPoint>>();
     let scan = b.scan_store()[..s as usize].iter().map(|&w| unpack_point(w)).collect::<Vec<FxPoint>>();
-    pficp_fpga::pf::run(cfg, |pose| pficp_fpga::pf::evaluate(&model, &scan, pose))
+    let grid = pficp_fpga::grid::Grid::build(&model).unwrap();
+    assert_eq!(&grid.first[..], b.table_store(), "the board's table is the model's");
+    pficp_fpga::pf::run(cfg, |pose| pficp_fpga::pf::evaluate(&grid, &scan, pose))
 }
 
 #[test]
@@ -93,7 +95,7 @@ fn the_filter_on_the_board_finds_a_shifted_grid() {
     // The scan is the grid shifted by (500, -400, 300) LSB; the model the grid. The
     // filter (region +-625 LSB per axis) must bring the translation near the opposite.
     let mut b = BoardModel::new(BoardConfig::default());
-    ok(&mut b, req(LOAD_MODEL, 1, load_data(0, 64, &grid())));
+    load_grid(&mut b, &grid());
     let t = [500i16, -400, 300];
     let scan: Vec<FxPoint> = grid().iter().map(|p| std::array::from_fn(|a| p[a] + t[a])).collect();
     ok(&mut b, req(LOAD_SCAN, 2, load_data(0, 64, &scan)));

@@ -22,6 +22,7 @@ pub const NEAREST: u8 = 0x06;
 pub const RUN: u8 = 0x07;
 pub const STATUS: u8 = 0x08;
 pub const RESULT: u8 = 0x09;
+pub const LOAD_TABLE: u8 = 0x0a;
 /// Q3.15 one (the identity matrix's diagonal).
 pub const ONE: i32 = 1 << 15;
 
@@ -96,10 +97,35 @@ pub fn shift(t: [i32; 3]) -> FxPose {
     FxPose { m: [ONE, 0, 0, 0, ONE, 0, 0, 0, ONE], t }
 }
 
-/// The model: a 4 x 4 x 4 grid, 2,000 LSB apart (coordinates -3000, -1000, 1000, 3000).
+/// The model: a 4 x 4 x 4 grid, 2,000 LSB apart (coordinates -3000, -1000, 1000, 3000),
+/// `x` fastest, so already sorted by the search's cells (each point in a cell of its own).
 pub fn grid() -> Vec<FxPoint> {
     let g = |v: usize| (-3000 + 2000 * v as i32) as i16;
-    (0..64).map(|k| [g(k / 16), g(k / 4 % 4), g(k % 4)]).collect()
+    (0..64).map(|k| [g(k % 4), g(k / 4 % 4), g(k / 16)]).collect()
+}
+
+/// LoadTable requests that write the whole cell `table` (4,097 entries).
+pub fn table_requests(table: &[u16]) -> Vec<Frame> {
+    use pficp_fpga::messages::{table_request, MAX_LOAD_ENTRIES};
+    table
+        .chunks(MAX_LOAD_ENTRIES)
+        .enumerate()
+        .map(|(k, c)| req(LOAD_TABLE, k as u8, table_request((k * MAX_LOAD_ENTRIES) as u16, c)))
+        .collect()
+}
+
+/// Load `model` sorted by cell with its table; the grid (its `order` maps stored indices
+/// back to `model`'s).
+pub fn load_grid(b: &mut BoardModel, model: &[FxPoint]) -> pficp_fpga::grid::Grid {
+    let g = pficp_fpga::grid::Grid::build(model).expect("the test model fits the grid");
+    for (k, chunk) in g.points.chunks(MAX_LOAD_POINTS).enumerate() {
+        let off = (k * MAX_LOAD_POINTS) as u16;
+        ok(b, req(LOAD_MODEL, 1, load_data(off, chunk.len() as u16, chunk)));
+    }
+    for f in table_requests(&g.first) {
+        ok(b, f);
+    }
+    g
 }
 
 /// Scan point `i` sits at grid point `home(i)` plus `offset(i)` (each axis within 300).
@@ -119,9 +145,11 @@ pub fn t_of(k: usize) -> [i32; 3] {
 }
 
 /// Squared distance of scan point `i` shifted by `t` to its home, by hand: with every
-/// axis off by at most 600 and the grid 2,000 apart, the home is the nearest point.
+/// axis off by at most 600 and the grid 2,000 apart, the home is the nearest point (and
+/// within a cell on every axis, so the search finds it unless the cap applies).
 pub fn hand_dist(i: usize, t: [i32; 3]) -> u64 {
-    (0..3).map(|a| ((offset(i)[a] + t[a]) as i64).pow(2) as u64).sum()
+    let d: u64 = (0..3).map(|a| ((offset(i)[a] + t[a]) as i64).pow(2) as u64).sum();
+    d.min(pficp_fpga::grid::CAP_D2)
 }
 pub fn hand_cost(n_scan: usize, t: [i32; 3]) -> u64 {
     (0..n_scan).map(|i| hand_dist(i, t)).sum()
@@ -130,7 +158,8 @@ pub fn hand_cost(n_scan: usize, t: [i32; 3]) -> u64 {
 /// A board with the grid as model, `n_scan` scan points, sizes set.
 pub fn loaded(n_scan: usize) -> BoardModel {
     let mut b = BoardModel::new(BoardConfig::default());
-    ok(&mut b, req(LOAD_MODEL, 1, load_data(0, 64, &grid())));
+    let g = load_grid(&mut b, &grid());
+    assert!(g.order.iter().enumerate().all(|(k, &o)| k == o as usize), "the test grid is stored as it is");
     let scan = scan_cloud(n_scan);
     for (k, chunk) in scan.chunks(MAX_LOAD_POINTS).enumerate() {
         let off = (k * MAX_LOAD_POINTS) as u16;
