@@ -249,6 +249,18 @@ pub fn table_request(offset: u16, entries: &[u16]) -> Vec<u8> {
     out
 }
 
+/// The requests (command, data) that upload a gridded model: LoadModel frames of its
+/// points as stored (sorted by cell), then LoadTable frames of its whole cell table.
+pub fn grid_upload(grid: &crate::grid::Grid) -> Vec<(crate::protocol::Command, Vec<u8>)> {
+    use crate::protocol::Command;
+    let points = grid.points.chunks(MAX_LOAD_POINTS).enumerate();
+    let entries = grid.first.chunks(MAX_LOAD_ENTRIES).enumerate();
+    points
+        .map(|(k, c)| (Command::LoadModel, load_request((k * MAX_LOAD_POINTS) as u16, c)))
+        .chain(entries.map(|(k, c)| (Command::LoadTable, table_request((k * MAX_LOAD_ENTRIES) as u16, c))))
+        .collect()
+}
+
 /// Bytes of two u16 fields.
 pub const TWO_U16_BYTES: usize = 4;
 

@@ -163,6 +163,23 @@ impl FrameFuzzer {
                 let seq = self.seq();
                 Frame { code, seq, data }.encode()
             }
+            5 if self.below(3) == 0 => {
+                // Cell-table entries: mostly a stretch of a table of at most MAX_MODEL
+                // points (increasing), sometimes anything up to 2 MAX_MODEL (ranges
+                // reversed or past the model); sometimes a count or offset out of range.
+                let range = if self.below(8) == 0 { 5000 } else { messages::TABLE_ENTRIES as u64 };
+                let offset = self.below(range) as u16;
+                let n = self.below(messages::MAX_LOAD_ENTRIES as u64 + 8) as usize;
+                let mut at = self.below(MAX_MODEL as u64 / 2) as u16;
+                let entries: Vec<u16> = (0..n)
+                    .map(|_| {
+                        at = (at + (self.below(8) == 0) as u16).min(MAX_MODEL);
+                        if self.below(16) == 0 { self.below(2 * MAX_MODEL as u64) as u16 } else { at }
+                    })
+                    .collect();
+                command = Some(Command::LoadTable);
+                self.request(Command::LoadTable, messages::table_request(offset, &entries))
+            }
             5 => {
                 let model = self.below(2) == 0;
                 let range = if self.below(8) == 0 { 5000 } else { MAX_MODEL as u64 };

@@ -3,6 +3,8 @@
 //! after it, byte for byte equal to the reference (so the pose bytes are `pf::run`'s).
 
 use pficp_fpga::board::BoardConfig;
+use pficp_fpga::format::FxPoint;
+use pficp_fpga::grid::Grid;
 use pficp_fpga::messages::{self, ResultReply, RunState, StatusReply};
 use pficp_fpga::pf::{self, example_cloud, example_config};
 use pficp_fpga::protocol::{Command, Frame};
@@ -29,13 +31,23 @@ fn req(cmd: Command, seq: u8, data: Vec<u8>) -> Frame {
     Frame { code: cmd as u8, seq, data }
 }
 
+/// Upload `model` sorted by cell with its cell table; its grid.
+fn load_grid(b: &mut SerialBoard, model: &[FxPoint]) -> Grid {
+    let g = Grid::build(model).expect("the test model fits the grid");
+    for (cmd, data) in messages::grid_upload(&g) {
+        let r = exchange(b, &req(cmd, 1, data));
+        assert_eq!(r.code, cmd as u8 | 0x80);
+    }
+    g
+}
+
 #[test]
 fn the_board_runs_the_filter_and_returns_the_reference_pose() {
     let model = example_cloud(80, [0, 0, 0], 0.0);
     let scan = example_cloud(30, [300, -150, 80], 0.0);
     let mut b = SerialBoard::new(BoardConfig::FAST_SIM).with_reference();
     b.run(100);
-    exchange(&mut b, &req(Command::LoadModel, 1, messages::load_request(0, &model)));
+    let grid = load_grid(&mut b, &model);
     exchange(&mut b, &req(Command::LoadScan, 2, messages::load_request(0, &scan)));
     // Result before any run: NoResult.
     let r = exchange(&mut b, &req(Command::Result, 3, vec![]));
@@ -65,7 +77,8 @@ fn the_board_runs_the_filter_and_returns_the_reference_pose() {
     assert!(b.progress_frames() >= 1, "at least one Status while running");
     let r = exchange(&mut b, &req(Command::Result, seq, vec![]));
     let result = ResultReply::decode(&r.data).unwrap();
-    let outcome = pf::run(&cfg, |pose| pf::evaluate(&model, &scan, pose));
+    let outcome = pf::run(&cfg, |pose| pf::evaluate(&grid, &scan, pose));
+    assert!(outcome.best.cost * 4 < outcome.start.cost, "the filter found something: {outcome:?}");
     assert_eq!(result.pose, outcome.pose);
     assert_eq!(result.params, outcome.params);
     assert_eq!((result.iterations, result.cost), (outcome.iterations, outcome.best.cost));
@@ -81,12 +94,13 @@ fn commands_get_busy_while_the_filter_runs() {
     let scan = example_cloud(30, [300, -150, 80], 0.0);
     let mut b = SerialBoard::new(BoardConfig::FAST_SIM);
     b.run(100);
-    exchange(&mut b, &req(Command::LoadModel, 1, messages::load_request(0, &model)));
+    let grid = load_grid(&mut b, &model);
     exchange(&mut b, &req(Command::LoadScan, 2, messages::load_request(0, &scan)));
     exchange(&mut b, &req(Command::SetSizes, 3, messages::two_u16(80, 30)));
     exchange(&mut b, &req(Command::Run, 4, example_config(10, 6, 11).encode()));
     let busy = [
         req(Command::LoadScan, 5, messages::load_request(0, &scan[..3])),
+        req(Command::LoadTable, 5, messages::table_request(7, &[1, 2, 3])),
         req(Command::SetSizes, 6, messages::two_u16(80, 30)),
         req(Command::Run, 7, example_config(10, 6, 11).encode()),
         req(Command::Result, 8, vec![]),
@@ -102,6 +116,6 @@ fn commands_get_busy_while_the_filter_runs() {
     // The scan store was not touched: the result is the reference's.
     b.run_until_idle(100_000_000).expect("the filter finishes");
     let result = ResultReply::decode(&exchange(&mut b, &req(Command::Result, 11, vec![])).data).unwrap();
-    let outcome = pf::run(&example_config(10, 6, 11), |pose| pf::evaluate(&model, &scan, pose));
+    let outcome = pf::run(&example_config(10, 6, 11), |pose| pf::evaluate(&grid, &scan, pose));
     assert_eq!(result.pose, outcome.pose);
 }

@@ -63,7 +63,8 @@ fn check(cfg: &PfConfig, model: &[FxPoint], scan: &[FxPoint], latency: u64) -> u
     let mut ref_poses = Vec::new();
     let outcome = pf::run(cfg, |pose| {
         ref_poses.push(*pose);
-        pf::evaluate(model, scan, pose)
+        // The sequencer alone: any search will do, the brute-force one here.
+        pf::Evaluated::of(&pficp_fpga::pipeline::evaluate(model, scan, pose))
     });
     let mut rtl = VerilatedSequencer::new();
     let r = run_rtl(&mut rtl, cfg, model, scan, latency);

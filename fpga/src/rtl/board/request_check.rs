@@ -8,8 +8,8 @@
 
 use crate::format::{MAX_PARTICLES, MAX_POINTS};
 use crate::messages::{
-    EVALUATE_HEADER_BYTES, FLAG_FIRST, FLAG_LAST, LOAD_HEADER_BYTES, MAX_LOAD_POINTS, MAX_NEAREST, MAX_POSES,
-    NEAREST_REQUEST_BYTES, POINT_BYTES, POSE_BYTES, TWO_U16_BYTES,
+    EVALUATE_HEADER_BYTES, FLAG_FIRST, FLAG_LAST, LOAD_HEADER_BYTES, MAX_LOAD_ENTRIES, MAX_LOAD_POINTS, MAX_NEAREST,
+    MAX_POSES, NEAREST_REQUEST_BYTES, POINT_BYTES, POSE_BYTES, TABLE_ENTRIES, TABLE_ENTRY_BYTES, TWO_U16_BYTES,
 };
 use crate::pf::RUN_BYTES;
 use crate::protocol::{Command, ErrorCode};
@@ -43,7 +43,7 @@ pub struct RequestCheck {
     pub busy_class: Signal<Out, Bit>,
     /// The command is Identify.
     pub is_identify: Signal<Out, Bit>,
-    /// LoadModel or LoadScan.
+    /// LoadModel, LoadScan or LoadTable (the engine tells them apart by the code).
     pub is_load: Signal<Out, Bit>,
     /// SetSizes.
     pub is_sizes: Signal<Out, Bit>,
@@ -60,6 +60,7 @@ pub struct RequestCheck {
     c_identify: Constant<Bits<8>>,
     c_load_model: Constant<Bits<8>>,
     c_load_scan: Constant<Bits<8>>,
+    c_load_table: Constant<Bits<8>>,
     c_sizes: Constant<Bits<8>>,
     c_evaluate: Constant<Bits<8>>,
     c_nearest: Constant<Bits<8>>,
@@ -72,6 +73,8 @@ pub struct RequestCheck {
     load_header: Constant<Bits<11>>,
     load_header20: Constant<Bits<20>>,
     max_load: Constant<Bits<16>>,
+    max_entries: Constant<Bits<16>>,
+    table_entries17: Constant<Bits<17>>,
     max_points17: Constant<Bits<17>>,
     max_points16: Constant<Bits<16>>,
     sizes_body: Constant<Bits<11>>,
@@ -104,6 +107,7 @@ pub struct RequestCheck {
     dlen20: Signal<Local, Bits<20>>,
     c_is_identify: Signal<Local, Bit>,
     c_is_load: Signal<Local, Bit>,
+    c_is_table: Signal<Local, Bit>,
     c_is_sizes: Signal<Local, Bit>,
     c_is_evaluate: Signal<Local, Bit>,
     c_is_nearest: Signal<Local, Bit>,
@@ -121,6 +125,10 @@ impl Default for RequestCheck {
 /// The widths of the kernel's arithmetic: `times6` and `times27` are shifts and adds.
 const _: () = assert!(POINT_BYTES == 6 && POSE_BYTES == 27 && MAX_POINTS <= 4096 && MAX_PARTICLES <= 512);
 const _: () = assert!(FLAG_FIRST == 1 && FLAG_LAST == 2);
+// A LoadTable's length is `2 count` plus the header (a shift); the busy class's code range
+// ends at Result, LoadTable is added to it by name.
+const _: () = assert!(TABLE_ENTRY_BYTES == 2 && TABLE_ENTRIES < 1 << 13);
+const _: () = assert!((Command::LoadTable as u8) > (Command::Result as u8));
 
 impl RequestCheck {
     /// The constants from the protocol's definitions.
@@ -150,6 +158,7 @@ impl RequestCheck {
             c_identify: c8(Command::Identify as u8),
             c_load_model: c8(Command::LoadModel as u8),
             c_load_scan: c8(Command::LoadScan as u8),
+            c_load_table: c8(Command::LoadTable as u8),
             c_sizes: c8(Command::SetSizes as u8),
             c_evaluate: c8(Command::Evaluate as u8),
             c_nearest: c8(Command::Nearest as u8),
@@ -162,6 +171,8 @@ impl RequestCheck {
             load_header: c11(LOAD_HEADER_BYTES),
             load_header20: Constant::new(Bits::<20>::from(LOAD_HEADER_BYTES as u64)),
             max_load: Constant::new(Bits::<16>::from(MAX_LOAD_POINTS as u64)),
+            max_entries: Constant::new(Bits::<16>::from(MAX_LOAD_ENTRIES as u64)),
+            table_entries17: Constant::new(Bits::<17>::from(TABLE_ENTRIES as u64)),
             max_points17: Constant::new(Bits::<17>::from(MAX_POINTS as u64)),
             max_points16: Constant::new(Bits::<16>::from(MAX_POINTS as u64)),
             sizes_body: c11(TWO_U16_BYTES),
@@ -192,6 +203,7 @@ impl RequestCheck {
             dlen20: Default::default(),
             c_is_identify: Default::default(),
             c_is_load: Default::default(),
+            c_is_table: Default::default(),
             c_is_sizes: Default::default(),
             c_is_evaluate: Default::default(),
             c_is_nearest: Default::default(),
@@ -221,7 +233,10 @@ impl Logic for RequestCheck {
         }
         self.dlen20.next = bit_cast::<20, 11>(self.dlen.val());
         self.c_is_identify.next = self.cmd.val() == self.c_identify.val();
-        self.c_is_load.next = (self.cmd.val() == self.c_load_model.val()) || (self.cmd.val() == self.c_load_scan.val());
+        self.c_is_table.next = self.cmd.val() == self.c_load_table.val();
+        self.c_is_load.next = (self.cmd.val() == self.c_load_model.val())
+            || (self.cmd.val() == self.c_load_scan.val())
+            || self.c_is_table.val();
         self.c_is_sizes.next = self.cmd.val() == self.c_sizes.val();
         self.c_is_evaluate.next = self.cmd.val() == self.c_evaluate.val();
         self.c_is_nearest.next = self.cmd.val() == self.c_nearest.val();
@@ -240,13 +255,25 @@ impl Logic for RequestCheck {
         self.is_run.next = self.run_r.q.val();
         self.is_status.next = self.status_r.q.val();
         self.is_result.next = self.result_r.q.val();
-        self.c_busy.next = (self.cmd.val() >= self.c_load_model.val())
+        self.c_busy.next = ((self.cmd.val() >= self.c_load_model.val())
             && (self.cmd.val() <= self.c_result.val())
-            && !self.c_is_status.val();
+            && !self.c_is_status.val())
+            || self.c_is_table.val();
         self.c_code.next = 0.into();
         if self.c_is_identify.val() || self.c_is_status.val() {
             if self.dlen.val().any() {
                 self.c_code.next = self.e_length.val();
+            }
+        } else if self.c_is_table.val() {
+            // Two bytes an entry: `len = 4 + 2 count`.
+            if (self.dlen.val() < self.load_header.val())
+                || !self.hi.val().any()
+                || (self.hi.val() > self.max_entries.val())
+                || (self.dlen20.val() != (bit_cast::<20, 16>(self.hi.val()) << 1) + self.load_header20.val())
+            {
+                self.c_code.next = self.e_length.val();
+            } else if self.sum17.q.val() > self.table_entries17.val() {
+                self.c_code.next = self.e_capacity.val();
             }
         } else if self.c_is_load.val() {
             if (self.dlen.val() < self.load_header.val())

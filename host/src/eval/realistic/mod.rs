@@ -222,7 +222,9 @@ fn on_board_reference(
     use crate::board::on_board::{finish, plan, DEFAULT_BOARD_POINTS};
     use pficp_fpga::pf;
     let plan = plan(nn, scan, settings, DEFAULT_BOARD_POINTS, crate::board::MAX_POINTS);
-    let out = pf::run(&plan.config, |p| pf::evaluate(&plan.model, &plan.scan, p));
+    // Interim (the host's grid upload follows): the model as the board will hold it.
+    let grid = pficp_fpga::grid::Grid::build(&plan.model).unwrap_or_else(|e| panic!("board model: {e}"));
+    let out = pf::run(&plan.config, |p| pf::evaluate(&grid, &plan.scan, p));
     let reply = pficp_fpga::messages::ResultReply::of(&out);
     finish(&plan, nn, scan, settings, &reply, std::time::Duration::ZERO)
 }

@@ -70,9 +70,11 @@ impl<const P: usize> Logic for CommandEngine<P> {
         self.sender.put_data.next = self.outbuf.q.val().get_bits::<8>(0);
         self.sender.send.next = false;
         self.nn.model_we.next = false;
-        self.nn.model_waddr.next = self.waddr.q.val();
+        self.nn.model_waddr.next = self.waddr.q.val().get_bits::<12>(0);
         self.nn.model_wdata.next = self.inbuf.q.val().get_bits::<48>(168);
-        self.nn.model_count.next = self.model_count.q.val();
+        self.nn.table_we.next = false;
+        self.nn.table_waddr.next = self.waddr.q.val();
+        self.nn.table_wdata.next = self.inbuf.q.val().get_bits::<13>(200);
         self.nn.start.next = self.start_r.q.val();
         self.start_r.d.next = false;
         self.nn.pose.next = self.inbuf.q.val();
@@ -91,7 +93,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
             self.nn.pose.next = self.filter.pose.val();
         }
         self.scan_store.write_enable.next = false;
-        self.scan_store.write_address.next = self.waddr.q.val();
+        self.scan_store.write_address.next = self.waddr.q.val().get_bits::<12>(0);
         self.scan_store.write_data.next = self.inbuf.q.val().get_bits::<48>(168);
         self.ws.clear.next = false;
         self.ws.cost_valid.next = self.nn.cost_valid.val() && self.eval_mode.q.val();
@@ -225,7 +227,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
                     self.state.d.next = EngState::Header;
                 } else if self.check.is_load.val() {
                     self.idx.d.next = 0.into();
-                    self.waddr.d.next = self.h_lo.val().get_bits::<12>(0);
+                    self.waddr.d.next = self.h_lo.val().get_bits::<13>(0);
                     self.faddr.d.next = self.a_load.val();
                     self.state.d.next = EngState::LoadNext;
                 } else if self.check.is_sizes.val() {
@@ -324,13 +326,19 @@ impl<const P: usize> Logic for CommandEngine<P> {
                     self.ret.d.next = EngState::EchoBody;
                     self.state.d.next = EngState::Header;
                 } else {
-                    self.fcount.d.next = self.n_point.val();
+                    if self.cur_cmd.q.val().get_bit(3) {
+                        self.fcount.d.next = self.n_entry.val();
+                    } else {
+                        self.fcount.d.next = self.n_point.val();
+                    }
                     self.ret.d.next = EngState::LoadWrite;
                     self.state.d.next = EngState::FetchAddr;
                 }
             }
             EngState::LoadWrite => {
-                if self.cur_cmd.q.val().get_bit(0) {
+                if self.cur_cmd.q.val().get_bit(3) {
+                    self.nn.table_we.next = true;
+                } else if self.cur_cmd.q.val().get_bit(0) {
                     self.scan_store.write_enable.next = true;
                 } else {
                     self.nn.model_we.next = true;

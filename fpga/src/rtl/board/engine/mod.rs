@@ -16,11 +16,12 @@ use super::sequencer::PfSequencer;
 use crate::messages::{
     Identity, COST_BYTES, EVALUATE_HEADER_BYTES, IDENTITY_BYTES, LOAD_HEADER_BYTES, NEAREST_HEAD_BYTES,
     NEAREST_REQUEST_BYTES, NEAREST_RESULT_BYTES, POINT_BYTES, POSE_BYTES, RESULT_HEAD_BYTES, RESULT_PARAMS_BYTES,
-    RUN_REPLY_BYTES, STATUS_BYTES, TWO_U16_BYTES, WEIGHT_BYTES, WEIGHT_SUMMARY_BYTES,
+    RUN_REPLY_BYTES, STATUS_BYTES, TABLE_ENTRY_BYTES, TWO_U16_BYTES, WEIGHT_BYTES, WEIGHT_SUMMARY_BYTES,
 };
+use crate::protocol::Command;
 use crate::pf::{RUN_HEADER_BYTES, RUN_WORD_BYTES};
 use crate::protocol::{ErrorCode, CRC_BYTES, ERROR_DATA_BYTES, HEADER_BYTES};
-use crate::rtl::pipeline::NnPipeline;
+use crate::rtl::grid_pipeline::GridPipeline;
 use crate::rtl::weights::WeightStage;
 use rust_hdl::prelude::*;
 
@@ -40,6 +41,13 @@ fn frame_address(at: usize) -> Constant<Bits<11>> {
 
 // The header fetch takes the longest command header (the sums decode from it).
 const _: () = assert!(LOAD_HEADER_BYTES <= EVALUATE_HEADER_BYTES && RUN_HEADER_BYTES == EVALUATE_HEADER_BYTES);
+
+// The loads are told apart by their codes' bits: bit 3 LoadTable, else bit 0 LoadScan.
+const _: () = assert!(
+    (Command::LoadTable as u8) & 8 != 0 && (Command::LoadModel as u8) & 9 == 0 && (Command::LoadScan as u8) & 9 == 1
+);
+// A table entry arrives in the top 16 bits of `inbuf` (13 used).
+const _: () = assert!(TABLE_ENTRY_BYTES == 2);
 
 // The Run, Load and SetSizes replies echo four bytes (`EchoBody`).
 const _: () = assert!(RUN_REPLY_BYTES == TWO_U16_BYTES);
@@ -101,7 +109,8 @@ pub struct CommandEngine<const P: usize> {
     model_count: DFF<Bits<13>>,
     scan_count: DFF<Bits<13>>,
     idx: DFF<Bits<16>>,
-    waddr: DFF<Bits<12>>,
+    /// Store write address (13 bits: the cell table has 4,097 entries).
+    waddr: DFF<Bits<13>>,
     eval_mode: DFF<Bit>,
     /// The pipeline's `start`, registered (its outputs feed this block's state machine).
     start_r: DFF<Bit>,
@@ -113,7 +122,7 @@ pub struct CommandEngine<const P: usize> {
     scan_store: RAM<Bits<48>, 12>,
     /// Nearest results (index | distance << 12) or weights, by particle / point.
     aux: RAM<Bits<46>, 8>,
-    nn: NnPipeline<P>,
+    nn: GridPipeline<P>,
     ws: WeightStage,
     filter: PfSequencer,
     sender: ReplySender,
@@ -131,6 +140,7 @@ pub struct CommandEngine<const P: usize> {
     a_eval: Constant<Bits<11>>,
     n_head_fetch: Constant<Bits<5>>,
     n_point: Constant<Bits<5>>,
+    n_entry: Constant<Bits<5>>,
     n_word: Constant<Bits<5>>,
     // Reply lengths (`Emit` counts), from the protocol's layouts.
     n_header: Constant<Bits<5>>,
@@ -209,7 +219,7 @@ impl<const P: usize> CommandEngine<P> {
             frame_buf: Default::default(),
             scan_store: Default::default(),
             aux: Default::default(),
-            nn: NnPipeline::new(),
+            nn: GridPipeline::new(),
             ws: WeightStage::new(),
             filter: PfSequencer::new(),
             sender: ReplySender::new(bit_clocks),
@@ -226,6 +236,7 @@ impl<const P: usize> CommandEngine<P> {
             a_eval: frame_address(HEADER_BYTES + EVALUATE_HEADER_BYTES),
             n_head_fetch: emit_count(EVALUATE_HEADER_BYTES),
             n_point: emit_count(POINT_BYTES),
+            n_entry: emit_count(TABLE_ENTRY_BYTES),
             n_word: emit_count(RUN_WORD_BYTES),
             n_header: emit_count(HEADER_BYTES),
             n_error: emit_count(HEADER_BYTES + ERROR_DATA_BYTES),
