@@ -46,7 +46,7 @@ use crate::messages::{
 };
 use crate::pf::{PfConfig, PfOutcome};
 use crate::grid_pipeline::evaluate_stored;
-use crate::protocol::{Command, Deframer, ErrorCode, Frame};
+use crate::protocol::{digest_update, Command, Deframer, ErrorCode, Frame, DIGEST_INIT, DIGEST_NONE};
 use crate::weights::{weights, COST_MAX, MAX_PARTICLES};
 
 /// The byte-level reference of the whole board (docs/protocol.md): the receiver
@@ -66,6 +66,7 @@ pub struct BoardModel {
     scan_count: u16,
     costs: Vec<u64>,
     outcome: Option<PfOutcome>,
+    digest: u32,
     deframer: Deframer,
 }
 
@@ -85,6 +86,7 @@ impl BoardModel {
             scan_count: 0,
             costs: Vec::with_capacity(MAX_PARTICLES),
             outcome: None,
+            digest: DIGEST_NONE,
             deframer: Deframer::default(),
         }
     }
@@ -140,6 +142,11 @@ impl BoardModel {
     /// The scan store (4,096 packed points).
     pub fn scan_store(&self) -> &[u64] {
         &self.scan
+    }
+
+    /// The model digest (docs/protocol.md, "Resident model").
+    pub fn model_digest(&self) -> u32 {
+        self.digest
     }
 
     /// Model and scan points in use.
@@ -201,7 +208,7 @@ impl BoardModel {
                     self.scan_count,
                     self.costs.len() as u16,
                 );
-                Ok(id.encode())
+                Ok(id.with_digest(self.digest).encode())
             }
             Command::LoadModel | Command::LoadScan => {
                 if d.len() < LOAD_HEADER_BYTES {
@@ -217,6 +224,12 @@ impl BoardModel {
                 let store = if command == Command::LoadModel { &mut self.model } else { &mut self.scan };
                 for (k, p) in d[LOAD_HEADER_BYTES..].chunks_exact(POINT_BYTES).enumerate() {
                     store[offset + k] = le(p);
+                }
+                if command == Command::LoadModel {
+                    if offset == 0 {
+                        self.digest = DIGEST_INIT;
+                    }
+                    self.digest = digest_update(self.digest, d);
                 }
                 Ok(two_u16(offset as u16, count as u16))
             }
@@ -234,6 +247,7 @@ impl BoardModel {
                 for (k, e) in d[LOAD_HEADER_BYTES..].chunks_exact(TABLE_ENTRY_BYTES).enumerate() {
                     self.table[offset + k] = le(e) as u16 & TABLE_ENTRY_MASK;
                 }
+                self.digest = digest_update(self.digest, d);
                 Ok(two_u16(offset as u16, count as u16))
             }
             Command::SetSizes => {

@@ -26,7 +26,9 @@ pub const MAX_POSES: usize = 37;
 /// Most results in one Nearest frame.
 pub const MAX_NEAREST: usize = 144;
 /// Data bytes of the Identify reply.
-pub const IDENTITY_BYTES: usize = 26;
+pub const IDENTITY_BYTES: usize = 30;
+/// Bytes of the model digest (the Identify reply's last field).
+pub const DIGEST_BYTES: usize = 4;
 /// Evaluate flag: forget the stored costs first.
 pub const FLAG_FIRST: u8 = 1;
 /// Evaluate flag: weigh every stored cost afterwards.
@@ -165,6 +167,10 @@ pub struct Identity {
     pub scan_count: u16,
     /// Particle costs stored.
     pub stored: u16,
+    /// The model digest: [`crate::protocol::digest_update`] over every LoadModel and
+    /// LoadTable request's data since the last LoadModel at offset 0 (docs/protocol.md,
+    /// "Resident model"); [`crate::protocol::DIGEST_NONE`] after power-up.
+    pub model_digest: u32,
 }
 
 impl Identity {
@@ -184,7 +190,13 @@ impl Identity {
             model_count,
             scan_count,
             stored,
+            model_digest: crate::protocol::DIGEST_NONE,
         }
+    }
+
+    /// The same with the model digest `d`.
+    pub fn with_digest(self, d: u32) -> Self {
+        Identity { model_digest: d, ..self }
     }
 
     /// The reply data.
@@ -203,6 +215,7 @@ impl Identity {
         put(&mut out, self.model_count as u64, 2);
         put(&mut out, self.scan_count as u64, 2);
         put(&mut out, self.stored as u64, 2);
+        put(&mut out, self.model_digest as u64, DIGEST_BYTES);
         out
     }
 
@@ -223,6 +236,7 @@ impl Identity {
             model_count: le(&d[20..22]) as u16,
             scan_count: le(&d[22..24]) as u16,
             stored: le(&d[24..26]) as u16,
+            model_digest: le(&d[26..30]) as u32,
         })
     }
 }
@@ -259,6 +273,14 @@ pub fn grid_upload(grid: &crate::grid::Grid) -> Vec<(crate::protocol::Command, V
         .map(|(k, c)| (Command::LoadModel, load_request((k * MAX_LOAD_POINTS) as u16, c)))
         .chain(entries.map(|(k, c)| (Command::LoadTable, table_request((k * MAX_LOAD_ENTRIES) as u16, c))))
         .collect()
+}
+
+/// The model digest a board reports after [`grid_upload`]'s requests (the first a LoadModel
+/// at offset 0): what a host compares with Identify's to skip the upload.
+pub fn grid_digest(grid: &crate::grid::Grid) -> u32 {
+    grid_upload(grid)
+        .iter()
+        .fold(crate::protocol::DIGEST_INIT, |d, (_, data)| crate::protocol::digest_update(d, data))
 }
 
 /// Bytes of two u16 fields.

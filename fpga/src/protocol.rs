@@ -34,6 +34,24 @@ pub fn crc16(data: &[u8]) -> u16 {
     crc
 }
 
+/// The model digest after power-up: nothing uploaded (docs/protocol.md, "Resident model").
+pub const DIGEST_NONE: u32 = 0;
+/// The model digest's restart value, taken by a LoadModel at offset 0.
+pub const DIGEST_INIT: u32 = 0xffff_ffff;
+
+/// The model digest continued over `data`: CRC-32/MPEG-2 (polynomial 0x04C11DB7, MSB first,
+/// no reflection, no final XOR) from `state`.
+pub fn digest_update(state: u32, data: &[u8]) -> u32 {
+    let mut crc = state;
+    for &b in data {
+        crc ^= (b as u32) << 24;
+        for _ in 0..8 {
+            crc = if crc & 0x8000_0000 != 0 { (crc << 1) ^ 0x04c1_1db7 } else { crc << 1 };
+        }
+    }
+    crc
+}
+
 /// COBS-encode `data` (no delimiter appended).
 pub fn cobs_encode(data: &[u8]) -> Vec<u8> {
     let mut out = Vec::with_capacity(data.len() + data.len() / 254 + 2);
@@ -359,6 +377,9 @@ mod tests {
             assert_eq!(c as u8, code);
         }
         assert_eq!(Command::from_code(0x0b), None);
+        // CRC-32/MPEG-2's check value; continuing over a split equals one pass.
+        assert_eq!(digest_update(DIGEST_INIT, b"123456789"), 0x0376_e6e7);
+        assert_eq!(digest_update(digest_update(DIGEST_INIT, b"1234"), b"56789"), 0x0376_e6e7);
         assert_eq!(ErrorCode::from_byte(7), Some(ErrorCode::NoResult));
         assert_eq!(ErrorCode::from_byte(8), None);
     }

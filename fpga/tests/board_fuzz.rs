@@ -14,7 +14,7 @@ use pficp_fpga::messages::{
 use pficp_fpga::pf::{self, PfConfig, PfOutcome, RUN_BYTES};
 use pficp_fpga::grid_pipeline::evaluate_stored;
 use pficp_fpga::pipeline::Evaluation;
-use pficp_fpga::protocol::{Deframer, ErrorCode, Frame, MAX_FRAME};
+use pficp_fpga::protocol::{digest_update, Deframer, ErrorCode, Frame, DIGEST_INIT, MAX_FRAME};
 use pficp_fpga::splitmix::SplitMix64;
 use pficp_fpga::weights::weights;
 use proptest::prelude::*;
@@ -63,6 +63,7 @@ struct Snapshot {
     sizes: (u16, u16),
     costs: Vec<u64>,
     outcome: Option<PfOutcome>,
+    digest: u32,
 }
 
 impl Snapshot {
@@ -74,6 +75,7 @@ impl Snapshot {
             sizes: b.sizes(),
             costs: b.stored_costs().to_vec(),
             outcome: b.pf_outcome().cloned(),
+            digest: b.model_digest(),
         }
     }
     fn same_as(&self, b: &BoardModel) -> bool {
@@ -83,6 +85,7 @@ impl Snapshot {
             && self.model == b.model_store()
             && self.table == b.table_store()
             && self.scan == b.scan_store()
+            && self.digest == b.model_digest()
     }
 
     /// The grid search over the stores before the command (the lanes of the default board).
@@ -195,7 +198,7 @@ fn check_reply(request: &Frame, reply: &Frame, before: &Snapshot, b: &BoardModel
             let (m, s) = b.sizes();
             let c = b.config();
             let id = Identity::of_board(c.lanes as u8, c.clock_hz, c.baud, m, s, b.stored_costs().len() as u16);
-            assert_eq!(Identity::decode(r), Ok(id));
+            assert_eq!(Identity::decode(r), Ok(id.with_digest(before.digest)));
             assert!(before.same_as(b));
         }
         0x02 | 0x03 => {
@@ -218,6 +221,14 @@ fn check_reply(request: &Frame, reply: &Frame, before: &Snapshot, b: &BoardModel
             }
             assert!(other == &old_other[..]);
             assert!(b.table_store() == &before.table[..]);
+            // The digest: a LoadModel at offset 0 restarts it, a LoadModel continues it with
+            // its data, a LoadScan leaves it.
+            let want = match (request.code, offset) {
+                (0x02, 0) => digest_update(DIGEST_INIT, d),
+                (0x02, _) => digest_update(before.digest, d),
+                _ => before.digest,
+            };
+            assert_eq!(b.model_digest(), want);
             assert_eq!(b.sizes(), before.sizes);
             assert_eq!(b.stored_costs(), &before.costs[..]);
         }
@@ -235,6 +246,7 @@ fn check_reply(request: &Frame, reply: &Frame, before: &Snapshot, b: &BoardModel
             }
             assert!(before.model == b.model_store() && before.scan == b.scan_store());
             assert_eq!((b.sizes(), b.stored_costs()), (before.sizes, &before.costs[..]));
+            assert_eq!(b.model_digest(), digest_update(before.digest, d));
         }
         0x04 => {
             assert_eq!(&r[..], &d[..]);
@@ -512,6 +524,7 @@ impl Fuzz {
         let (m, s) = self.b.sizes();
         let c = self.b.config();
         let id = Identity::of_board(c.lanes as u8, c.clock_hz, c.baud, m, s, self.b.stored_costs().len() as u16);
+        let id = id.with_digest(self.b.model_digest());
         assert_eq!(frames.last().unwrap(), &Frame { code: 0x81, seq, data: id.encode() });
     }
 }

@@ -17,7 +17,7 @@ fn wire_bytes_are_exact() {
     let request = [0x05, 0x01, 0x05, 0x9b, 0x7e, 0x00];
     let reply = [
         0x04, 0x81, 0x05, 0x03, 0x02, 0x10, 0x02, 0x10, 0x02, 0x10, 0x05, 0x01, 0x25, 0xaa, 0x90, 0x04, 0xe1, 0xf5,
-        0x05, 0x03, 0x10, 0x0e, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x03, 0x20, 0xbb, 0x00,
+        0x05, 0x03, 0x10, 0x0e, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x03, 0x08, 0x69, 0x00,
     ];
     for (k, &byte) in request.iter().enumerate() {
         let out = b.receive(byte);
@@ -466,4 +466,38 @@ fn every_error_code_but_busy_is_reachable() {
     // host that does not wait or a running filter (the RTL tests check it).
     assert_eq!(seen, vec![1, 2, 3, 4, 6, 7]);
     assert_eq!(ErrorCode::Busy as u8, 5);
+}
+
+#[test]
+fn the_model_digest_follows_model_and_table_loads() {
+    use pficp_fpga::messages::{grid_digest, table_request};
+    use pficp_fpga::protocol::{digest_update, DIGEST_INIT, DIGEST_NONE};
+    let digest = |b: &mut BoardModel| le_at(&ok(b, req(IDENTIFY, 9, vec![])), 26, 4) as u32;
+    let mut b = BoardModel::new(BoardConfig::default());
+    assert_eq!(digest(&mut b), DIGEST_NONE, "nothing uploaded since power-up");
+    // The host's upload (LoadModel from offset 0, then the table) gives what it predicts.
+    let g = load_grid(&mut b, &grid());
+    let want = grid_digest(&g);
+    assert_eq!(digest(&mut b), want);
+    assert_ne!(want, DIGEST_NONE);
+    // Scans, sizes, Evaluate and reset leave it; a rejected load leaves it.
+    ok(&mut b, req(LOAD_SCAN, 1, load_data(0, 3, &scan_cloud(3))));
+    ok(&mut b, req(SET_SIZES, 2, u16s(64, 3)));
+    ok(&mut b, req(EVALUATE, 3, eval_data(FLAG_FIRST, 0, 0, 1, &[shift([0; 3])])));
+    b.reset();
+    rejects(&mut b, req(LOAD_MODEL, 4, load_data(4095, 2, &grid()[..2])), ErrorCode::OverCapacity);
+    assert_eq!(digest(&mut b), want);
+    // Any table or model write changes it; the same bytes again continue it.
+    let t = table_request(5, &[1, 2]);
+    ok(&mut b, req(LOAD_TABLE, 5, t.clone()));
+    assert_eq!(digest(&mut b), digest_update(want, &t));
+    let m = load_data(7, 1, &[[1, 2, 3]]);
+    ok(&mut b, req(LOAD_MODEL, 6, m.clone()));
+    assert_eq!(digest(&mut b), digest_update(digest_update(want, &t), &m));
+    // A LoadModel at offset 0 restarts it: uploading the grid again gives the same digest.
+    load_grid(&mut b, &grid());
+    assert_eq!(digest(&mut b), want);
+    let m0 = load_data(0, 1, &[[1, 2, 3]]);
+    ok(&mut b, req(LOAD_MODEL, 7, m0.clone()));
+    assert_eq!(digest(&mut b), digest_update(DIGEST_INIT, &m0));
 }

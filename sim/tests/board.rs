@@ -59,6 +59,9 @@ fn every_command_matches_the_reference_byte_for_byte() {
         assert_eq!(r.code, cmd as u8 | 0x80);
         seq = seq.wrapping_add(1);
     }
+    // The model digest after the upload (the RTL's CRC-32 against the reference's).
+    let id = messages::Identity::decode(&exchange(&mut b, &req(Command::Identify, seq, vec![])).data).unwrap();
+    assert_eq!(id.model_digest, messages::grid_digest(&grid));
     exchange(&mut b, &req(Command::SetSizes, seq, messages::two_u16(300, 45)));
     let scale = WeightScale::for_two_q(1.0e6);
     let first = EvaluateRequest { first: true, last: false, scale, poses: (0..5).map(pose).collect() };

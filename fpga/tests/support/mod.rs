@@ -219,5 +219,5 @@ pub fn identify_reply(b: &BoardModel, seq: u8) -> Vec<u8> {
     let (m, s) = b.sizes();
     let c = b.config();
     let id = Identity::of_board(c.lanes as u8, c.clock_hz, c.baud, m, s, b.stored_costs().len() as u16);
-    Frame { code: 0x81, seq, data: id.encode() }.encode()
+    Frame { code: 0x81, seq, data: id.with_digest(b.model_digest()).encode() }.encode()
 }

@@ -1,6 +1,7 @@
 //! The board around the pipeline (docs/protocol.md), one block a file:
 //! - [`uart`]: `UartRx`, `UartTx` (8N1, clocks per bit set at generation);
 //! - [`crc`]: `Crc16Serial`, CRC-16/CCITT-FALSE a bit per clock;
+//! - [`digest`]: `ModelDigest`, the model digest (CRC-32) a byte per clock;
 //! - [`frame_rx`]: `FrameReceiver`, streaming COBS decode, CRC check, frame buffer writes;
 //! - [`reply_tx`]: `ReplySender`, reply buffer, CRC and COBS encoder before the UART;
 //! - [`engine`]: `CommandEngine<P>`, command execution, scan store, pipeline and weights;
@@ -13,6 +14,7 @@
 //! the same bytes for the same bytes in (sim crate).
 
 pub mod crc;
+pub mod digest;
 pub mod engine;
 pub mod frame_rx;
 pub mod reply_tx;

@@ -7,7 +7,8 @@ impl<const P: usize> Logic for CommandEngine<P> {
     fn update(&mut self) {
         dff_setup!(self, clock, state, ret, dlen, cur_cmd, cur_seq, e_code, e_cmd, e_seq, pending, p_cmd, p_seq);
         dff_setup!(self, clock, err_led, faddr, fcount, inbuf, outbuf, ecount, hdr, model_count, scan_count, idx);
-        dff_setup!(self, clock, waddr, eval_mode, start_r, wi, ncost);
+        dff_setup!(self, clock, waddr, eval_mode, start_r, wi, ncost, dig_sr, dig_restart);
+        self.digest.clock.next = self.clock.val();
         self.nn.clock.next = self.clock.val();
         self.ws.clock.next = self.clock.val();
         self.filter.clock.next = self.clock.val();
@@ -65,6 +66,9 @@ impl<const P: usize> Logic for CommandEngine<P> {
         self.nn.scan_last.next = self.feeder.last.val();
 
         // Defaults.
+        self.digest.restart.next = false;
+        self.digest.feed.next = false;
+        self.digest.byte.next = self.frame_buf.read_data.val();
         self.sender.open.next = false;
         self.sender.put.next = false;
         self.sender.put_data.next = self.outbuf.q.val().get_bits::<8>(0);
@@ -156,6 +160,10 @@ impl<const P: usize> Logic for CommandEngine<P> {
                 self.state.d.next = EngState::FetchData;
             }
             EngState::FetchData => {
+                // A LoadModel's or LoadTable's data bytes go into the model digest.
+                if (self.ret.q.val() == EngState::LoadWrite) && !self.cur_cmd.q.val().get_bit(0) {
+                    self.digest.feed.next = true;
+                }
                 self.inbuf.d.next =
                     (self.inbuf.q.val() >> 8) | (bit_cast::<216, 8>(self.frame_buf.read_data.val()) << 208);
                 self.fcount.d.next = self.fcount.q.val() - 1;
@@ -229,7 +237,15 @@ impl<const P: usize> Logic for CommandEngine<P> {
                     self.idx.d.next = 0.into();
                     self.waddr.d.next = self.h_lo.val().get_bits::<13>(0);
                     self.faddr.d.next = self.a_load.val();
-                    self.state.d.next = EngState::LoadNext;
+                    if self.cur_cmd.q.val().get_bit(0) {
+                        self.state.d.next = EngState::LoadNext;
+                    } else {
+                        // LoadModel or LoadTable: the header into the digest first.
+                        self.dig_sr.d.next = self.h.val().get_bits::<32>(0);
+                        self.dig_restart.d.next = !self.cur_cmd.q.val().get_bit(3) && !self.h_lo.val().any();
+                        self.wi.d.next = 0.into();
+                        self.state.d.next = EngState::DigHead;
+                    }
                 } else if self.check.is_sizes.val() {
                     self.model_count.d.next = self.h_lo.val().get_bits::<13>(0);
                     self.scan_count.d.next = self.h_hi.val().get_bits::<13>(0);
@@ -312,13 +328,30 @@ impl<const P: usize> Logic for CommandEngine<P> {
                 self.ret.d.next = EngState::Send;
                 self.state.d.next = EngState::Emit;
             }
+            EngState::DigHead => {
+                self.digest.restart.next = self.dig_restart.q.val();
+                self.digest.feed.next = true;
+                self.digest.byte.next = self.dig_sr.q.val().get_bits::<8>(0);
+                self.dig_restart.d.next = false;
+                self.dig_sr.d.next = self.dig_sr.q.val() >> 8;
+                self.wi.d.next = self.wi.q.val() + 1;
+                if self.wi.q.val() == 3 {
+                    self.state.d.next = EngState::LoadNext;
+                }
+            }
+            EngState::IdDigest => {
+                self.outbuf.d.next = bit_cast::<216, 32>(self.digest.digest.val());
+                self.ecount.d.next = self.n_digest.val();
+                self.ret.d.next = EngState::Send;
+                self.state.d.next = EngState::Emit;
+            }
             EngState::IdBody => {
                 self.outbuf.d.next = self.ident.val()
                     | (bit_cast::<216, 13>(self.model_count.q.val()) << 160)
                     | (bit_cast::<216, 13>(self.scan_count.q.val()) << 176)
                     | (bit_cast::<216, 9>(self.ws.count.val()) << 192);
                 self.ecount.d.next = self.n_identity.val();
-                self.ret.d.next = EngState::Send;
+                self.ret.d.next = EngState::IdDigest;
                 self.state.d.next = EngState::Emit;
             }
             EngState::LoadNext => {

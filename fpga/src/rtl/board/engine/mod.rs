@@ -9,12 +9,13 @@
 //! (`state.rs`), the state machine is `kernel.rs`, the scan stream into the pipeline is the
 //! [`ScanFeeder`].
 
+use super::digest::ModelDigest;
 use super::reply_tx::ReplySender;
 use super::request_check::RequestCheck;
 use super::scan_feeder::ScanFeeder;
 use super::sequencer::PfSequencer;
 use crate::messages::{
-    Identity, COST_BYTES, EVALUATE_HEADER_BYTES, IDENTITY_BYTES, LOAD_HEADER_BYTES, NEAREST_HEAD_BYTES,
+    Identity, COST_BYTES, DIGEST_BYTES, EVALUATE_HEADER_BYTES, IDENTITY_BYTES, LOAD_HEADER_BYTES, NEAREST_HEAD_BYTES,
     NEAREST_REQUEST_BYTES, NEAREST_RESULT_BYTES, POINT_BYTES, POSE_BYTES, RESULT_HEAD_BYTES, RESULT_PARAMS_BYTES,
     RUN_REPLY_BYTES, STATUS_BYTES, TABLE_ENTRY_BYTES, TWO_U16_BYTES, WEIGHT_BYTES, WEIGHT_SUMMARY_BYTES,
 };
@@ -116,6 +117,10 @@ pub struct CommandEngine<const P: usize> {
     start_r: DFF<Bit>,
     wi: DFF<Bits<9>>,
     ncost: DFF<Bits<48>>,
+    /// A load's header bytes on their way into the digest.
+    dig_sr: DFF<Bits<32>>,
+    /// The digest restarts with the next byte (a LoadModel at offset 0).
+    dig_restart: DFF<Bit>,
     /// The checks' sums, registered a clock before Dispatch (short paths).
     // The scan stream into the pipeline: read-ahead of up to two points.
     frame_buf: RAM<Bits<8>, 11>,
@@ -128,6 +133,7 @@ pub struct CommandEngine<const P: usize> {
     sender: ReplySender,
     feeder: ScanFeeder,
     check: RequestCheck,
+    digest: ModelDigest,
     all48: Constant<Bits<48>>,
     e_busy: Constant<Bits<8>>,
     e_no_result: Constant<Bits<8>>,
@@ -150,6 +156,7 @@ pub struct CommandEngine<const P: usize> {
     n_result_params: Constant<Bits<5>>,
     n_pose: Constant<Bits<5>>,
     n_identity: Constant<Bits<5>>,
+    n_digest: Constant<Bits<5>>,
     n_echo: Constant<Bits<5>>,
     n_cost: Constant<Bits<5>>,
     n_summary: Constant<Bits<5>>,
@@ -216,6 +223,8 @@ impl<const P: usize> CommandEngine<P> {
             start_r: Default::default(),
             wi: Default::default(),
             ncost: Default::default(),
+            dig_sr: Default::default(),
+            dig_restart: Default::default(),
             frame_buf: Default::default(),
             scan_store: Default::default(),
             aux: Default::default(),
@@ -225,6 +234,7 @@ impl<const P: usize> CommandEngine<P> {
             sender: ReplySender::new(bit_clocks),
             feeder: ScanFeeder::new(),
             check: RequestCheck::new(),
+            digest: ModelDigest::default(),
             all48: Constant::new(Bits::<48>::from((1u64 << 48) - 1)),
             e_busy: Constant::new(Bits::<8>::from(ErrorCode::Busy as u64)),
             e_no_result: Constant::new(Bits::<8>::from(ErrorCode::NoResult as u64)),
@@ -244,7 +254,8 @@ impl<const P: usize> CommandEngine<P> {
             n_result_head: emit_count(RESULT_HEAD_BYTES),
             n_result_params: emit_count(RESULT_PARAMS_BYTES),
             n_pose: emit_count(POSE_BYTES),
-            n_identity: emit_count(IDENTITY_BYTES),
+            n_identity: emit_count(IDENTITY_BYTES - DIGEST_BYTES),
+            n_digest: emit_count(DIGEST_BYTES),
             n_echo: emit_count(TWO_U16_BYTES),
             n_cost: emit_count(COST_BYTES),
             n_summary: emit_count(WEIGHT_SUMMARY_BYTES),

@@ -27,8 +27,12 @@ pub enum EngState {
     Send,
     /// Wait for the last byte to leave.
     SendWait,
-    /// Identify: the 26 data bytes.
+    /// Identify: the data bytes before the model digest.
     IdBody,
+    /// Identify: the model digest.
+    IdDigest,
+    /// LoadModel / LoadTable: the request's four header bytes into the model digest.
+    DigHead,
     /// Load: next point or done.
     LoadNext,
     /// Load: write the fetched point.
