@@ -18,10 +18,10 @@ pub struct ModelDigest {
     pub clock: Signal<In, Clock>,
     /// Restart at `DIGEST_INIT` (before `feed` in the same clock).
     pub restart: Signal<In, Bit>,
-    /// Add `byte`.
+    /// Add `data_in`.
     pub feed: Signal<In, Bit>,
     /// The byte.
-    pub byte: Signal<In, Bits<8>>,
+    pub data_in: Signal<In, Bits<8>>,
     /// The digest of the bytes fed since the last restart.
     pub digest: Signal<Out, Bits<32>>,
     poly: Constant<Bits<32>>,
@@ -45,7 +45,7 @@ impl Default for ModelDigest {
             clock: Default::default(),
             restart: Default::default(),
             feed: Default::default(),
-            byte: Default::default(),
+            data_in: Default::default(),
             digest: Default::default(),
             poly: Constant::new(POLY.into()),
             init: Constant::new((DIGEST_INIT as u64).into()),
@@ -74,42 +74,42 @@ impl Logic for ModelDigest {
             self.c0.next = self.value.q.val();
         }
         // One bit of the byte a step, MSB first (the reference's inner loop, unrolled).
-        if self.c0.val().get_bit(31) ^ self.byte.val().get_bit(7) {
+        if self.c0.val().get_bit(31) ^ self.data_in.val().get_bit(7) {
             self.c1.next = (self.c0.val() << 1) ^ self.poly.val();
         } else {
             self.c1.next = self.c0.val() << 1;
         }
-        if self.c1.val().get_bit(31) ^ self.byte.val().get_bit(6) {
+        if self.c1.val().get_bit(31) ^ self.data_in.val().get_bit(6) {
             self.c2.next = (self.c1.val() << 1) ^ self.poly.val();
         } else {
             self.c2.next = self.c1.val() << 1;
         }
-        if self.c2.val().get_bit(31) ^ self.byte.val().get_bit(5) {
+        if self.c2.val().get_bit(31) ^ self.data_in.val().get_bit(5) {
             self.c3.next = (self.c2.val() << 1) ^ self.poly.val();
         } else {
             self.c3.next = self.c2.val() << 1;
         }
-        if self.c3.val().get_bit(31) ^ self.byte.val().get_bit(4) {
+        if self.c3.val().get_bit(31) ^ self.data_in.val().get_bit(4) {
             self.c4.next = (self.c3.val() << 1) ^ self.poly.val();
         } else {
             self.c4.next = self.c3.val() << 1;
         }
-        if self.c4.val().get_bit(31) ^ self.byte.val().get_bit(3) {
+        if self.c4.val().get_bit(31) ^ self.data_in.val().get_bit(3) {
             self.c5.next = (self.c4.val() << 1) ^ self.poly.val();
         } else {
             self.c5.next = self.c4.val() << 1;
         }
-        if self.c5.val().get_bit(31) ^ self.byte.val().get_bit(2) {
+        if self.c5.val().get_bit(31) ^ self.data_in.val().get_bit(2) {
             self.c6.next = (self.c5.val() << 1) ^ self.poly.val();
         } else {
             self.c6.next = self.c5.val() << 1;
         }
-        if self.c6.val().get_bit(31) ^ self.byte.val().get_bit(1) {
+        if self.c6.val().get_bit(31) ^ self.data_in.val().get_bit(1) {
             self.c7.next = (self.c6.val() << 1) ^ self.poly.val();
         } else {
             self.c7.next = self.c6.val() << 1;
         }
-        if self.c7.val().get_bit(31) ^ self.byte.val().get_bit(0) {
+        if self.c7.val().get_bit(31) ^ self.data_in.val().get_bit(0) {
             self.c8.next = (self.c7.val() << 1) ^ self.poly.val();
         } else {
             self.c8.next = self.c7.val() << 1;

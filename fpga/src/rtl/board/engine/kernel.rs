@@ -68,7 +68,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
         // Defaults.
         self.digest.restart.next = false;
         self.digest.feed.next = false;
-        self.digest.byte.next = self.frame_buf.read_data.val();
+        self.digest.data_in.next = self.frame_buf.read_data.val();
         self.sender.open.next = false;
         self.sender.put.next = false;
         self.sender.put_data.next = self.outbuf.q.val().get_bits::<8>(0);
@@ -331,7 +331,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
             EngState::DigHead => {
                 self.digest.restart.next = self.dig_restart.q.val();
                 self.digest.feed.next = true;
-                self.digest.byte.next = self.dig_sr.q.val().get_bits::<8>(0);
+                self.digest.data_in.next = self.dig_sr.q.val().get_bits::<8>(0);
                 self.dig_restart.d.next = false;
                 self.dig_sr.d.next = self.dig_sr.q.val() >> 8;
                 self.wi.d.next = self.wi.q.val() + 1;
