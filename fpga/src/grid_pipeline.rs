@@ -448,7 +448,8 @@ pub fn evaluate_stored(ram: &[u64], first: &[u16], lanes: usize, scan: &[FxPoint
             for z in lo[2]..=hi[2] {
                 for y in lo[1]..=hi[1] {
                     let row = ((z as usize) << 8) | ((y as usize) << 4);
-                    let (start, end) = (first[row | lo[0] as usize] & 0x1fff, first[(row | hi[0] as usize) + 1] & 0x1fff);
+                    let (start, end) =
+                        (first[row | lo[0] as usize] & 0x1fff, first[(row | hi[0] as usize) + 1] & 0x1fff);
                     for a in start..end {
                         let d = unpack_point(ram[a as usize % MAX_POINTS]);
                         for (b, q) in best.iter_mut().zip(&queries) {

@@ -278,9 +278,7 @@ pub fn grid_upload(grid: &crate::grid::Grid) -> Vec<(crate::protocol::Command, V
 /// The model digest a board reports after [`grid_upload`]'s requests (the first a LoadModel
 /// at offset 0): what a host compares with Identify's to skip the upload.
 pub fn grid_digest(grid: &crate::grid::Grid) -> u32 {
-    grid_upload(grid)
-        .iter()
-        .fold(crate::protocol::DIGEST_INIT, |d, (_, data)| crate::protocol::digest_update(d, data))
+    grid_upload(grid).iter().fold(crate::protocol::DIGEST_INIT, |d, (_, data)| crate::protocol::digest_update(d, data))
 }
 
 /// Bytes of two u16 fields.

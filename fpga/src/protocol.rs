@@ -371,7 +371,9 @@ mod tests {
         assert_eq!(Command::from_code(e.data[1]), Some(Command::Evaluate));
         assert_eq!(Command::from_code(0x85), Some(Command::Evaluate));
         assert_eq!(Command::from_code(0x42), None);
-        for (code, c) in [(0x07, Command::Run), (0x08, Command::Status), (0x09, Command::Result), (0x0a, Command::LoadTable)] {
+        for (code, c) in
+            [(0x07, Command::Run), (0x08, Command::Status), (0x09, Command::Result), (0x0a, Command::LoadTable)]
+        {
             assert_eq!(Command::from_code(code), Some(c));
             assert_eq!(Command::from_code(code | 0x80), Some(c));
             assert_eq!(c as u8, code);

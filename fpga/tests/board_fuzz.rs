@@ -7,12 +7,12 @@
 
 use pficp_fpga::board::{BoardConfig, BoardModel};
 use pficp_fpga::format::{unpack_point, FxPoint, WeightScale};
+use pficp_fpga::grid_pipeline::evaluate_stored;
 use pficp_fpga::messages::{
     parse_two_u16, pose_from_bytes, EvaluateReply, Identity, NearestReply, NearestRequest, ResultReply, RunState,
     StatusReply, FLAG_FIRST, FLAG_LAST,
 };
 use pficp_fpga::pf::{self, PfConfig, PfOutcome, RUN_BYTES};
-use pficp_fpga::grid_pipeline::evaluate_stored;
 use pficp_fpga::pipeline::Evaluation;
 use pficp_fpga::protocol::{digest_update, Deframer, ErrorCode, Frame, DIGEST_INIT, MAX_FRAME};
 use pficp_fpga::splitmix::SplitMix64;
@@ -292,7 +292,9 @@ fn check_reply(request: &Frame, reply: &Frame, before: &Snapshot, b: &BoardModel
             let want = pf::run(&cfg, |pose| pf::Evaluated::of(&before.search(&scan, pose)));
             assert_eq!(b.pf_outcome(), Some(&want));
             assert!(before.sizes == b.sizes() && before.costs == b.stored_costs(), "Run changed the stores");
-            assert!(before.model == b.model_store() && before.scan == b.scan_store() && before.table == b.table_store());
+            assert!(
+                before.model == b.model_store() && before.scan == b.scan_store() && before.table == b.table_store()
+            );
         }
         0x08 => {
             let s = StatusReply::decode(r).expect("Status reply layout");

@@ -4,10 +4,10 @@
 //! in the cube, scans under poses that put points outside it, gaps in the scan stream,
 //! several particles back to back and model rewrites between them.
 
-use pficp_fpga::format::{FxPoint, FxPose};
-use pficp_fpga::grid::{Grid, CAP_D2, CELL_LSBS, NONE};
 use pficp_fpga::format::{pack_point, MAX_POINTS};
+use pficp_fpga::format::{FxPoint, FxPose};
 use pficp_fpga::grid::CELLS;
+use pficp_fpga::grid::{Grid, CAP_D2, CELL_LSBS, NONE};
 use pficp_fpga::grid_pipeline::{evaluate_grid, evaluate_stored, run_particle, upload, GridInputs, GridPipelineModel};
 use proptest::prelude::*;
 

@@ -174,7 +174,11 @@ impl FrameFuzzer {
                 let entries: Vec<u16> = (0..n)
                     .map(|_| {
                         at = (at + (self.below(8) == 0) as u16).min(MAX_MODEL);
-                        if self.below(16) == 0 { self.below(2 * MAX_MODEL as u64) as u16 } else { at }
+                        if self.below(16) == 0 {
+                            self.below(2 * MAX_MODEL as u64) as u16
+                        } else {
+                            at
+                        }
                     })
                     .collect();
                 command = Some(Command::LoadTable);

@@ -19,8 +19,8 @@ use crate::messages::{
     NEAREST_REQUEST_BYTES, NEAREST_RESULT_BYTES, POINT_BYTES, POSE_BYTES, RESULT_HEAD_BYTES, RESULT_PARAMS_BYTES,
     RUN_REPLY_BYTES, STATUS_BYTES, TABLE_ENTRY_BYTES, TWO_U16_BYTES, WEIGHT_BYTES, WEIGHT_SUMMARY_BYTES,
 };
-use crate::protocol::Command;
 use crate::pf::{RUN_HEADER_BYTES, RUN_WORD_BYTES};
+use crate::protocol::Command;
 use crate::protocol::{ErrorCode, CRC_BYTES, ERROR_DATA_BYTES, HEADER_BYTES};
 use crate::rtl::grid_pipeline::GridPipeline;
 use crate::rtl::weights::WeightStage;
