@@ -58,6 +58,11 @@ seq_states! {
     EvStart,
     /// Evaluate: wait for the cost.
     EvWait,
+    /// Particles: wait for the evaluation in flight; store it; start the next or finish.
+    EvSync,
+    /// Particles: start the pipeline on this particle's pose and go on propagating the
+    /// next while it runs.
+    EvLaunch,
     /// The start's evaluation is in: it is the first best.
     StartDone,
     /// A new iteration.

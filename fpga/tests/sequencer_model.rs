@@ -267,6 +267,9 @@ fn one_particle_odd_counts_wrapping_angles_and_random_latencies() {
     for (seed, n) in [(1u32, 16u16), (2, 5), (3, 13)] {
         check(&example_config(n, 4, seed * 7919), &model, &scan, Timing { lat: (2, 45), gap: 4, seed });
     }
+    // Evaluations longer and shorter than a propagation and pose (749 clocks): the next
+    // particle waits in EvSync for some, not for others.
+    check(&example_config(11, 3, 77), &model, &scan, Timing { lat: (400, 1300), gap: 3, seed: 21 });
 }
 
 #[test]
@@ -405,7 +408,15 @@ fn phase_clocks() {
             c(&["CorInit", "CorStep", "CorCos", "CorSin", "PoseScale", "OpFetch", "OpA", "OpB", "OpMul", "PoseT"]);
         // Every pipeline run and the final pose.
         assert_eq!(pose, POSE_CLOCKS * (evals + 1), "pose clocks");
-        assert_eq!(c(&["EvStart", "EvWait"]), eval_each * evals, "evaluation clocks");
+        // The start and the estimates wait for their evaluations (EvStart, EvWait); the
+        // particles' run while the next particle is propagated (EvLaunch, EvSync): a launch
+        // each, one EvSync clock for the first, two for each later one (before and after
+        // storing the previous), and the last's whole evaluation plus its store's return.
+        let (its_n, sync_evals) = (outcome.iterations as u64, evals - n as u64 * outcome.iterations as u64);
+        assert_eq!(c(&["EvStart", "EvWait"]), eval_each * sync_evals, "evaluation clocks");
+        let overlapped = 3 * n as u64 + eval_each;
+        assert!(eval_each < 7 * PROPAGATE_CLOCKS + POSE_CLOCKS, "no particle waits for the one before");
+        assert_eq!(c(&["EvLaunch", "EvSync"]), overlapped * its_n, "overlapped evaluation clocks");
         let prop = c(&["PropAddr", "PropRead", "PropMul", "PropClamp", "PropWrite"]);
         assert_eq!(prop, PROPAGATE_CLOCKS * p * n * its, "propagation clocks");
         let sums = c(&["SumBegin", "SumAddr", "SumWait", "SumData", "SumMul", "SumDiv", "SumDivGo", "SumDivWait"]);
@@ -436,7 +447,7 @@ fn phase_clocks() {
             advances_total += advances.unwrap_or(0);
             shapes.push(IterationShape {
                 particles: n,
-                eval_clocks: eval_each * (n + 1),
+                eval_clocks: overlapped + eval_each,
                 temper_passes: passes,
                 best_copied,
                 resample_advances: advances,
@@ -456,7 +467,7 @@ fn phase_clocks() {
              temperature {temper} in {passes_total} passes, weights {}, estimate and spread {sums}, resampling \
              {resampling})",
             r.clocks,
-            eval_each * evals,
+            eval_each * sync_evals + overlapped * its,
             4 * n * its
         );
     }

@@ -29,7 +29,15 @@ impl Both {
     }
 }
 
-fn realistic(cfg: &PfConfig, model: &[FxPoint], scan: &[FxPoint], seed: u32, reset_at: Option<u64>) -> u64 {
+/// `lat`: the emulated pipeline's latency range after `start` (clocks).
+fn realistic(
+    cfg: &PfConfig,
+    model: &[FxPoint],
+    scan: &[FxPoint],
+    seed: u32,
+    reset_at: Option<u64>,
+    lat: (u64, u64),
+) -> u64 {
     let mut b = Both::new();
     let mut rng = pf::Xorshift32::new(seed);
     for (a, w) in config_writes(cfg) {
@@ -43,7 +51,8 @@ fn realistic(cfg: &PfConfig, model: &[FxPoint], scan: &[FxPoint], seed: u32, res
         let o = b.m().outputs();
         let mut i = SeqInputs { nn_ready: !pipeline.busy() && now >= ready_at && !o.start, ..Default::default() };
         if o.start {
-            pipeline.start(now, (rng.next() % 40) as u64, model, scan, &unpack_pose(&o.pose));
+            let latency = lat.0 + rng.next() as u64 % (lat.1 - lat.0 + 1);
+            pipeline.start(now, latency, model, scan, &unpack_pose(&o.pose));
         }
         if pipeline.drive(now, &mut i) {
             ready_at = now + 1 + (rng.next() % 4) as u64;
@@ -68,23 +77,26 @@ fn realistic(cfg: &PfConfig, model: &[FxPoint], scan: &[FxPoint], seed: u32, res
 fn lockstep_realistic() {
     let model = example_cloud(60, [0, 0, 0], 0.0);
     let scan = example_cloud(30, [400, -200, 100], 0.05);
-    println!("{}", realistic(&example_config(12, 5, 7), &model, &scan, 3, None));
-    println!("{}", realistic(&example_config(1, 3, 9), &model, &scan, 4, None));
+    println!("{}", realistic(&example_config(12, 5, 7), &model, &scan, 3, None, (0, 39)));
+    println!("{}", realistic(&example_config(1, 3, 9), &model, &scan, 4, None, (0, 39)));
+    // Evaluations longer and shorter than the next particle's propagation and pose (749
+    // clocks): the sequencer waits for some in EvSync.
+    println!("{}", realistic(&example_config(10, 3, 31), &model, &scan, 9, None, (300, 1500)));
     let mut c = example_config(7, 4, 0);
     c.centre = [1000, -2000, 300, (1 << SCALE_FRAC) + 5000, 8_000_000, -8_300_000, 4_190_000];
     c.temper_exp = 40;
-    println!("{}", realistic(&c, &model, &scan, 5, None));
+    println!("{}", realistic(&c, &model, &scan, 5, None, (0, 39)));
     let mut c = example_config(9, 3, 0xdead_beef);
     c.centre[3] = 3000;
     c.sigma0[3] = 1 << 14;
-    println!("{}", realistic(&c, &model, &scan, 6, None));
+    println!("{}", realistic(&c, &model, &scan, 6, None, (0, 39)));
     for at in [3u64, 400, 2000, 9000, 17000] {
-        realistic(&example_config(8, 4, 17), &model, &scan, 7, Some(at));
+        realistic(&example_config(8, 4, 17), &model, &scan, 7, Some(at), (0, 39));
     }
     let mut c = example_config(10, 30, 21);
     c.thr_cost = 1 << 40;
     c.thr_max = (1 << 34) - 1;
-    realistic(&c, &model, &scan, 8, None);
+    realistic(&c, &model, &scan, 8, None, (0, 39));
 }
 
 /// Random inputs on every port, random configuration words.

@@ -30,8 +30,11 @@ pub const fn sum_clocks(n: u64) -> u64 {
 pub struct IterationShape {
     /// Particles.
     pub particles: u64,
-    /// Clocks in `EvStart` and `EvWait` over the iteration's `particles + 1` evaluations
-    /// (the pipeline's time: `1 +` clocks from `start` to `cost_valid` each, when ready).
+    /// Clocks in the states that wait for or launch the pipeline over the iteration:
+    /// `EvLaunch` and `EvSync` for the particles, whose evaluations run while the next
+    /// particle is propagated and posed (at least `3 n` plus the last one's evaluation, more
+    /// when an evaluation outlasts a propagation and pose), and `EvStart` and `EvWait` for
+    /// the estimate (`1 +` clocks from `start` to `cost_valid`, when ready).
     pub eval_clocks: u64,
     /// Temperature passes: the bit length of the median excess, plus one (1 to 49).
     pub temper_passes: u64,

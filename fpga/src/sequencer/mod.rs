@@ -20,8 +20,9 @@
 //! | phase | clocks | states |
 //! |---|---|---|
 //! | pose ([`POSE_CLOCKS`]) | 588 | 3 x (CorInit, 18 CorStep, CorCos, CorSin) = 63, PoseScale 1, 23 multiplies x 22 (OpFetch, OpA, OpB, 19 OpMul), 5 additions x 3, 3 PoseT |
-//! | evaluation | 1 + pipeline | EvStart (1 when `nn_ready`), EvWait from `start` to the clock `cost_valid` is taken |
-//! | propagation, per parameter ([`PROPAGATE_CLOCKS`]) | 23 | PropAddr, PropRead, 19 PropMul, PropClamp, PropWrite (161 per particle, + PartStore 1 after its evaluation; IterBegin 1 per iteration) |
+//! | evaluation of the start and each estimate | 1 + pipeline | EvStart (1 when `nn_ready`), EvWait from `start` to the clock `cost_valid` is taken |
+//! | evaluation of the particles, per iteration | 3n + the last one's (1 + pipeline + 1), or more | EvLaunch (1 when `nn_ready`) starts particle `i` and goes on propagating `i + 1`; EvSync waits until its cost is in (1 clock when the evaluation took less than the next particle's propagation and pose, 749 clocks), PartStore stores it, EvSync again launches the next or, after the last, waits for it and goes on to the temperature |
+//! | propagation, per parameter ([`PROPAGATE_CLOCKS`]) | 23 | PropAddr, PropRead, 19 PropMul, PropClamp, PropWrite (161 per particle, + PartStore 1 for its evaluation; IterBegin 1 per iteration) |
 //! | temperature, per pass ([`temper_pass_clocks`]) | 3n + 2 | TPass, n x (TAddr, TWait, TData), TCheck; passes = bit length of the median excess + 1 (1 to 49); then TSet 1 |
 //! | weights | 4n + 1 | n x (WAddr, WWait, WData, WIdx), BestCheck; + 16 when the best particle beats the best so far (BestRec, BestAddr, 7 x (BestWait, BestData)) |
 //! | estimate, spread: per parameter ([`sum_clocks`]) | 23n + 51 | SumBegin, n x (SumAddr, SumWait, SumData, SumMul, 19 SumDiv), SumDivGo, 49 SumDivWait; 7 parameters each: 14 (23n + 51) |

@@ -283,6 +283,13 @@ impl SequencerModel {
         let mut div_go = false;
         let div_n_in = acc_abs;
 
+        // The pipeline's results, taken in any state (the kernel's order).
+        n.maxd = maxd_next;
+        if i.cost_valid {
+            n.costr = cost_in;
+            n.inflight = false;
+        }
+
         // ---- Configuration writes.
         if i.cfg_we {
             let a = cfg_addr as usize;
@@ -325,6 +332,8 @@ impl SequencerModel {
                     n.rng = if r.seed == 0 { 1 } else { r.seed };
                     n.run_r = true;
                     n.fin_r = false;
+                    n.inflight = false;
+                    n.havep = false;
                     // Nothing evaluated yet: Status reports no best cost (not the last run's).
                     n.best_cost_r = m(48);
                     n.iter_done = 0;
@@ -437,9 +446,7 @@ impl SequencerModel {
                 }
             }
             S::EvWait => {
-                n.maxd = maxd_next;
                 if i.cost_valid {
-                    n.costr = cost_in;
                     n.state = r.ret2;
                 }
             }
@@ -495,27 +502,45 @@ impl SequencerModel {
                     n.pd = 0;
                     n.pa = (r.pa + 2) & m(12);
                     n.cj = 0;
-                    n.ret = S::EvStart;
-                    n.ret2 = S::PartStore;
+                    n.ret = S::EvSync;
                     n.state = S::CorInit;
                 } else {
                     n.state = S::PropAddr;
                 }
             }
+            S::EvSync => {
+                if !r.inflight {
+                    if r.havep {
+                        n.state = S::PartStore;
+                    } else if r.i == r.n_part {
+                        n.p = 0;
+                        n.mask = 0;
+                        n.state = S::TPass;
+                    } else {
+                        n.state = S::EvLaunch;
+                    }
+                }
+            }
+            S::EvLaunch => {
+                if i.nn_ready {
+                    n.start_r = true;
+                    n.maxd = 0;
+                    n.inflight = true;
+                    n.havep = true;
+                    n.ie = r.i;
+                    n.i = (r.i + 1) & m(9);
+                    n.state = if last(r.i) { S::EvSync } else { S::PropAddr };
+                }
+            }
             S::PartStore => {
                 cram_w.we = true;
+                cram_w.addr = (r.ie & m(8)) as usize;
                 if r.costr < r.cmin {
                     n.cmin = r.costr;
-                    n.imin = r.i & m(8);
+                    n.imin = r.ie & m(8);
                 }
-                n.i = (r.i + 1) & m(9);
-                if last(r.i) {
-                    n.p = 0;
-                    n.mask = 0;
-                    n.state = S::TPass;
-                } else {
-                    n.state = S::PropAddr;
-                }
+                n.havep = false;
+                n.state = S::EvSync;
             }
             // ---- Temperature.
             S::TPass => {

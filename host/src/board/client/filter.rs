@@ -214,7 +214,9 @@ pub fn run_clocks_bound(particles: u16, iterations: u16, scan_points: usize, mod
     let eval = 1 + clocks_per_particle(scan_points, model_points, lanes.max(1));
     let shape = |last: bool| IterationShape {
         particles: n,
-        eval_clocks: (n + 1) * eval,
+        // The particles' evaluations overlap the next particle's propagation: at most each
+        // evaluation plus four clocks of launch, synchronisation and store.
+        eval_clocks: (n + 1) * eval + 4 * n,
         temper_passes: 49,
         best_copied: true,
         resample_advances: (!last).then_some(n.saturating_sub(1)),

@@ -8,7 +8,7 @@ impl Logic for PfSequencer {
         dff_setup!(self, clock, n_part, n_iter, tq, seed, thr_cost, thr_max, state, ret, ret2, rng, k, iter_done);
         dff_setup!(self, clock, run_r, fin_r, first, half, i, j, pd, spread, pa, cra, wra, x_r, off, start_r, pose_r);
         dff_setup!(self, clock, maxd, costr, cmin, imin, best_cost_r, best_max_r, p, mask, cnt, w_sum, acc);
-        dff_setup!(self, clock, cj);
+        dff_setup!(self, clock, cj, ie, inflight, havep);
         self.pram.read_clock.next = self.clock.val();
         self.pram.write_clock.next = self.clock.val();
         self.cram.read_clock.next = self.clock.val();
@@ -98,6 +98,13 @@ impl Logic for PfSequencer {
         if self.nn_valid.val() && (self.nn_dist.val() > self.maxd.q.val()) {
             self.maxd_next.next = self.nn_dist.val();
         }
+        // The pipeline's results are taken in any state (an evaluation runs while the next
+        // particle is propagated): the largest distance, the cost, the end of the flight.
+        self.maxd.d.next = self.maxd_next.val();
+        if self.cost_valid.val() {
+            self.costr.d.next = self.cost.val();
+            self.inflight.d.next = false;
+        }
         self.resample.clock.next = self.clock.val();
         self.resample.clear.next = false;
         self.resample.set_pointer.next = false;
@@ -174,6 +181,8 @@ impl Logic for PfSequencer {
                     }
                     self.run_r.d.next = true;
                     self.fin_r.d.next = false;
+                    self.inflight.d.next = false;
+                    self.havep.d.next = false;
                     // Nothing evaluated yet: Status reports no best cost (not the last run's).
                     self.best_cost_r.d.next = self.all48.val();
                     self.iter_done.d.next = 0.into();
@@ -268,9 +277,8 @@ impl Logic for PfSequencer {
                 }
             }
             SeqState::EvWait => {
-                self.maxd.d.next = self.maxd_next.val();
+                // (The cost and the largest distance are taken above, in any state.)
                 if self.cost_valid.val() {
-                    self.costr.d.next = self.cost.val();
                     self.state.d.next = self.ret2.q.val();
                 }
             }
@@ -318,27 +326,49 @@ impl Logic for PfSequencer {
                     self.pd.d.next = 0.into();
                     self.pa.d.next = self.pa.q.val() + 2;
                     self.cj.d.next = 0.into();
-                    self.ret.d.next = SeqState::EvStart;
-                    self.ret2.d.next = SeqState::PartStore;
+                    self.ret.d.next = SeqState::EvSync;
                     self.state.d.next = SeqState::CorInit;
                 } else {
                     self.state.d.next = SeqState::PropAddr;
                 }
             }
+            SeqState::EvSync => {
+                if !self.inflight.q.val() {
+                    if self.havep.q.val() {
+                        self.state.d.next = SeqState::PartStore;
+                    } else if self.i.q.val() == self.n_part.q.val() {
+                        self.p.d.next = 0.into();
+                        self.mask.d.next = 0.into();
+                        self.state.d.next = SeqState::TPass;
+                    } else {
+                        self.state.d.next = SeqState::EvLaunch;
+                    }
+                }
+            }
+            SeqState::EvLaunch => {
+                if self.nn_ready.val() {
+                    self.start_r.d.next = true;
+                    self.maxd.d.next = 0.into();
+                    self.inflight.d.next = true;
+                    self.havep.d.next = true;
+                    self.ie.d.next = self.i.q.val();
+                    self.i.d.next = self.i.q.val() + 1;
+                    if (self.i.q.val() + 1) == self.n_part.q.val() {
+                        self.state.d.next = SeqState::EvSync;
+                    } else {
+                        self.state.d.next = SeqState::PropAddr;
+                    }
+                }
+            }
             SeqState::PartStore => {
                 self.cram.write_enable.next = true;
+                self.cram.write_address.next = self.ie.q.val().get_bits::<8>(0);
                 if self.costr.q.val() < self.cmin.q.val() {
                     self.cmin.d.next = self.costr.q.val();
-                    self.imin.d.next = self.i.q.val().get_bits::<8>(0);
+                    self.imin.d.next = self.ie.q.val().get_bits::<8>(0);
                 }
-                self.i.d.next = self.i.q.val() + 1;
-                if (self.i.q.val() + 1) == self.n_part.q.val() {
-                    self.p.d.next = 0.into();
-                    self.mask.d.next = 0.into();
-                    self.state.d.next = SeqState::TPass;
-                } else {
-                    self.state.d.next = SeqState::PropAddr;
-                }
+                self.havep.d.next = false;
+                self.state.d.next = SeqState::EvSync;
             }
             // ---- Temperature: the bit length of the excess of rank n / 2.
             SeqState::TPass => {

@@ -122,6 +122,12 @@ pub struct PfSequencer {
     first: DFF<Bit>,
     half: DFF<Bits<1>>,
     i: DFF<Bits<9>>,
+    /// The particle whose evaluation is in flight or awaits its store.
+    ie: DFF<Bits<9>>,
+    /// An evaluation started by `EvLaunch` has not delivered its cost yet.
+    inflight: DFF<Bit>,
+    /// A delivered evaluation awaits its store (`PartStore`).
+    havep: DFF<Bit>,
     j: DFF<Bits<9>>,
     pd: DFF<Bits<3>>,
     spread: DFF<Bit>,
@@ -228,6 +234,9 @@ impl PfSequencer {
             first: Default::default(),
             half: Default::default(),
             i: Default::default(),
+            ie: Default::default(),
+            inflight: Default::default(),
+            havep: Default::default(),
             j: Default::default(),
             pd: Default::default(),
             spread: Default::default(),
