@@ -107,7 +107,10 @@ fn check_line(period: BitPeriod, line: &[bool]) -> Result<Vec<u8>, String> {
             }
             if let Some(w) = want {
                 if v != w {
-                    return Err(format!("{} bit {t} clocks after the start edge at {s} is {v}", ["start", "stop"][bit / 9]));
+                    return Err(format!(
+                        "{} bit {t} clocks after the start edge at {s} is {v}",
+                        ["start", "stop"][bit / 9]
+                    ));
                 }
             }
             if middle && (1..=8).contains(&bit) && v {
@@ -181,7 +184,8 @@ fn receive(period: BitPeriod, line: Vec<bool>) -> (Vec<u8>, usize) {
     r
 }
 
-const PERIODS: [(u32, u32); 4] = [(50_000_000, 3_000_000), (50_000_000, 921_600), (45_000_000, 10_000_000), (100_000_000, 25_000_000)];
+const PERIODS: [(u32, u32); 4] =
+    [(50_000_000, 3_000_000), (50_000_000, 921_600), (45_000_000, 10_000_000), (100_000_000, 25_000_000)];
 
 #[test]
 fn the_transmitter_places_every_edge_within_a_clock_of_the_exact_time() {
@@ -190,7 +194,8 @@ fn the_transmitter_places_every_edge_within_a_clock_of_the_exact_time() {
         let n = if period.clocks > 1000 { 60 } else { 300 };
         let data = bytes(n, 7 + k as u64);
         let line = transmit(period, &data);
-        let got = check_line(period, &line).unwrap_or_else(|e| panic!("{hz} Hz, {baud} baud ({period} clocks a bit): {e}"));
+        let got =
+            check_line(period, &line).unwrap_or_else(|e| panic!("{hz} Hz, {baud} baud ({period} clocks a bit): {e}"));
         assert_eq!(got, data, "{hz} Hz, {baud} baud: the bytes read back at the exact bit middles");
         // Back to back: at most a clock more than 10 exact bits a byte (the stop bit's end
         // rounds up, the next start waits a clock for `busy`), so nothing accumulates.

@@ -81,7 +81,10 @@ fn ucf_pins_every_port_of_the_board_top() {
     let (ok, stdout, stderr) = generate(&dir, &[]);
     assert!(ok, "{stdout}\n{stderr}");
     assert!(stdout.contains("board_verilog(BoardConfig { lanes: 1, clock_hz: 50000000, baud: 3000000 })"), "{stdout}");
-    assert!(stdout.contains("UART: 3000000 baud at 50000000 Hz: 16 2/3 clocks per bit (50/3), exact on average"), "{stdout}");
+    assert!(
+        stdout.contains("UART: 3000000 baud at 50000000 Hz: 16 2/3 clocks per bit (50/3), exact on average"),
+        "{stdout}"
+    );
     let ucf = read(&dir.join(UCF_FILE));
     let ports = top_ports(&read(&dir.join(VERILOG_FILE)), TOP).unwrap();
     let names: Vec<&str> = ports.iter().map(|p| p.name.as_str()).collect();

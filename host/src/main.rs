@@ -7,7 +7,6 @@
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
 use pficp::board::BoardClient;
-use pficp_fpga::messages::Identity;
 use pficp::cli::{Inputs, Provenance, RegisterReport, Settings};
 use pficp::cloud::Cloud;
 use pficp::datasets::{self, ModelId, Sampling, ScanSpec};
@@ -18,6 +17,7 @@ use pficp::pf_icp::PfIcpSettings;
 use pficp::progress::{self, note, Progress};
 use pficp::registration::methods::Method;
 use pficp::request::{BoardProgress, BoardRun, Engine, Registered, Request};
+use pficp_fpga::messages::Identity;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 

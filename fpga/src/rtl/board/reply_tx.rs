@@ -5,8 +5,8 @@
 //! block's bytes, exactly as `protocol::cobs_encode`.
 
 use super::crc::Crc16Serial;
-use crate::board::BitPeriod;
 use super::uart::UartTx;
+use crate::board::BitPeriod;
 use rust_hdl::prelude::*;
 
 /// Sender states.
