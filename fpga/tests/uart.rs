@@ -133,7 +133,7 @@ fn host_line(host: BitPeriod, data: &[u8], gaps: bool, seed: u64) -> Vec<bool> {
     let mut starts = Vec::new();
     let mut t = 5 * d + d / 3;
     for _ in data {
-        if gaps && lcg(&mut s) % 3 == 0 {
+        if gaps && lcg(&mut s).is_multiple_of(3) {
             // An idle gap of up to 3 bits, any fraction of a clock.
             t += lcg(&mut s) % (3 * n);
         }
