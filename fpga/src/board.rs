@@ -1,6 +1,14 @@
 //! The board: its generation parameters and (below) the byte-level reference of the whole
 //! board (docs/protocol.md): given the bytes in, the bytes out.
 
+/// The generated board's nominal UART baud rate: 3 Mbaud, what common USB-serial bridges
+/// (FT232R, CP2102N, CH340) reach. The host opens the port at this rate first.
+pub const DEFAULT_BAUD: u32 = 3_000_000;
+
+/// The widest UART bit period the RTL's phase accumulator holds: the reduced period's
+/// `2 clocks` must fit [`PHASE_BITS`] bits.
+pub const PHASE_BITS: u32 = 24;
+
 /// What a board is generated with.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct BoardConfig {
@@ -8,32 +16,103 @@ pub struct BoardConfig {
     pub lanes: usize,
     /// Design clock in Hz (the oscillator; no DCM).
     pub clock_hz: u32,
-    /// Nominal UART baud rate.
+    /// UART baud rate; the bit timing is exact on average ([`BitPeriod`]).
     pub baud: u32,
 }
 
 /// The default board: 16 lanes, the design clock straight from the default pin map's 50 MHz
-/// oscillator (constraints/pinmap.toml: no DCM), 921,600 baud (54 clocks per bit). This is
-/// the board `hdl-gen` generates and `pficp-sim-board` serves.
+/// oscillator (constraints/pinmap.toml: no DCM), [`DEFAULT_BAUD`] (16 2/3 clocks per bit).
+/// This is the board `hdl-gen` generates and `pficp-sim-board` serves.
 impl Default for BoardConfig {
     fn default() -> Self {
-        BoardConfig { lanes: 16, clock_hz: 50_000_000, baud: 921_600 }
+        BoardConfig { lanes: 16, clock_hz: 50_000_000, baud: DEFAULT_BAUD }
     }
 }
 
 impl BoardConfig {
     /// The board the co-simulation's fault and fuzz tests use: 4 lanes and 4 clocks per
-    /// UART bit (25 Mbaud at 100 MHz), 27 times faster on the wire than the default.
+    /// UART bit (25 Mbaud at 100 MHz), 8 1/3 times faster on the wire than the default.
     pub const FAST_SIM: BoardConfig = BoardConfig { lanes: 4, clock_hz: 100_000_000, baud: 25_000_000 };
 
-    /// Clocks per UART bit: `round(clock_hz / baud)`.
-    pub fn bit_clocks(&self) -> u32 {
-        ((self.clock_hz as u64 + self.baud as u64 / 2) / self.baud as u64) as u32
+    /// The UART's bit period, `clock_hz / baud` clocks as a reduced fraction (the one
+    /// place the UARTs and the simulated host take their timing from).
+    pub fn bit_period(&self) -> BitPeriod {
+        BitPeriod::new(self.clock_hz, self.baud)
     }
 
-    /// The baud rate the board really runs at (`clock_hz / bit_clocks`).
-    pub fn actual_baud(&self) -> f64 {
-        self.clock_hz as f64 / self.bit_clocks() as f64
+    /// Why the RTL's UART cannot run at this clock and baud, if it cannot: fewer than 4
+    /// clocks per bit, or a reduced period too wide for the phase accumulator.
+    pub fn uart_problem(&self) -> Option<String> {
+        if self.baud == 0 || self.clock_hz == 0 {
+            return Some(format!("a UART at {} baud and {} Hz", self.baud, self.clock_hz));
+        }
+        let p = self.bit_period();
+        if (p.clocks as u64) < 4 * p.bits as u64 {
+            return Some(format!(
+                "{} baud is too fast for a {} Hz clock: the UART needs at least 4 clocks per bit",
+                self.baud, self.clock_hz
+            ));
+        }
+        if 2 * p.clocks as u64 >= 1 << PHASE_BITS {
+            return Some(format!(
+                "{} baud at {} Hz: the bit period {}/{} clocks does not reduce enough for the UART's \
+                 {PHASE_BITS}-bit phase (its numerator must be below {}; a baud rate sharing more factors \
+                 with the clock, e.g. a multiple of 100, does)",
+                self.baud,
+                self.clock_hz,
+                p.clocks,
+                p.bits,
+                1u32 << (PHASE_BITS - 1)
+            ));
+        }
+        None
+    }
+}
+
+/// A UART bit period of `clocks / bits` clocks (a reduced fraction: `clock_hz / baud`
+/// divided by their greatest common divisor). The RTL's UARTs place the `k`-th bit boundary
+/// after a start edge at clock `ceil(k clocks / bits)`: within one clock of the exact time,
+/// and the error never accumulates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BitPeriod {
+    /// Clocks (numerator).
+    pub clocks: u32,
+    /// Bits (denominator).
+    pub bits: u32,
+}
+
+impl BitPeriod {
+    /// `clock_hz / baud`, reduced (both nonzero).
+    pub fn new(clock_hz: u32, baud: u32) -> BitPeriod {
+        assert!(clock_hz > 0 && baud > 0, "a bit period of {clock_hz} / {baud} clocks");
+        let (mut a, mut b) = (clock_hz, baud);
+        while b != 0 {
+            (a, b) = (b, a % b);
+        }
+        BitPeriod { clocks: clock_hz / a, bits: baud / a }
+    }
+
+    /// Clocks per bit.
+    pub fn clocks_per_bit(&self) -> f64 {
+        self.clocks as f64 / self.bits as f64
+    }
+
+    /// Whole clocks in `k` bits, rounded up (the clock of the `k`-th bit boundary after a
+    /// start edge at clock 0).
+    pub fn boundary(&self, k: u64) -> u64 {
+        (k * self.clocks as u64).div_ceil(self.bits as u64)
+    }
+}
+
+impl std::fmt::Display for BitPeriod {
+    /// `16 2/3` (or `4` when whole).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let (whole, rest) = (self.clocks / self.bits, self.clocks % self.bits);
+        if rest == 0 {
+            write!(f, "{whole}")
+        } else {
+            write!(f, "{whole} {rest}/{}", self.bits)
+        }
     }
 }
 

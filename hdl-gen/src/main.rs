@@ -43,7 +43,9 @@ struct Cli {
     /// pin map's frequency_hz [default: the pin map's (50 MHz on the committed map)].
     #[arg(long, value_name = "HZ")]
     clock_hz: Option<u32>,
-    /// The board's UART baud rate [default: 921600].
+    /// The board's UART baud rate, at least 4 clocks per bit; the bit timing is exact on
+    /// average at any rate whose bit period `clock / baud` reduces to a numerator below 2^23
+    /// (every common rate) [default: 3000000].
     #[arg(long, value_name = "BAUD")]
     baud: Option<u32>,
     /// Skip the Verilator lint.
@@ -156,12 +158,8 @@ fn board_config(cli: &Cli, map: &PinMap) -> Result<BoardConfig> {
     };
     map.check_clock(clock_hz as u64)?;
     let config = BoardConfig { lanes: cli.lanes, clock_hz, baud: cli.baud.unwrap_or(BoardConfig::default().baud) };
-    if config.baud == 0 || config.bit_clocks() < 4 {
-        bail!(
-            "--baud {} is too fast for a {} Hz clock: the UART needs at least 4 clocks per bit",
-            config.baud,
-            config.clock_hz
-        );
+    if let Some(problem) = config.uart_problem() {
+        bail!("--baud {}: {problem}", config.baud);
     }
     Ok(config)
 }
@@ -199,13 +197,11 @@ fn run(cli: &Cli) -> Result<()> {
     let path = write_verilog(&verilog, &cli.out)?;
     println!("wrote {} ({source})", path.display());
     if board {
+        let period = config.bit_period();
         println!(
-            "UART: {} clocks per bit at {} Hz: {:.0} baud ({:+.2} % from {})",
-            config.bit_clocks(),
-            config.clock_hz,
-            config.actual_baud(),
-            (config.actual_baud() / config.baud as f64 - 1.0) * 100.0,
-            config.baud
+            "UART: {} baud at {} Hz: {period} clocks per bit ({}/{}), exact on average (every bit \
+             boundary within one clock of its exact time)",
+            config.baud, config.clock_hz, period.clocks, period.bits
         );
     }
     match &map {

@@ -80,7 +80,11 @@ fn ucf_pins_every_port_of_the_board_top() {
     let dir = fresh_dir("constraints-every-port");
     let (ok, stdout, stderr) = generate(&dir, &[]);
     assert!(ok, "{stdout}\n{stderr}");
-    assert!(stdout.contains("board_verilog(BoardConfig { lanes: 1, clock_hz: 50000000, baud: 921600 })"), "{stdout}");
+    assert!(stdout.contains("board_verilog(BoardConfig { lanes: 1, clock_hz: 50000000, baud: 3000000 })"), "{stdout}");
+    assert!(
+        stdout.contains("UART: 3000000 baud at 50000000 Hz: 16 2/3 clocks per bit (50/3), exact on average"),
+        "{stdout}"
+    );
     let ucf = read(&dir.join(UCF_FILE));
     let ports = top_ports(&read(&dir.join(VERILOG_FILE)), TOP).unwrap();
     let names: Vec<&str> = ports.iter().map(|p| p.name.as_str()).collect();
@@ -115,7 +119,7 @@ fn period_follows_the_clock() {
         generate(&out, &["--pinmap", map.to_str().unwrap(), "--clock-hz", "100000000", "--baud", "115200"]);
     assert!(ok, "{stdout}\n{stderr}");
     assert!(stdout.contains("clock_hz: 100000000, baud: 115200"), "{stdout}");
-    assert!(stdout.contains("UART: 868 clocks per bit at 100000000 Hz"), "{stdout}");
+    assert!(stdout.contains("UART: 115200 baud at 100000000 Hz: 868 1/18 clocks per bit (15625/18)"), "{stdout}");
     let ucf = read(&out.join(UCF_FILE));
     assert!(ucf.contains("TIMESPEC \"TS_clock\" = PERIOD \"clock\" 10 ns HIGH 50%;  # 100000000 Hz"), "{ucf}");
     assert!(ucf.contains(&format!("from the pin map {}", map.display())), "{ucf}");
@@ -123,7 +127,7 @@ fn period_follows_the_clock() {
     let out2 = dir.join("out2");
     let (ok, stdout, _) = generate(&out2, &["--pinmap", map.to_str().unwrap()]);
     assert!(ok);
-    assert!(stdout.contains("clock_hz: 100000000, baud: 921600"), "{stdout}");
+    assert!(stdout.contains("clock_hz: 100000000, baud: 3000000"), "{stdout}");
     assert!(read(&out2.join(UCF_FILE)).contains("PERIOD \"clock\" 10 ns"));
 }
 
@@ -138,6 +142,10 @@ fn clock_other_than_the_oscillator_is_refused() {
     let (ok, _, stderr) = generate(&dir, &["--baud", "20000000"]);
     assert!(!ok);
     assert!(stderr.contains("at least 4 clocks per bit"), "{stderr}");
+    // A rate whose bit period does not reduce enough for the UART's phase accumulator.
+    let (ok, _, stderr) = generate(&dir, &["--baud", "3000001"]);
+    assert!(!ok);
+    assert!(stderr.contains("--baud 3000001") && stderr.contains("50000000/3000001"), "{stderr}");
 }
 
 #[test]

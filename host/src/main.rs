@@ -17,6 +17,7 @@ use pficp::pf_icp::PfIcpSettings;
 use pficp::progress::{self, note, Progress};
 use pficp::registration::methods::Method;
 use pficp::request::{BoardProgress, BoardRun, Engine, Registered, Request};
+use pficp_fpga::messages::Identity;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -65,24 +66,26 @@ enum BoardCommand {
 
 #[derive(clap::Args)]
 struct LinkArgs {
-    /// Serial line baud rate (the board's is set when it is generated).
-    #[arg(long, default_value_t = pficp::board::DEFAULT_BAUD)]
-    baud: u32,
+    /// Serial line baud rate (the board's is set when it is generated) [default: the rate the
+    /// board answers Identify at, trying 3000000, 921600, then 115200].
+    #[arg(long)]
+    baud: Option<u32>,
     /// Time allowed per reply in milliseconds (plus the board's modelled transfer and compute time).
     #[arg(long, default_value_t = pficp::board::DEFAULT_TIMEOUT.as_millis() as u64)]
     timeout_ms: u64,
 }
 
 impl LinkArgs {
-    fn open(&self, port: &str) -> Result<BoardClient> {
+    /// Open the port and identify the board (at --baud, or at the rate it answers).
+    fn connect(&self, port: &str) -> Result<(BoardClient, Identity)> {
         use pficp::board::{MAX_BAUD, MAX_TIMEOUT, MIN_BAUD};
         if self.timeout_ms == 0 || self.timeout_ms > MAX_TIMEOUT.as_millis() as u64 {
             bail!("--timeout-ms {}: must be 1 to {}", self.timeout_ms, MAX_TIMEOUT.as_millis());
         }
-        if !(MIN_BAUD..=MAX_BAUD).contains(&self.baud) {
-            bail!("--baud {}: the client runs {MIN_BAUD} to {MAX_BAUD} baud", self.baud);
+        if let Some(baud) = self.baud.filter(|b| !(MIN_BAUD..=MAX_BAUD).contains(b)) {
+            bail!("--baud {baud}: the client runs {MIN_BAUD} to {MAX_BAUD} baud");
         }
-        Ok(BoardClient::open(port, self.baud, Duration::from_millis(self.timeout_ms))?)
+        Ok(BoardClient::connect(port, self.baud, Duration::from_millis(self.timeout_ms))?)
     }
 }
 
@@ -426,9 +429,11 @@ fn register(a: &RegisterArgs) -> Result<()> {
     // Open the port before the work starts: a missing or silent board fails at once.
     let mut client = match &a.board {
         Some(port) => {
-            let mut c = a.link.open(port)?;
-            let id = c.identify()?;
-            note(format_args!("board on {port}: protocol {}, {} lanes at {} Hz", id.version, id.lanes, id.clock_hz));
+            let (c, id) = a.link.connect(port)?;
+            note(format_args!(
+                "board on {port}: protocol {}, {} lanes at {} Hz, {} baud",
+                id.version, id.lanes, id.clock_hz, id.baud
+            ));
             Some(c)
         }
         None => None,
@@ -549,8 +554,7 @@ fn on_board_progress() -> impl FnMut(pficp::board::on_board::OnBoardStep, usize,
 }
 
 fn board_info(a: &BoardInfoArgs) -> Result<()> {
-    let mut client = a.link.open(&a.port)?;
-    let id = client.identify()?;
+    let (_client, id) = a.link.connect(&a.port)?;
     print!("{}", pficp::board::identity_text(&a.port, &id));
     Ok(())
 }

@@ -6,7 +6,7 @@
 mod support;
 
 use pficp::board::{host_driven, Upload};
-use pficp::board::{BoardClient, BoardError, MAX_RETRIES};
+use pficp::board::{BoardClient, BoardError, DEFAULT_BAUD, MAX_RETRIES, PROBE_BAUDS};
 use pficp::cloud::bbox_diagonal;
 use pficp::datasets::{make, ModelId, Sampling, ScanSpec};
 use pficp::nn::NearestNeighbours;
@@ -19,7 +19,7 @@ use pficp_fpga::pipeline::evaluate;
 use pficp_fpga::protocol::{Command, ErrorCode, Frame};
 use pficp_fpga::weights::weights;
 use std::time::{Duration, Instant};
-use support::{cloud, loaded, poses, reference_handler, upload, PtyBoard};
+use support::{cloud, loaded, poses, reference_handler, uart_resample, upload, PtyBoard};
 
 #[test]
 fn identify_reports_the_reference_board() {
@@ -216,17 +216,86 @@ fn a_board_that_goes_away_mid_transfer_is_a_clear_error() {
 
 #[test]
 fn a_missing_port_is_named() {
-    let e = BoardClient::open("/dev/does-not-exist-pficp", 921_600, Duration::from_secs(1)).unwrap_err();
+    let e = BoardClient::open("/dev/does-not-exist-pficp", DEFAULT_BAUD, Duration::from_secs(1)).unwrap_err();
     assert!(matches!(e, BoardError::Open { .. }), "{e:?}");
     assert!(e.to_string().contains("/dev/does-not-exist-pficp"), "{e}");
-    let e = BoardClient::open("/dev/null", 921_600, Duration::from_secs(1)).unwrap_err();
+    let e = BoardClient::open("/dev/null", DEFAULT_BAUD, Duration::from_secs(1)).unwrap_err();
     assert!(e.to_string().contains("/dev/null"), "{e}");
+}
+
+/// The line model the rate tests rely on: a UART reads a line at its own rate, within a few
+/// per cent, and not at another common rate.
+#[test]
+fn the_line_model_reads_only_at_the_right_rate() {
+    let bytes: Vec<u8> = (0..=255).collect();
+    assert_eq!(uart_resample(&bytes, 921_600, 921_600), bytes);
+    assert_eq!(uart_resample(&bytes, 3_000_000, 3_060_000), bytes);
+    assert_eq!(uart_resample(&bytes, 3_000_000, 2_940_000), bytes);
+    for (from, to) in [(3_000_000, 921_600), (921_600, 3_000_000), (921_600, 115_200), (115_200, 3_000_000)] {
+        let got = uart_resample(&bytes, from, to);
+        assert!(got.len() < 200 || got.iter().zip(&bytes).filter(|(a, b)| a == b).count() < 50, "{from} -> {to}");
+    }
+}
+
+/// Without a rate the client opens the port at each rate of PROBE_BAUDS in turn and uses the
+/// one Identify answers at; the board's line keeps the rate (`reference_at_rate`), so a
+/// wrong rate really gets no valid reply.
+#[test]
+fn without_a_baud_rate_the_client_uses_the_rate_the_board_answers_at() {
+    assert_eq!(PROBE_BAUDS, [BoardConfig::default().baud, 921_600, 115_200]);
+    let timeout = Duration::from_millis(300);
+    for baud in PROBE_BAUDS {
+        let board = PtyBoard::reference_at_rate(BoardConfig { baud, ..BoardConfig::default() });
+        let start = Instant::now();
+        let (mut client, id) = BoardClient::connect(&board.path, None, timeout).unwrap();
+        let took = start.elapsed();
+        assert_eq!((client.baud(), id.baud), (baud, baud));
+        // The rates before it were tried first (each a timeout or failed attempts long).
+        let before = PROBE_BAUDS.iter().position(|&b| b == baud).unwrap() as u32;
+        assert!(took >= timeout * before, "{baud} baud found after {took:?}");
+        // The client works at that rate.
+        client.load_model(&cloud(300, 1), |_, _| {}).unwrap();
+    }
+    // With a rate, that rate only.
+    let board = PtyBoard::reference_at_rate(BoardConfig { baud: 921_600, ..BoardConfig::default() });
+    let e = BoardClient::connect(&board.path, Some(DEFAULT_BAUD), timeout).unwrap_err();
+    assert!(matches!(e, BoardError::Timeout { .. } | BoardError::Retries { .. }), "{e:?}");
+    let (client, _) = BoardClient::connect(&board.path, Some(921_600), timeout).unwrap();
+    assert_eq!(client.baud(), 921_600);
+}
+
+#[test]
+fn a_board_at_no_probed_rate_is_an_error_naming_the_rates_tried() {
+    let board = PtyBoard::reference_at_rate(BoardConfig { baud: 57_600, ..BoardConfig::default() });
+    let e = BoardClient::connect(&board.path, None, Duration::from_millis(300)).unwrap_err();
+    assert!(matches!(e, BoardError::NoAnswer { .. }), "{e:?}");
+    let text = e.to_string();
+    assert!(!text.contains('\n') && text.contains(&board.path), "{text}");
+    let at = |b: &str| text.find(b).unwrap_or_else(|| panic!("{b} not in {text}"));
+    assert!(at("3000000 (") < at("921600 (") && at("921600 (") < at("115200 ("), "{text}");
+    // A silent line: the same, each rate a timeout.
+    let board = PtyBoard::serve(Box::new(|_| Some(Vec::new())));
+    let e = BoardClient::connect(&board.path, None, Duration::from_millis(200)).unwrap_err();
+    assert!(e.to_string().contains("115200 (no reply within"), "{e}");
+}
+
+/// A line that ignores the rate (a pseudo-terminal) to a board generated for another: the
+/// probe's first rate answers, but the board says it runs at its own; refused.
+#[test]
+fn a_board_that_reports_another_rate_than_it_answered_at_is_refused() {
+    let board = PtyBoard::reference_of(BoardConfig { baud: 2_000_000, ..BoardConfig::default() });
+    let e = BoardClient::connect(&board.path, None, Duration::from_secs(1)).unwrap_err();
+    assert!(matches!(e, BoardError::BaudMismatch { opened: DEFAULT_BAUD, reported: 2_000_000, .. }), "{e:?}");
+    assert!(e.to_string().contains("--baud 2000000"), "{e}");
+    // Given its rate, it is used.
+    let (_, id) = BoardClient::connect(&board.path, Some(2_000_000), Duration::from_secs(1)).unwrap();
+    assert_eq!(id.baud, 2_000_000);
 }
 
 #[test]
 fn open_by_path_and_identify() {
     let board = PtyBoard::reference();
-    let mut client = BoardClient::open(&board.path, 921_600, Duration::from_secs(2)).unwrap();
+    let mut client = BoardClient::open(&board.path, DEFAULT_BAUD, Duration::from_secs(2)).unwrap();
     assert_eq!(client.identify().unwrap().lanes, BoardConfig::default().lanes as u8);
 }
 

@@ -181,7 +181,8 @@ fn a_silent_board_is_a_clear_error() {
     let board = support::PtyBoard::serve(Box::new(|_| Some(Vec::new())));
     let start = std::time::Instant::now();
     let o = pficp(&["board", "info", "--port", &board.path, "--timeout-ms", "300"]);
-    assert_error(&o, &[&board.path, "did not answer"]);
+    // Every rate of the probe tried, in order.
+    assert_error(&o, &[&board.path, "did not answer", "3000000 (no reply", "921600 (no reply", "115200 (no reply"]);
     assert!(start.elapsed() < std::time::Duration::from_secs(10));
 }
 
@@ -207,9 +208,23 @@ fn board_info_prints_the_identity() {
     let o = pficp(&["board", "info", "--port", &board.path]);
     assert!(o.status.success(), "{}", stderr(&o));
     let out = String::from_utf8(o.stdout).unwrap();
-    for line in ["protocol version  2", "lanes             16", "max particles     256", "baud              921600"] {
+    let baud = format!("baud              {}", pficp::board::DEFAULT_BAUD);
+    for line in ["protocol version  2", "lanes             16", "max particles     256", &baud] {
         assert!(out.contains(line), "{line:?} not in {out}");
     }
+}
+
+/// Without --baud, `pficp` uses the rate the board answers Identify at (the board's line
+/// keeps the rate); with --baud, that rate only.
+#[test]
+fn board_info_follows_the_boards_rate() {
+    let config = pficp_fpga::board::BoardConfig { baud: 921_600, ..Default::default() };
+    let board = support::PtyBoard::reference_at_rate(config);
+    let o = pficp(&["board", "info", "--port", &board.path, "--timeout-ms", "300"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8(o.stdout).unwrap().contains("baud              921600"));
+    let o = pficp(&["board", "info", "--port", &board.path, "--timeout-ms", "300", "--baud", "3000000"]);
+    assert_error(&o, &[&board.path, "did not answer", "3000000 baud"]);
 }
 
 #[test]

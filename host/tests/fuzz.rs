@@ -282,6 +282,8 @@ fn outcome<T>(r: &Result<T, BoardError>) -> &'static str {
         Err(BoardError::RunTimeout { .. }) => "RunTimeout",
         Err(BoardError::Io { .. }) => "Io",
         Err(BoardError::Open { .. }) => "Open",
+        Err(BoardError::NoAnswer { .. }) => "NoAnswer",
+        Err(BoardError::BaudMismatch { .. }) => "BaudMismatch",
     }
 }
 

@@ -1,7 +1,14 @@
-//! The host's end of the Verilated board's serial line, at the board's real bit timing:
-//! [`SerialBoard`] shifts queued bytes onto `uart_rx` (8N1, `bit_clocks` clocks per bit,
-//! back to back), decodes `uart_tx` by sampling each bit in its middle, and optionally runs
-//! the byte-level reference ([`BoardModel`]) beside it. With the reference:
+//! The host's end of the Verilated board's serial line, at the nominal bit timing:
+//! [`SerialBoard`] shifts queued bytes onto `uart_rx` (8N1, back to back) and decodes
+//! `uart_tx` by sampling each bit in its middle, and optionally runs the byte-level
+//! reference ([`BoardModel`]) beside it.
+//!
+//! The host keeps exact rational time, independently of the RTL's phase accumulator: with
+//! a bit period of `clocks / bits` ([`BitPeriod`]), a byte it starts at time `t` (in
+//! 1/`bits` clock) drives bit `floor((c bits - t) / clocks)` at clock `c`, and back-to-back
+//! bytes start exactly `10 clocks / bits` apart, so the board sees start edges at every
+//! phase of its clock; a byte from the board is sampled `floor((2 j + 1) clocks / (2 bits))`
+//! clocks after its falling edge (bit `j`, 0 the start bit). With the reference:
 //! - every byte the board sends is compared with the reference's as it arrives, except
 //!   the bytes of a Status reply, which are compared as a whole frame: equal to the
 //!   reference's, or, when the board says "running" (a timeless reference cannot know
@@ -17,7 +24,7 @@
 //! The first difference is a [`ByteMismatch`]; [`SerialBoard::comparison`] returns it,
 //! and [`SerialBoard::expected_pending`] the reference's bytes the board has not sent.
 use crate::{BoardInputs, BoardPins, VerilatedBoard};
-use pficp_fpga::board::{BoardConfig, BoardModel};
+use pficp_fpga::board::{BitPeriod, BoardConfig, BoardModel};
 use pficp_fpga::messages::{RunState, StatusReply};
 use pficp_fpga::protocol::{Command, Frame};
 use std::collections::VecDeque;
@@ -66,24 +73,28 @@ pub const RX_GLOW_CLOCKS: u64 = 1 << 21;
 /// The heartbeat LED's bit of the clock count.
 pub const HEARTBEAT_BIT: u32 = 26;
 
+/// The host's receiver: idle, or in a byte whose falling edge was at clock `edge`, next
+/// sampling bit `j` (0 the start bit, 9 the stop bit), the data so far `v`.
 #[derive(Clone, Copy, Debug)]
 enum RxPhase {
     Idle,
-    Start(u32),
-    Data(u32, u8, u8),
-    Stop(u32, u8),
+    Byte { edge: u64, j: u64, v: u8 },
 }
 
 /// The Verilated board with a serial line on each side and, optionally, the reference.
 pub struct SerialBoard {
     board: VerilatedBoard,
     config: BoardConfig,
-    bit: u32,
+    period: BitPeriod,
+    /// Whole clocks in a bit, rounded up (the slack of the idle and LED rules).
+    bit: u64,
     inputs: BoardInputs,
     outgoing: VecDeque<u8>,
-    /// The byte being shifted out to the board: 10 bits (start, data, stop), bit index,
-    /// clocks left in the bit.
-    shifting: Option<(u16, u32, u32)>,
+    /// The byte being shifted out to the board: 10 bits (start, data, stop) and the time its
+    /// start bit began, in 1/`period.bits` clock.
+    shifting: Option<(u16, u64)>,
+    /// When the last byte's stop bit ended, in 1/`period.bits` clock.
+    line_free: u64,
     rx: RxPhase,
     received: Vec<u8>,
     sent_total: u64,
@@ -117,10 +128,12 @@ impl SerialBoard {
         SerialBoard {
             board,
             config,
-            bit: config.bit_clocks(),
+            period: config.bit_period(),
+            bit: config.bit_period().boundary(1),
             inputs: BoardInputs::default(),
             outgoing: VecDeque::new(),
             shifting: None,
+            line_free: 0,
             rx: RxPhase::Idle,
             received: Vec::new(),
             sent_total: 0,
@@ -206,15 +219,25 @@ impl SerialBoard {
     /// Nothing queued or on either line, and the engine not busy, for at least two bit
     /// periods (a frame's last byte reaches the engine a bit period after its stop bit).
     pub fn idle(&self) -> bool {
-        self.quiet > 2 * self.bit as u64 && self.outgoing.is_empty()
+        self.quiet > 2 * self.bit && self.outgoing.is_empty()
     }
 
     /// One clock.
     pub fn step(&mut self) {
-        // Host -> board.
+        // Host -> board: the line at clock `now`, in exact time (module documentation).
+        let (n, d) = (self.period.clocks as u64, self.period.bits as u64);
+        let now = self.clocks();
+        if let Some((_, start)) = self.shifting {
+            if now * d >= start + 10 * n {
+                self.line_free = start + 10 * n;
+                self.shifting = None;
+            }
+        }
         if self.shifting.is_none() {
             if let Some(b) = self.outgoing.pop_front() {
-                self.shifting = Some(((b as u16) << 1 | 1 << 9, 0, self.bit));
+                // Back to back when the line became free within the last clock.
+                let start = if self.line_free + d > now * d { self.line_free } else { now * d };
+                self.shifting = Some(((b as u16) << 1 | 1 << 9, start));
                 self.sent_total += 1;
                 if let Some(r) = self.reference.as_mut() {
                     self.expected.extend(r.receive(b));
@@ -222,49 +245,27 @@ impl SerialBoard {
             }
         }
         self.inputs.uart_rx = match self.shifting {
-            Some((frame, i, _)) => frame >> i & 1 != 0,
+            Some((frame, start)) => frame >> ((now * d - start) / n) & 1 != 0,
             None => true,
         };
         self.board.set_inputs(&self.inputs);
         self.board.tick();
-        if let Some((frame, i, left)) = self.shifting {
-            self.shifting = if left > 1 {
-                Some((frame, i, left - 1))
-            } else if i < 9 {
-                Some((frame, i + 1, self.bit))
-            } else {
-                None
-            };
-        }
-        // Board -> host.
+        // Board -> host: sample bit j at edge + floor((2 j + 1) n / (2 d)).
         let pins = self.board.pins();
         let line = pins.uart_tx;
-        let half = self.bit / 2;
+        let now = self.clocks();
         self.rx = match self.rx {
-            RxPhase::Idle if !line => RxPhase::Start(half),
-            RxPhase::Idle => RxPhase::Idle,
-            RxPhase::Start(1) => {
-                if line {
+            RxPhase::Idle if !line => RxPhase::Byte { edge: now, j: 0, v: 0 },
+            RxPhase::Byte { edge, j, v } if now == edge + (2 * j + 1) * n / (2 * d) => match j {
+                0 if line => RxPhase::Idle,
+                0 => RxPhase::Byte { edge, j: 1, v },
+                1..=8 => RxPhase::Byte { edge, j: j + 1, v: v | (line as u8) << (j - 1) },
+                _ => {
+                    self.byte_from_board(line.then_some(v));
                     RxPhase::Idle
-                } else {
-                    RxPhase::Data(self.bit, 0, 0)
                 }
-            }
-            RxPhase::Start(n) => RxPhase::Start(n - 1),
-            RxPhase::Data(1, k, v) => {
-                let v = v | (line as u8) << k;
-                if k == 7 {
-                    RxPhase::Stop(self.bit, v)
-                } else {
-                    RxPhase::Data(self.bit, k + 1, v)
-                }
-            }
-            RxPhase::Data(n, k, v) => RxPhase::Data(n - 1, k, v),
-            RxPhase::Stop(1, v) => {
-                self.byte_from_board(line.then_some(v));
-                RxPhase::Idle
-            }
-            RxPhase::Stop(n, v) => RxPhase::Stop(n - 1, v),
+            },
+            rx => rx,
         };
         if self.shifting.is_some() {
             let now = self.clocks();
@@ -404,7 +405,7 @@ impl SerialBoard {
     /// The LEDs against their rule (module documentation), on this clock.
     fn check_leds(&mut self, leds: u8) {
         let now = self.clocks();
-        let bit = self.bit as u64;
+        let bit = self.bit;
         let heartbeat = (now >> HEARTBEAT_BIT) & 1 == 1;
         // Lit for sure: from a bit after a byte's start bit to a bit before its glow ends
         // (the latest byte's, or the glow the byte before left); dark for sure: before any

@@ -82,3 +82,37 @@ fn every_command_matches_the_reference_byte_for_byte() {
     assert!((1..40).contains(&capped), "{capped} of 40 capped");
     eprintln!("{} bytes compared in {} clocks", b.comparison().0, b.clocks());
 }
+
+/// The generated board (16 lanes, 50 MHz, 3 Mbaud: 16 2/3 clocks a bit, the UART's timing
+/// fractional) with the host at the exact nominal timing (`SerialBoard` keeps rational time:
+/// back-to-back bytes start at every phase of the clock): long frames each way, byte for
+/// byte as the reference, the LEDs by their rule.
+#[test]
+fn the_generated_board_at_16_2_3_clocks_a_bit_matches_the_reference() {
+    let config = BoardConfig::default();
+    assert_eq!(config.bit_period().to_string(), "16 2/3");
+    let mut b = SerialBoard::new(config).with_reference();
+    b.run(100);
+    let id = exchange(&mut b, &req(Command::Identify, 1, vec![]));
+    let ident = messages::Identity::decode(&id.data).unwrap();
+    assert_eq!((ident.lanes, ident.baud, ident.clock_hz), (16, pficp_fpga::board::DEFAULT_BAUD, 50_000_000));
+    let mut s = 11;
+    let model = cloud(340, &mut s);
+    let scan = cloud(200, &mut s);
+    let mut seq = 2u8;
+    for (cmd, pts) in [(Command::LoadModel, &model), (Command::LoadScan, &scan)] {
+        for (k, chunk) in pts.chunks(messages::MAX_LOAD_POINTS).enumerate() {
+            let r = exchange(&mut b, &req(cmd, seq, messages::load_request((k * 170) as u16, chunk)));
+            assert_eq!(r.code, cmd as u8 | 0x80);
+            seq += 1;
+        }
+    }
+    exchange(&mut b, &req(Command::SetSizes, seq, messages::two_u16(340, 200)));
+    // The longest reply: 144 results of 7 bytes.
+    let near = NearestRequest { first: 10, count: 144, pose: pose(3) };
+    let r = exchange(&mut b, &req(Command::Nearest, seq + 1, near.encode()));
+    assert_eq!(messages::NearestReply::decode(&r.data, &near).unwrap().results.len(), 144);
+    let (sent, received) = b.byte_counts();
+    assert!(sent > 3_000 && received > 1_000, "{sent} bytes in, {received} out");
+    eprintln!("{} bytes compared in {} clocks", b.comparison().0, b.clocks());
+}

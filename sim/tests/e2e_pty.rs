@@ -1,10 +1,10 @@
 //! End to end: the real host client (`pficp::board`, through the real `serialport` crate)
-//! talks to `pficp-sim-board` (the Verilated board top as hdl-gen generates it: 16 lanes, 50 MHz, 921,600 baud) over a
+//! talks to `pficp-sim-board` (the Verilated board top as hdl-gen generates it: 16 lanes, 50 MHz, 3,000,000 baud) over a
 //! pseudo-terminal. The simulated board runs with `--check`: every byte it sends is
 //! compared with the byte-level reference, and it says so when it stops.
 
-use pficp::board::BoardClient;
 use pficp::board::{host_driven, on_board};
+use pficp::board::{BoardClient, DEFAULT_BAUD};
 use pficp::cloud::bbox_diagonal;
 use pficp::datasets::{make, ModelId, Sampling, ScanSpec};
 use pficp::nn::NearestNeighbours;
@@ -55,7 +55,7 @@ fn register_both(id: ModelId, board: &SimBoard) {
     let settings = PfIcpSettings { clusters: 15, particles: 24, iterations: 12, seed: 5, ..Default::default() };
     let software = pf_icp::register(&nn, &ds.scan, &settings);
     // One client per registration: the port is opened and closed each time, as `pficp` does.
-    let mut client = BoardClient::open(&board.path, 921_600, Duration::from_secs(5)).expect("open the pty");
+    let mut client = BoardClient::open(&board.path, DEFAULT_BAUD, Duration::from_secs(5)).expect("open the pty");
     let t = Instant::now();
     let r =
         host_driven::register(&mut client, &nn, &ds.scan, &settings, &mut |_, _, _| {}).expect("board registration");
@@ -87,9 +87,9 @@ fn register_both(id: ModelId, board: &SimBoard) {
 #[test]
 fn reduced_models_1_and_2_through_the_simulated_board() {
     let board = SimBoard::start();
-    let mut client = BoardClient::open(&board.path, 921_600, Duration::from_secs(5)).unwrap();
-    let id = client.identify().unwrap();
-    assert_eq!((id.lanes, id.baud, id.clock_hz), (16, 921_600, 50_000_000));
+    // No rate given: the client probes and the board answers at the first, its default.
+    let (client, id) = BoardClient::connect(&board.path, None, Duration::from_secs(5)).unwrap();
+    assert_eq!((id.lanes, id.baud, id.clock_hz, client.baud()), (16, DEFAULT_BAUD, 50_000_000, DEFAULT_BAUD));
     drop(client);
     register_both(ModelId::Model1, &board);
     register_both(ModelId::Model2, &board);
@@ -116,7 +116,7 @@ fn register_on_board(id: ModelId, board: &SimBoard) -> bool {
     let settings = PfIcpSettings { particles: 40, iterations: 20, seed: 5, ..Default::default() };
     let software = pf_icp::register(&nn, &ds.scan, &settings);
     // The simulated board runs ~30 times slower than a real one: a long timeout.
-    let mut client = BoardClient::open(&board.path, 921_600, Duration::from_secs(120)).expect("open the pty");
+    let mut client = BoardClient::open(&board.path, DEFAULT_BAUD, Duration::from_secs(120)).expect("open the pty");
     let t = Instant::now();
     let r = on_board::register_on_board(
         &mut client,

@@ -59,8 +59,13 @@ use pficp_fpga::protocol::{Command, Deframer, VERSION};
 use serialport::SerialPort;
 use std::time::Duration;
 
-/// The board's nominal baud rate.
-pub const DEFAULT_BAUD: u32 = 921_600;
+/// The generated board's baud rate (`pficp_fpga::board::DEFAULT_BAUD`), the first the
+/// client tries ([`PROBE_BAUDS`]).
+pub const DEFAULT_BAUD: u32 = pficp_fpga::board::DEFAULT_BAUD;
+/// The rates the client tries, in this order, when it is given none ([`BoardClient::connect`]):
+/// the generated board's default, then 921,600 (the default of earlier boards) and 115,200
+/// (the common rate of USB-serial bridges).
+pub const PROBE_BAUDS: [u32; 3] = [DEFAULT_BAUD, 921_600, 115_200];
 /// The slowest baud rate the client opens a port at (below it a request takes minutes).
 pub const MIN_BAUD: u32 = 9_600;
 /// The fastest baud rate the client opens a port at (above any USB-serial bridge's).
@@ -166,6 +171,44 @@ impl BoardClient {
         client.baud = baud;
         client.timeout = timeout;
         Ok(client)
+    }
+
+    /// Open `path` and identify the board. With `baud`, at that rate only. Without, at each
+    /// rate of [`PROBE_BAUDS`] in turn (the port opened again each time) until Identify gets
+    /// a valid reply, which must report that rate; if none answers,
+    /// [`BoardError::NoAnswer`] naming the rates tried. A port that cannot be opened, that
+    /// fails or echoes, ends the probe at once.
+    pub fn connect(path: &str, baud: Option<u32>, timeout: Duration) -> Result<(Self, Identity), BoardError> {
+        match baud {
+            Some(b) => {
+                let mut client = Self::open(path, b, timeout)?;
+                let id = client.identify()?;
+                Ok((client, id))
+            }
+            None => Self::probe(path, &PROBE_BAUDS, timeout),
+        }
+    }
+
+    /// [`Self::connect`] without a baud rate, trying `bauds` in order.
+    pub fn probe(path: &str, bauds: &[u32], timeout: Duration) -> Result<(Self, Identity), BoardError> {
+        let mut tried = Vec::new();
+        for &baud in bauds {
+            let mut client = Self::open(path, baud, timeout)?;
+            match client.identify() {
+                Ok(id) if id.baud == baud => return Ok((client, id)),
+                Ok(id) => {
+                    return Err(BoardError::BaudMismatch { port: path.to_string(), opened: baud, reported: id.baud })
+                }
+                Err(e @ (BoardError::Open { .. } | BoardError::Io { .. } | BoardError::Echo { .. })) => return Err(e),
+                Err(e) => tried.push((baud, no_answer(&e))),
+            }
+        }
+        Err(BoardError::NoAnswer { port: path.to_string(), tried })
+    }
+
+    /// The baud rate the port was opened at.
+    pub fn baud(&self) -> u32 {
+        self.baud
     }
 
     /// A client on a port opened elsewhere (e.g. one end of a pseudo-terminal), with the
@@ -479,6 +522,18 @@ impl BoardClient {
     /// Lanes for the compute-time model: the board's once identified, else 1 (the slowest).
     fn lanes(&self) -> usize {
         self.identity.map_or(1, |i| i.lanes.max(1) as usize)
+    }
+}
+
+/// Why Identify got no valid reply at one rate of the probe, in a few words.
+fn no_answer(e: &BoardError) -> String {
+    match e {
+        BoardError::Timeout { waited, received: 0, .. } => format!("no reply within {} ms", waited.as_millis()),
+        BoardError::Timeout { waited, received, .. } => {
+            format!("{received} bytes but no valid reply within {} ms", waited.as_millis())
+        }
+        BoardError::Retries { attempts, .. } => format!("no valid reply in {attempts} attempts"),
+        e => e.to_string(),
     }
 }
 

@@ -79,6 +79,33 @@ pub enum BoardError {
         /// The request that came back.
         command: Command,
     },
+    /// Identify got no valid reply at any of the baud rates tried ([`super::BoardClient::connect`]
+    /// without a rate).
+    #[error(
+        "the board on {port} did not answer Identify at any baud rate tried: {} (is it connected and configured? \
+         --baud gives its rate; a board slower than its clock says, such as the simulated one, needs a larger --timeout-ms)",
+        tried.iter().map(|(b, why)| format!("{b} ({why})")).collect::<Vec<_>>().join(", ")
+    )]
+    NoAnswer {
+        /// The port.
+        port: String,
+        /// Each rate tried, in order, and why it gave no answer.
+        tried: Vec<(u32, String)>,
+    },
+    /// Identify answered at one baud rate, but the board says it was generated for another
+    /// (a line that ignores the rate, such as a pseudo-terminal).
+    #[error(
+        "the board on {port} answered Identify at {opened} baud but says it runs at {reported} baud \
+         (a line that ignores the rate?); give --baud {reported}"
+    )]
+    BaudMismatch {
+        /// The port.
+        port: String,
+        /// The rate the port was opened at.
+        opened: u32,
+        /// The rate the board reports.
+        reported: u32,
+    },
     /// The board answered with an error reply.
     #[error("the board answered {command:?} with error {code:?} ({})", *code as u8)]
     Board {

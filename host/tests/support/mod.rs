@@ -7,7 +7,7 @@
 
 use pficp::board::pty::{read_some, PtyBoard as Server};
 use pficp_fpga::board::{BoardConfig, BoardModel};
-use serialport::TTYPort;
+use serialport::{SerialPort, TTYPort};
 use std::io::{ErrorKind, Write};
 use std::time::Duration;
 
@@ -53,10 +53,78 @@ impl PtyBoard {
         PtyBoard::wrap(Server::reference(BoardConfig::default()))
     }
 
+    /// The reference board of `config` on a line that ignores the baud rate (a
+    /// pseudo-terminal), as [`Self::reference`].
+    pub fn reference_of(config: BoardConfig) -> PtyBoard {
+        PtyBoard::wrap(Server::reference(config))
+    }
+
+    /// The reference board of `config` on a line that keeps the baud rate: the rate the
+    /// host set its end to (a pseudo-terminal's two ends share their settings, so the
+    /// board's end reads it) carries the host's bytes to a UART at `config.baud` and the
+    /// board's replies back ([`uart_resample`]): the board understands the host, and the
+    /// host the board, only at `config.baud`, as on a real serial line.
+    pub fn reference_at_rate(config: BoardConfig) -> PtyBoard {
+        let mut board = BoardModel::new(config);
+        let mut buf = [0u8; 4096];
+        PtyBoard::wrap(Server::run(Duration::from_millis(20), move |port: &mut TTYPort| {
+            let n = match read_some(port, &mut buf) {
+                None => return false,
+                Some(0) => return true,
+                Some(n) => n,
+            };
+            let host = port.baud_rate().unwrap_or(0);
+            let out = board.receive_all(&uart_resample(&buf[..n], host, config.baud));
+            let out = uart_resample(&out, config.baud, host);
+            out.is_empty() || port.write_all(&out).is_ok()
+        }))
+    }
+
     /// A client on this line (takes the client's end).
     pub fn client(&mut self) -> pficp::board::BoardClient {
         self.server.client().expect("one client per board")
     }
+}
+
+/// The bytes a UART at `to` baud receives from a line that carries `bytes` back to back at
+/// `from` baud (8N1): it waits for a low line, checks the start bit half a bit later,
+/// samples the data bits in their middles and drops a byte whose stop bit is low. `bytes`
+/// when the rates are equal; at other rates, what a board or a host set to the wrong rate
+/// reads (garbage, or nothing).
+pub fn uart_resample(bytes: &[u8], from: u32, to: u32) -> Vec<u8> {
+    if from == to {
+        return bytes.to_vec();
+    }
+    if from == 0 || to == 0 {
+        return Vec::new();
+    }
+    let bits: Vec<bool> =
+        bytes.iter().flat_map(|&b| (0..10).map(move |i| ((b as u16) << 1 | 1 << 9) >> i & 1 != 0)).collect();
+    let (from, bit) = (from as f64, 1.0 / to as f64);
+    let level = |t: f64| bits.get((t * from).floor() as usize).copied().unwrap_or(true);
+    let end = bits.len() as f64 / from;
+    let (mut out, mut t) = (Vec::new(), 0.0f64);
+    while t < end {
+        // The next start: the line already low, or the next high-to-low boundary.
+        let edge = if !level(t) {
+            t
+        } else {
+            match ((t * from).floor() as usize + 1..bits.len()).find(|&k| !bits[k]) {
+                Some(k) => k as f64 / from,
+                None => break,
+            }
+        };
+        if level(edge + 0.5 * bit) {
+            t = edge + 0.5 * bit;
+            continue;
+        }
+        let v = (1..=8).filter(|&j| level(edge + (j as f64 + 0.5) * bit)).fold(0u8, |v, j| v | 1 << (j - 1));
+        if level(edge + 9.5 * bit) {
+            out.push(v);
+        }
+        t = edge + 9.5 * bit;
+    }
+    out
 }
 
 /// The byte-level reference as a handler.

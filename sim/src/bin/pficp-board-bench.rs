@@ -5,8 +5,8 @@
 //! The registration really runs: the host client talks over a pseudo-terminal to the
 //! byte-level reference (bit-exact with the Verilated board, see sim/tests/e2e_pty.rs),
 //! which gives the exact bytes each way and the number of particle evaluations. The board
-//! time is then modelled at the generated clock: UART = bytes x 10 bits / the real baud
-//! rate (`clock / round(clock / baud)`); compute = per evaluated particle the pipeline's
+//! time is then modelled at the generated clock: UART = bytes x 10 bits / the baud
+//! rate (the board's UART keeps the nominal rate exactly on average); compute = per evaluated particle the pipeline's
 //! clocks (`pipeline::clocks_per_particle`, equal to Verilator's count) plus the command
 //! engine's per-pose work (fetching 27 bytes at 2 clocks each, emitting 6 cost bytes at 9
 //! clocks each: 108 clocks). Request, compute and answer do not overlap (the board answers
@@ -84,7 +84,7 @@ fn main() -> Result<()> {
 
     let poses = (r.board.iterations * args.particles) as u64;
     let bytes = (r.board.stats.bytes_sent + r.board.stats.bytes_received) as u64;
-    let uart_s = bytes as f64 * 10.0 / config.actual_baud();
+    let uart_s = bytes as f64 * 10.0 / config.baud as f64;
     let per_pose =
         clocks_per_particle(r.board.scan_points, r.board.model_points, config.lanes) + ENGINE_CLOCKS_PER_POSE;
     let compute_s = (poses * per_pose) as f64 / config.clock_hz as f64;

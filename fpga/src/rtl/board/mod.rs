@@ -1,5 +1,5 @@
 //! The board around the pipeline (docs/protocol.md), one block a file:
-//! - [`uart`]: `UartRx`, `UartTx` (8N1, clocks per bit set at generation);
+//! - [`uart`]: `UartRx`, `UartTx` (8N1, the bit period set at generation, exact on average);
 //! - [`crc`]: `Crc16Serial`, CRC-16/CCITT-FALSE a bit per clock;
 //! - [`digest`]: `ModelDigest`, the model digest (CRC-32) a byte per clock;
 //! - [`frame_rx`]: `FrameReceiver`, streaming COBS decode, CRC check, frame buffer writes;

@@ -6,6 +6,7 @@
 
 use super::crc::Crc16Serial;
 use super::uart::UartTx;
+use crate::board::BitPeriod;
 use rust_hdl::prelude::*;
 
 /// Sender states.
@@ -69,8 +70,8 @@ pub struct ReplySender {
 }
 
 impl ReplySender {
-    /// A sender whose UART runs at `bit_clocks` clocks per bit.
-    pub fn new(bit_clocks: u32) -> Self {
+    /// A sender whose UART's bits are `period` clocks.
+    pub fn new(period: BitPeriod) -> Self {
         ReplySender {
             clock: Default::default(),
             reset: Default::default(),
@@ -90,7 +91,7 @@ impl ReplySender {
             zero_end: Default::default(),
             reply_buf: Default::default(),
             crc_gen: Default::default(),
-            uart: UartTx::new(bit_clocks),
+            uart: UartTx::new(period),
         }
     }
 }

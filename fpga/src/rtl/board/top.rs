@@ -34,7 +34,9 @@ impl<const P: usize> BoardTop<P> {
     /// The board as `config` says (its `lanes` must be `P`).
     pub fn new(config: &BoardConfig) -> Self {
         assert_eq!(config.lanes, P, "BoardTop<{P}> with a {}-lane config", config.lanes);
-        let bit_clocks = config.bit_clocks();
+        if let Some(problem) = config.uart_problem() {
+            panic!("BoardTop: {problem}");
+        }
         BoardTop {
             clock: Default::default(),
             reset_n: Default::default(),
@@ -45,9 +47,9 @@ impl<const P: usize> BoardTop<P> {
             reset: Default::default(),
             heartbeat: Default::default(),
             rx_glow: Default::default(),
-            uart_in: UartRx::new(bit_clocks),
+            uart_in: UartRx::new(config.bit_period()),
             receiver: Default::default(),
-            engine: CommandEngine::new(config.clock_hz, config.baud, bit_clocks),
+            engine: CommandEngine::new(config),
         }
     }
 }

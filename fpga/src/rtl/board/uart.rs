@@ -1,8 +1,33 @@
-//! The UART, 8N1, `bit_clocks` clocks per bit (set at generation): [`UartRx`] samples each
-//! bit in its middle through a two-register synchroniser; [`UartTx`] shifts a start bit,
-//! eight data bits (LSB first) and a stop bit.
+//! The UART, 8N1, at a bit period of `clocks / bits` clocks set at generation
+//! ([`BitPeriod`], at least 4 clocks): [`UartRx`] samples each bit in its middle through a
+//! two-register synchroniser; [`UartTx`] shifts a start bit, eight data bits (LSB first) and
+//! a stop bit.
+//!
+//! **Bit timing, exact on average.** Both count time in a phase accumulator: a
+//! [`PHASE_BITS`]-bit register `phase` below `2 clocks` that advances by `2 bits` a clock;
+//! when it would reach `2 clocks` it wraps (`phase - (2 clocks - 2 bits)`) and that clock is
+//! a *tick*. Started at `phase = s` on the clock of the start edge (clock 0), the `j`-th tick
+//! is the first clock `c` with `2 bits c + s >= 2 clocks j`. The transmitter starts at 0: its
+//! `k`-th bit boundary is at `ceil(k clocks / bits)` clocks after its start edge, within one
+//! clock of the exact time, and the error never accumulates. The receiver starts at
+//! `clocks` (half a bit): it samples bit `j` (0 the start bit, 9 the stop bit) at
+//! `ceil((j + 1/2) clocks / bits)` clocks after it saw the falling edge.
 
+use crate::board::{BitPeriod, PHASE_BITS};
 use rust_hdl::prelude::*;
+
+// The phase registers below are `Bits<24>`.
+const _: () = assert!(PHASE_BITS == 24);
+
+/// The phase accumulator's constants for `period`: (step `2 bits`, wrap `2 clocks - 2 bits`,
+/// half a bit `clocks`). Panics unless `period` is at least 4 clocks and `2 clocks` fits
+/// [`PHASE_BITS`] bits (`BoardConfig::uart_problem` says so first).
+fn phase_constants(period: BitPeriod) -> (u64, u64, u64) {
+    let (c, b) = (period.clocks as u64, period.bits as u64);
+    assert!(c >= 4 * b, "a UART needs at least 4 clocks per bit, not {period}");
+    assert!(2 * c < 1 << PHASE_BITS, "the UART bit period {c}/{b} does not fit the {PHASE_BITS}-bit phase");
+    (2 * b, 2 * c - 2 * b, c)
+}
 
 /// Receiver states.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, LogicState)]
@@ -32,12 +57,16 @@ pub struct UartRx {
     pub data: Signal<Out, Bits<8>>,
     /// A byte is being received.
     pub active: Signal<Out, Bit>,
-    bit_m1: Constant<Bits<16>>,
-    half_m1: Constant<Bits<16>>,
+    step: Constant<Bits<24>>,
+    wrap: Constant<Bits<24>>,
+    half: Constant<Bits<24>>,
     /// The synchroniser, stored inverted so that power-up reads as an idle (high) line.
     sync_n: [DFF<Bit>; 2],
     state: DFF<RxState>,
-    count: DFF<Bits<16>>,
+    /// The phase accumulator (module documentation).
+    phase: DFF<Bits<24>>,
+    /// A sample clock: the phase wraps.
+    tick: Signal<Local, Bit>,
     nbit: DFF<Bits<3>>,
     shift: DFF<Bits<8>>,
     valid_r: DFF<Bit>,
@@ -46,9 +75,9 @@ pub struct UartRx {
 }
 
 impl UartRx {
-    /// A receiver for `bit_clocks` clocks per bit (at least 4).
-    pub fn new(bit_clocks: u32) -> Self {
-        assert!((4..65536).contains(&bit_clocks), "4 to 65535 clocks per bit");
+    /// A receiver for bits of `period` clocks (at least 4).
+    pub fn new(period: BitPeriod) -> Self {
+        let (step, wrap, half) = phase_constants(period);
         UartRx {
             clock: Default::default(),
             reset: Default::default(),
@@ -56,11 +85,13 @@ impl UartRx {
             valid: Default::default(),
             data: Default::default(),
             active: Default::default(),
-            bit_m1: Constant::new((bit_clocks as u64 - 1).into()),
-            half_m1: Constant::new((bit_clocks as u64 / 2 - 1).into()),
+            step: Constant::new(step.into()),
+            wrap: Constant::new(wrap.into()),
+            half: Constant::new(half.into()),
             sync_n: Default::default(),
             state: Default::default(),
-            count: Default::default(),
+            phase: Default::default(),
+            tick: Default::default(),
             nbit: Default::default(),
             shift: Default::default(),
             valid_r: Default::default(),
@@ -73,7 +104,7 @@ impl UartRx {
 impl Logic for UartRx {
     #[hdl_gen]
     fn update(&mut self) {
-        dff_setup!(self, clock, state, count, nbit, shift, valid_r, data_r);
+        dff_setup!(self, clock, state, phase, nbit, shift, valid_r, data_r);
         for i in 0..2 {
             self.sync_n[i].clock.next = self.clock.val();
         }
@@ -84,35 +115,36 @@ impl Logic for UartRx {
         self.data.next = self.data_r.q.val();
         self.active.next = self.state.q.val() != RxState::Idle;
         self.valid_r.d.next = false;
-        if self.count.q.val().any() {
-            self.count.d.next = self.count.q.val() - 1;
+        self.tick.next = self.phase.q.val() >= self.wrap.val();
+        if self.tick.val() {
+            self.phase.d.next = self.phase.q.val() - self.wrap.val();
+        } else {
+            self.phase.d.next = self.phase.q.val() + self.step.val();
         }
         match self.state.q.val() {
             RxState::Idle => {
                 if !self.line.val() {
                     self.state.d.next = RxState::Start;
-                    self.count.d.next = self.half_m1.val();
+                    self.phase.d.next = self.half.val();
                 }
             }
             RxState::Start => {
-                if !self.count.q.val().any() {
+                if self.tick.val() {
                     if self.line.val() {
                         self.state.d.next = RxState::Idle;
                     } else {
                         self.state.d.next = RxState::Data;
-                        self.count.d.next = self.bit_m1.val();
                         self.nbit.d.next = 0.into();
                     }
                 }
             }
             RxState::Data => {
-                if !self.count.q.val().any() {
+                if self.tick.val() {
                     if self.line.val() {
                         self.shift.d.next = (self.shift.q.val() >> 1) | bits::<8>(128);
                     } else {
                         self.shift.d.next = self.shift.q.val() >> 1;
                     }
-                    self.count.d.next = self.bit_m1.val();
                     self.nbit.d.next = self.nbit.q.val() + 1;
                     if self.nbit.q.val().all() {
                         self.state.d.next = RxState::Stop;
@@ -120,7 +152,7 @@ impl Logic for UartRx {
                 }
             }
             RxState::Stop => {
-                if !self.count.q.val().any() {
+                if self.tick.val() {
                     self.state.d.next = RxState::Idle;
                     if self.line.val() {
                         self.valid_r.d.next = true;
@@ -154,9 +186,13 @@ pub struct UartTx {
     pub busy: Signal<Out, Bit>,
     /// The serial line.
     pub tx: Signal<Out, Bit>,
-    bit_m1: Constant<Bits<16>>,
+    step: Constant<Bits<24>>,
+    wrap: Constant<Bits<24>>,
     busy_r: DFF<Bit>,
-    count: DFF<Bits<16>>,
+    /// The phase accumulator (module documentation).
+    phase: DFF<Bits<24>>,
+    /// A bit boundary: the phase wraps.
+    tick: Signal<Local, Bit>,
     left: DFF<Bits<4>>,
     /// Start, data and stop bits still to send, the current one in bit 0.
     shift: DFF<Bits<10>>,
@@ -165,9 +201,9 @@ pub struct UartTx {
 }
 
 impl UartTx {
-    /// A transmitter for `bit_clocks` clocks per bit.
-    pub fn new(bit_clocks: u32) -> Self {
-        assert!((4..65536).contains(&bit_clocks), "4 to 65535 clocks per bit");
+    /// A transmitter for bits of `period` clocks (at least 4).
+    pub fn new(period: BitPeriod) -> Self {
+        let (step, wrap, _) = phase_constants(period);
         UartTx {
             clock: Default::default(),
             reset: Default::default(),
@@ -175,9 +211,11 @@ impl UartTx {
             data: Default::default(),
             busy: Default::default(),
             tx: Default::default(),
-            bit_m1: Constant::new((bit_clocks as u64 - 1).into()),
+            step: Constant::new(step.into()),
+            wrap: Constant::new(wrap.into()),
             busy_r: Default::default(),
-            count: Default::default(),
+            phase: Default::default(),
+            tick: Default::default(),
             left: Default::default(),
             shift: Default::default(),
             tx_n: Default::default(),
@@ -188,28 +226,33 @@ impl UartTx {
 impl Logic for UartTx {
     #[hdl_gen]
     fn update(&mut self) {
-        dff_setup!(self, clock, busy_r, count, left, shift, tx_n);
+        dff_setup!(self, clock, busy_r, phase, left, shift, tx_n);
         self.busy.next = self.busy_r.q.val();
         self.tx.next = !self.tx_n.q.val();
+        self.tick.next = self.phase.q.val() >= self.wrap.val();
+        if self.tick.val() {
+            self.phase.d.next = self.phase.q.val() - self.wrap.val();
+        } else {
+            self.phase.d.next = self.phase.q.val() + self.step.val();
+        }
         if !self.busy_r.q.val() {
             self.tx_n.d.next = false;
             if self.start.val() {
                 self.busy_r.d.next = true;
                 self.shift.d.next = (bit_cast::<10, 8>(self.data.val()) << 1) | bits::<10>(512);
                 self.tx_n.d.next = true;
-                self.count.d.next = self.bit_m1.val();
+                self.phase.d.next = 0.into();
                 self.left.d.next = 9.into();
             }
-        } else if self.count.q.val().any() {
-            self.count.d.next = self.count.q.val() - 1;
-        } else if self.left.q.val().any() {
-            self.left.d.next = self.left.q.val() - 1;
-            self.shift.d.next = self.shift.q.val() >> 1;
-            self.tx_n.d.next = !self.shift.q.val().get_bit(1);
-            self.count.d.next = self.bit_m1.val();
-        } else {
-            self.busy_r.d.next = false;
-            self.tx_n.d.next = false;
+        } else if self.tick.val() {
+            if self.left.q.val().any() {
+                self.left.d.next = self.left.q.val() - 1;
+                self.shift.d.next = self.shift.q.val() >> 1;
+                self.tx_n.d.next = !self.shift.q.val().get_bit(1);
+            } else {
+                self.busy_r.d.next = false;
+                self.tx_n.d.next = false;
+            }
         }
         if self.reset.val() {
             self.busy_r.d.next = false;

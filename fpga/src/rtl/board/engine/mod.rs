@@ -14,6 +14,7 @@ use super::reply_tx::ReplySender;
 use super::request_check::RequestCheck;
 use super::scan_feeder::ScanFeeder;
 use super::sequencer::PfSequencer;
+use crate::board::BoardConfig;
 use crate::messages::{
     Identity, COST_BYTES, DIGEST_BYTES, EVALUATE_HEADER_BYTES, IDENTITY_BYTES, LOAD_HEADER_BYTES, NEAREST_HEAD_BYTES,
     NEAREST_REQUEST_BYTES, NEAREST_RESULT_BYTES, POINT_BYTES, POSE_BYTES, RESULT_HEAD_BYTES, RESULT_PARAMS_BYTES,
@@ -172,10 +173,10 @@ pub struct CommandEngine<const P: usize> {
 }
 
 impl<const P: usize> CommandEngine<P> {
-    /// The engine of a board with `P` lanes, `clock_hz` and `baud` reported by Identify,
-    /// its UART at `bit_clocks` clocks per bit.
-    pub fn new(clock_hz: u32, baud: u32, bit_clocks: u32) -> Self {
-        let id = Identity::of_board(P as u8, clock_hz, baud, 0, 0, 0).encode();
+    /// The engine of a board with `P` lanes, the clock and the nominal baud rate of
+    /// `config` reported by Identify, its UART at `config`'s bit period.
+    pub fn new(config: &BoardConfig) -> Self {
+        let id = Identity::of_board(P as u8, config.clock_hz, config.baud, 0, 0, 0).encode();
         let mut ident = Bits::<216>::default();
         for (k, &b) in id.iter().take(20).enumerate() {
             ident = ident | (Bits::<216>::from(b as u64) << (8 * k as u64));
@@ -231,7 +232,7 @@ impl<const P: usize> CommandEngine<P> {
             nn: GridPipeline::new(),
             ws: WeightStage::new(),
             filter: PfSequencer::new(),
-            sender: ReplySender::new(bit_clocks),
+            sender: ReplySender::new(config.bit_period()),
             feeder: ScanFeeder::new(),
             check: RequestCheck::new(),
             digest: ModelDigest::default(),
