@@ -218,7 +218,7 @@ struct RegisterArgs {
     /// particles (the mode of protocol version 1 boards).
     #[arg(long)]
     host_driven: bool,
-    /// With --board: scan points the on-board filter weighs each particle over [default: 100].
+    /// With --board: scan points the on-board filter weighs each particle over [default: 300].
     #[arg(long, value_name = "N")]
     board_points: Option<usize>,
     #[command(flatten)]

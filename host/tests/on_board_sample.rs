@@ -10,7 +10,9 @@
 //! `cargo test --release -p pficp-host --test on_board_sample -- --ignored --nocapture`
 //! (`PFICP_SAMPLE_SEEDS=N` for N seeds per model, default 10; `PFICP_SAMPLE_SIZES=300,500`
 //! for other sample sizes, default 300, 500, 1,000; `PFICP_SAMPLE_NOISE_PERCENT=1` for
-//! `U(0, 1%` of the diagonal`)` noise on every scan coordinate, default 0). The tables they
+//! `U(0, 1%` of the diagonal`)` noise on every scan coordinate, default 0;
+//! `PFICP_SAMPLE_UNCAPPED=1` to emulate the protocol 2 board instead: the brute-force
+//! search, distances not capped, to see what the grid's cap changes). The tables they
 //! print are in docs/decisions.md.
 
 use pficp::board::fixed::{normalised_pose, quantise_pose};
@@ -61,6 +63,10 @@ fn scan_points_per_weight_on_the_board() {
     let noise_percent =
         std::env::var("PFICP_SAMPLE_NOISE_PERCENT").ok().and_then(|s| s.parse::<f64>().ok()).unwrap_or(0.0);
     let sizes = env_list("PFICP_SAMPLE_SIZES", &[300, 500, 1000]);
+    let uncapped = std::env::var("PFICP_SAMPLE_UNCAPPED").is_ok_and(|v| v == "1");
+    if uncapped {
+        println!("the protocol 2 board: brute-force search, distances not capped");
+    }
     println!("{seeds} seeds per model, noise {noise_percent}% of the diagonal, board samples {sizes:?}");
     let board = BoardConfig::default();
     // columns: software, then each board sample size: the board's pose alone, then polished
@@ -88,7 +94,13 @@ fn scan_points_per_weight_on_the_board() {
                 .par_iter()
                 .map(|&s| {
                     let plan = on_board::plan_with_prior(prior.clone(), &nn, &ds.scan, &settings, s, 4096).unwrap();
-                    let out = plan.emulate();
+                    let out = if uncapped {
+                        pf::run(&plan.config, |p| {
+                            pf::Evaluated::of(&pficp_fpga::pipeline::evaluate(&plan.model, &plan.scan, p))
+                        })
+                    } else {
+                        plan.emulate()
+                    };
                     let r = on_board::finish(&plan, &nn, &ds.scan, &settings, &ResultReply::of(&out), Duration::ZERO);
                     let clocks = pficp::board::run_clocks_bound(
                         plan.config.particles,
