@@ -524,7 +524,8 @@ fn upload_progress() -> impl FnMut(pficp::board::Upload, usize, usize) + Send {
     move |store, done, total| {
         // The model goes with its cell table (protocol 3), counted in data bytes.
         let unit = if store == pficp::board::Upload::Model { "bytes" } else { "points" };
-        let b = bar.get_or_insert_with(|| Progress::bar(&format!("uploading the {}", store.name()), total as u64, unit));
+        let b =
+            bar.get_or_insert_with(|| Progress::bar(&format!("uploading the {}", store.name()), total as u64, unit));
         b.set(done as u64);
         if done == total {
             if let Some(b) = bar.take() {

@@ -382,7 +382,8 @@ fn old_board(version: u16) -> PtyBoard {
         }
         if f.code == Command::SetSizes as u8 && f.data.len() == 4 {
             let m = u16::from_le_bytes([f.data[0], f.data[1]]) as usize;
-            let model: Vec<_> = b.model_store()[..m.min(4096)].iter().map(|&w| pficp_fpga::format::unpack_point(w)).collect();
+            let model: Vec<_> =
+                b.model_store()[..m.min(4096)].iter().map(|&w| pficp_fpga::format::unpack_point(w)).collect();
             let g = grid(&model);
             let mut load = |code: Command, data| b.execute(&Frame { code: code as u8, seq: 1, data });
             for (k, c) in g.points.chunks(MAX_LOAD_POINTS).enumerate() {
@@ -425,7 +426,10 @@ fn the_on_board_filter_needs_protocol_3_and_the_host_driven_mode_takes_1_to_3() 
     let mut client = board.client();
     let e = on_board_50(&mut client, &nn, &ds.scan, &settings).unwrap_err();
     let m = e.to_string();
-    assert!(m.contains("version 2") && m.contains("needs 3") && m.contains("--host-driven") && !m.contains('\n'), "{m}");
+    assert!(
+        m.contains("version 2") && m.contains("needs 3") && m.contains("--host-driven") && !m.contains('\n'),
+        "{m}"
+    );
     assert_eq!(client.stats().requests, 1, "only Identify");
     host_driven::register(&mut client, &nn, &ds.scan, &settings, &mut |_, _, _| {}).unwrap();
     // A board of a later version than the host: both modes refuse it.
@@ -449,7 +453,10 @@ fn a_model_the_grid_refuses_is_a_one_line_error() {
     // grid's cube (here one quantised by hand) or too many points is refused in one line.
     let e = pficp::board::board_grid(&[[0, 0, 0], [0, 9000, 0]]).unwrap_err();
     let m = e.to_string();
-    assert!(matches!(e, BoardError::Limit(_)) && m.contains("point 1") && m.contains("outside") && !m.contains('\n'), "{m}");
+    assert!(
+        matches!(e, BoardError::Limit(_)) && m.contains("point 1") && m.contains("outside") && !m.contains('\n'),
+        "{m}"
+    );
     let e = pficp::board::board_grid(&vec![[0; 3]; 4097]).unwrap_err();
     assert!(e.to_string().contains("4097"), "{e}");
     // Every planned model fits, its sample in Morton order.

@@ -166,7 +166,11 @@ fn scan_points_per_weight_on_the_board() {
 
 /// Model `id` (2,000 points), an independent scan of `scan_points` (seed 3), the plan of
 /// `board_points` and the pose near the truth, quantised.
-fn planned(id: ModelId, scan_points: usize, board_points: usize) -> (on_board::OnBoardPlan, pficp_fpga::format::FxPose) {
+fn planned(
+    id: ModelId,
+    scan_points: usize,
+    board_points: usize,
+) -> (on_board::OnBoardPlan, pficp_fpga::format::FxPose) {
     let truth = id.table1_truth();
     let spec = ScanSpec { sampling: Sampling::Independent { points: scan_points }, noise: 0.0, seed: 3 };
     let ds = make(id, 2000, &truth, &spec);
@@ -216,7 +220,9 @@ fn the_clock_bound_holds_on_models_1_to_3() {
 #[ignore = "seconds in release; prints the table of docs/decisions.md"]
 fn morton_order_clocks() {
     let lanes = BoardConfig::default().lanes;
-    println!("| model | S | pose | sampler's order | Morton order | Morton at the start pose | brute force | bound | gain |");
+    println!(
+        "| model | S | pose | sampler's order | Morton order | Morton at the start pose | brute force | bound | gain |"
+    );
     println!("|---|---|---|---|---|---|---|---|---|");
     for s in env_list("PFICP_SAMPLE_SIZES", &[300]) {
         for id in ModelId::ALL {
