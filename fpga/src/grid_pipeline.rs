@@ -540,6 +540,31 @@ pub fn run_particle(
     }
 }
 
+/// Rows a batch sweeps at most: every `(y, z)` of the grid.
+pub const MAX_ROWS: u64 = (crate::grid::CELLS_PER_AXIS * crate::grid::CELLS_PER_AXIS) as u64;
+
+/// An upper bound of [`clocks_per_particle`]'s count (start edge to `cost_valid` edge, no
+/// gaps in the scan stream) for `scan_points` scan points under any pose, over any model of
+/// `model_points` points uploaded as [`Grid::build`] stores it, on `lanes` lanes; for
+/// deadlines, where the data-dependent count is not worth running the cycle model.
+///
+/// Per batch of `n_b` points, as [`crate::pipeline::clocks_per_particle`] with the sweep
+/// bounded: `(n_b + 3)` to load, at most `model_points + MAX_ROWS + 9` to sweep, `(n_b + 1)`
+/// to reduce; plus the start edge. The sweep (docs/pipeline.md, "The grid pipeline") is
+/// `S_b + 9 + stalls`: the batch's swept addresses `S_b` are disjoint row ranges of the
+/// stored model (at most `model_points`), and each of its rows (at most [`MAX_ROWS`], the
+/// box being clipped to the grid) stalls at most one clock: an empty row looked up while
+/// no range runs, or a one-point row (two clocks for its one address). So the bound is
+/// the brute-force count plus `MAX_ROWS + 3` a batch; a batch whose box misses the grid
+/// sweeps nothing and stays below it.
+pub fn clocks_bound(scan_points: usize, model_points: usize, lanes: usize) -> u64 {
+    let lanes = lanes.max(1) as u64;
+    let (n, m) = (scan_points as u64, model_points as u64);
+    let batches = n.div_ceil(lanes);
+    // Loads and reduces: every point twice, plus 3 + 1 a batch; sweeps: m + rows + 9 a batch.
+    1 + 2 * n + batches * (4 + m + MAX_ROWS + 9)
+}
+
 /// Clocks and swept addresses of one particle with no gaps in the scan stream, counted on
 /// the cycle model (the sweep's length depends on the data): `grid` uploaded, then one
 /// particle.

@@ -6,9 +6,11 @@
 
 use pficp_fpga::format::{pack_point, MAX_POINTS};
 use pficp_fpga::format::{FxPoint, FxPose};
-use pficp_fpga::grid::CELLS;
-use pficp_fpga::grid::{Grid, CAP_D2, CELL_LSBS, NONE};
-use pficp_fpga::grid_pipeline::{evaluate_grid, evaluate_stored, run_particle, upload, GridInputs, GridPipelineModel};
+use pficp_fpga::grid::{Grid, CAP_D2, CELLS, CELL_LSBS, NONE};
+use pficp_fpga::grid_pipeline::{
+    clocks_bound, clocks_per_particle, evaluate_grid, evaluate_stored, run_particle, upload, GridInputs,
+    GridPipelineModel, MAX_ROWS,
+};
 use proptest::prelude::*;
 
 fn inside_coord() -> impl Strategy<Value = i16> {
@@ -138,4 +140,86 @@ fn a_lone_point_and_an_empty_box() {
     assert!(pipe.outputs().busy);
     pipe.step(&GridInputs { start: true, ..Default::default() });
     assert!(pipe.outputs().scan_ready);
+}
+
+/// A model point in cell `(x, y, z)`, `d` LSBs into it.
+fn in_cell(x: i16, y: i16, z: i16, d: i16) -> FxPoint {
+    [x, y, z].map(|k| -8192 + k * CELL_LSBS as i16 + d)
+}
+
+/// A model of 0 to 3 points in a random cell of each row (the rows that stall most: empty
+/// and one-point ones), or points anywhere.
+fn row_model() -> impl Strategy<Value = Vec<FxPoint>> {
+    prop_oneof![
+        prop::collection::vec((0i16..16, 0usize..4, 0i16..1024), 256).prop_map(|rows| {
+            let mut m = Vec::new();
+            for (r, &(x, count, d)) in rows.iter().enumerate() {
+                for k in 0..count {
+                    m.push(in_cell(x, (r % 16) as i16, (r / 16) as i16, (d + 97 * k as i16) % 1024));
+                }
+            }
+            if m.is_empty() {
+                m.push([0; 3]);
+            }
+            m
+        }),
+        model(),
+    ]
+}
+
+/// A scan whose batches span the whole grid (two opposite corners first), then points
+/// anywhere, inside the cube or not.
+fn spanning_scan() -> impl Strategy<Value = Vec<FxPoint>> {
+    prop::collection::vec([inside_coord(), inside_coord(), inside_coord()], 0..70).prop_map(|mut s| {
+        s.insert(0, [8000, 8000, 8000]);
+        s.insert(0, [-8100, -8100, -8100]);
+        s
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 200, failure_persistence: None, ..ProptestConfig::default() })]
+
+    /// `clocks_bound` (the host's deadlines) is never below the cycle model's count.
+    #[test]
+    fn the_clock_bound_holds(
+        lanes in prop::sample::select(vec![1usize, 2, 3, 4, 16]),
+        m in row_model(),
+        scan in spanning_scan(),
+        p in prop_oneof![Just(identity()), pose()],
+    ) {
+        let g = Grid::build(&m).unwrap();
+        let r = clocks_per_particle(&g, &scan, &p, lanes);
+        let bound = clocks_bound(scan.len(), m.len(), lanes);
+        prop_assert!(r.clocks <= bound, "{} clocks above the bound {bound}", r.clocks);
+    }
+}
+
+fn identity() -> FxPose {
+    FxPose::from_f64(&[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0], &[0.0; 3])
+}
+
+/// The bound's worst cases: every row of the grid swept, each holding one point (two
+/// clocks for one address) or none with one-point rows between (one clock of lookup each);
+/// the bound is within a clock a row of them, and is the brute-force count plus
+/// `MAX_ROWS + 3` a batch.
+#[test]
+fn the_clock_bound_is_tight_on_rows_that_stall() {
+    let corners = [[-8100, -8100, -8100], [8000, 8000, 8000]];
+    let every_row: Vec<FxPoint> = (0..256).map(|r| in_cell(7, r % 16, r / 16, 500)).collect();
+    let every_other: Vec<FxPoint> = (0..256).step_by(2).map(|r| in_cell(3, r % 16, r / 16, 9)).collect();
+    for (name, m) in [("every row", every_row), ("every other row", every_other)] {
+        let g = Grid::build(&m).unwrap();
+        for lanes in [2, 16] {
+            let r = clocks_per_particle(&g, &corners, &identity(), lanes);
+            let bound = clocks_bound(2, m.len(), lanes);
+            eprintln!("{name}, {lanes} lanes: {} clocks, bound {bound}", r.clocks);
+            assert!(r.clocks <= bound && bound - r.clocks <= 16, "{name}: {} clocks, bound {bound}", r.clocks);
+        }
+    }
+    assert_eq!(
+        clocks_bound(300, 2000, 16),
+        pficp_fpga::pipeline::clocks_per_particle(300, 2000, 16) + 19 * (MAX_ROWS + 3)
+    );
+    assert_eq!(clocks_bound(0, 2000, 16), 1);
 }

@@ -221,7 +221,7 @@ struct RegisterArgs {
     /// particles (the mode of protocol version 1 boards).
     #[arg(long)]
     host_driven: bool,
-    /// With --board: scan points the on-board filter weighs each particle over [default: 100].
+    /// With --board: scan points the on-board filter weighs each particle over [default: 300].
     #[arg(long, value_name = "N")]
     board_points: Option<usize>,
     #[command(flatten)]
@@ -331,9 +331,14 @@ struct EvalArgs {
     #[arg(long, value_enum, value_delimiter = ',')]
     with: Vec<MethodArg>,
     /// Realistic suite: also run PF-ICP with the filter on the board, the board's part by
-    /// its bit-exact reference (what the simulated board computes), column pf-icp-board.
+    /// its bit-exact reference (what the board computes), columns pf-icp-board (with the
+    /// host's polish) and pf-icp-board-filter (the board's pose alone).
     #[arg(long)]
     board_reference: bool,
+    /// Realistic suite, with --board-reference: scan points the on-board filter weighs
+    /// each particle over [default: the register command's].
+    #[arg(long, requires = "board_reference")]
+    board_points: Option<usize>,
     /// Realistic suite: export every case (model, scan, truth, symmetries) to this folder
     /// for the peers' script (tests/peers).
     #[arg(long, value_name = "DIR")]
@@ -522,12 +527,14 @@ fn register(a: &RegisterArgs) -> Result<()> {
 fn upload_progress() -> impl FnMut(pficp::board::Upload, usize, usize) + Send {
     let mut bar: Option<Progress> = None;
     move |store, done, total| {
-        let b = bar
-            .get_or_insert_with(|| Progress::bar(&format!("uploading the {}", store.name()), total as u64, "points"));
+        // The model goes with its cell table (protocol 3), counted in data bytes.
+        let unit = if store == pficp::board::Upload::Model { "bytes" } else { "points" };
+        let b =
+            bar.get_or_insert_with(|| Progress::bar(&format!("uploading the {}", store.name()), total as u64, unit));
         b.set(done as u64);
         if done == total {
             if let Some(b) = bar.take() {
-                b.finish(format_args!("uploaded the {}: {total} points", store.name()));
+                b.finish(format_args!("uploaded the {}: {total} {unit}", store.name()));
             }
         }
     }
@@ -656,8 +663,12 @@ fn eval_realistic(a: &EvalArgs) -> Result<()> {
         out_dir: Some(a.out.clone()),
         export: a.export.clone(),
         board: a.board_reference,
+        board_points: a.board_points.unwrap_or(pficp::board::on_board::DEFAULT_BOARD_POINTS),
         ..Default::default()
     };
+    if opts.board_points == 0 || opts.board_points > pficp::board::MAX_POINTS {
+        bail!("--board-points must be 1 to {} (got {})", pficp::board::MAX_POINTS, opts.board_points);
+    }
     let report = realistic::run(&opts)?;
     print!("{}", report.render());
     note(format_args!("wrote {}", a.out.join("realistic.json").display()));

@@ -14,12 +14,13 @@ use pficp::pf_icp::PfIcpSettings;
 use pficp::registration::methods::{PoseError, Tolerance};
 use pficp_fpga::board::BoardConfig;
 use pficp_fpga::format::WeightScale;
+use pficp_fpga::grid::CAP_D2;
+use pficp_fpga::grid_pipeline::evaluate_grid;
 use pficp_fpga::messages::Identity;
-use pficp_fpga::pipeline::evaluate;
 use pficp_fpga::protocol::{Command, ErrorCode, Frame};
 use pficp_fpga::weights::weights;
 use std::time::{Duration, Instant};
-use support::{cloud, loaded, poses, reference_handler, uart_resample, upload, PtyBoard};
+use support::{cloud, grid, loaded, poses, reference_handler, uart_resample, upload, PtyBoard};
 
 #[test]
 fn identify_reports_the_reference_board() {
@@ -43,6 +44,15 @@ fn load_evaluate_and_weigh_equal_the_references() {
     assert_eq!(seen.last(), Some(&(700, 700)));
     assert!(seen.windows(2).all(|w| w[0].0 < w[1].0), "progress grows: {seen:?}");
     assert_eq!(seen.len(), 1 + 700usize.div_ceil(170));
+    // The protocol 3 board searches through the cell table: the model goes gridded, its
+    // progress in data bytes over the points and the table.
+    let g = grid(&model);
+    let mut seen = Vec::new();
+    client.load_grid(&g, |done, total| seen.push((done, total))).unwrap();
+    let total = 700 * 6 + 4097 * 2;
+    assert_eq!((seen.first(), seen.last()), (Some(&(0, total)), Some(&(total, total))));
+    assert!(seen.windows(2).all(|w| w[0].0 < w[1].0), "progress grows: {seen:?}");
+    assert_eq!(seen.len(), 1 + 700usize.div_ceil(170) + 4097usize.div_ceil(510));
     client.load_scan(&scan, |_, _| {}).unwrap();
     client.set_sizes(model.len(), scan.len()).unwrap();
     let id = client.identify().unwrap();
@@ -50,7 +60,7 @@ fn load_evaluate_and_weigh_equal_the_references() {
 
     // 50 particles: two frames (37 + 13), then the weights.
     let ps = poses(50, 3);
-    let expected: Vec<u64> = ps.iter().map(|p| evaluate(&model, &scan, p).cost).collect();
+    let expected: Vec<u64> = ps.iter().map(|p| evaluate_grid(&g, &scan, p).cost).collect();
     let mut chosen = None;
     let (costs, summary) = client
         .costs_and_weights(&ps, |c| {
@@ -80,10 +90,29 @@ fn nearest_in_frames_equals_the_reference() {
     let (_board, mut client) = loaded(&model, &scan);
     let pose = poses(1, 6)[0];
     let r = client.nearest(10, 320, &pose).unwrap();
-    let e = evaluate(&model, &scan[10..330], &pose);
+    let g = grid(&model);
+    let e = evaluate_grid(&g, &scan[10..330], &pose);
     assert_eq!(r.first, 10);
     assert_eq!(r.results, e.nearest);
     assert_eq!(r.cost, e.cost);
+    // In the host's terms: the index in the model as given (before the grid's sort), a
+    // capped point none; each distance is that model point's.
+    let near = client.nearest_model(10, 320, &pose).unwrap();
+    assert_eq!(near.len(), 320);
+    let mut found = 0;
+    for (k, (n, &(i, d))) in near.iter().zip(&e.nearest).enumerate() {
+        let q = pficp_fpga::format::transform(&pose, scan[10 + k]);
+        match *n {
+            None => assert_eq!(d, CAP_D2),
+            Some((j, d2)) => {
+                found += 1;
+                assert_eq!((j, d2), (g.order[i as usize] as usize, d));
+                assert_eq!(pficp_fpga::format::dist2(q, model[j]), d);
+            }
+        }
+    }
+    // Both kinds: 400 points in the cube are sparser than the cap (h = 1/8).
+    assert!(found > 50 && found < 320, "{found} of 320 within the cap");
     // Past the scan in use: the board's own error, named.
     match client.nearest(300, 100, &pose) {
         Err(BoardError::Board { command: Command::Nearest, code: ErrorCode::OverCapacity }) => {}
@@ -157,15 +186,16 @@ fn a_corrupted_request_is_resent() {
 #[test]
 fn a_lost_evaluate_reply_starts_the_iteration_over() {
     let (model, scan) = (cloud(200, 7), cloud(100, 8));
-    // Replies: 0 identify, 1-2 model (170 + 30 points), 3 scan, 4 sizes, 5 first batch
-    // (FIRST), 6 second batch (no FIRST: lost once, not repeatable), 7.. the batches again.
-    let mut board = corrupt_replies(|k| k == 6);
+    // Replies: 0 identify, 1-2 model (170 + 30 points), 3-11 cell table (9 frames of up to
+    // 510 entries), 12 scan, 13 sizes, 14 first batch (FIRST), 15 second batch (no FIRST:
+    // lost once, not repeatable), 16.. the batches again.
+    let mut board = corrupt_replies(|k| k == 15);
     let mut client = board.client();
     upload(&mut client, &model, &scan);
     let ps = poses(45, 9);
     let scale = WeightScale::for_two_q(1e6);
     let (costs, summary) = client.costs_and_weights(&ps, |_| scale).unwrap();
-    let expected: Vec<u64> = ps.iter().map(|p| evaluate(&model, &scan, p).cost).collect();
+    let expected: Vec<u64> = ps.iter().map(|p| evaluate_grid(&grid(&model), &scan, p).cost).collect();
     assert_eq!(costs, expected, "no costs stored twice");
     assert_eq!(summary.weights, weights(&expected, &scale));
     assert_eq!(client.stats().restarts, 1);
@@ -327,7 +357,8 @@ fn pf_icp_with_the_board_weights_registers_a_reduced_model_1() {
     assert!(r.board.iterations > 5, "the filter iterated on the board's weights");
     assert_eq!(r.board.stats.resends, 0);
     assert_eq!(uploads.last(), Some(&(Upload::Scan, 300, 300)));
-    assert!(uploads.contains(&(Upload::Model, 400, 400)));
+    let model_bytes = 400 * 6 + 4097 * 2;
+    assert!(uploads.contains(&(Upload::Model, model_bytes, model_bytes)));
 }
 
 #[test]

@@ -16,7 +16,7 @@ use pficp_fpga::messages::{Identity, ResultReply, RunState, StatusReply};
 use pficp_fpga::pf::{self, PfConfig};
 use pficp_fpga::protocol::{Command, ErrorCode, Frame};
 use std::time::{Duration, Instant};
-use support::{cloud, loaded, upload, PtyBoard};
+use support::{cloud, grid, loaded, upload, PtyBoard};
 
 /// A Run configuration over the unit-cube clouds of [`cloud`]: centre at the identity.
 /// `register_on_board` with 50 board points, Status polled every 20 ms, no progress output.
@@ -50,7 +50,9 @@ fn run_status_and_result_equal_the_functional_reference() {
     assert_eq!(client.status().unwrap(), StatusReply::IDLE);
     let cfg = run_config(20, 8, 99);
     client.run(&cfg).unwrap();
-    let want = pf::run(&cfg, |pose| pf::evaluate(&model, &scan, pose));
+    let want = pf::run(&cfg, |pose| pf::evaluate(&grid(&model), &scan, pose));
+    // The host's fast emulation (the grid's 27-cell search) is the reference to the bit.
+    assert_eq!(want, pf::run(&cfg, |pose| on_board::evaluate(&grid(&model), &scan, pose)));
     let s = client.status().unwrap();
     assert_eq!(s, StatusReply { state: RunState::Done, iterations: want.iterations, best_cost: want.best.cost });
     let r = client.result().unwrap();
@@ -68,8 +70,10 @@ fn run_status_and_result_equal_the_functional_reference() {
     assert_eq!(clocks, pficp::board::run_clocks_bound(20, 8, 80, 300, 16));
     assert_eq!(client.modelled_run_time(&cfg), Duration::from_secs_f64(clocks as f64 / 50e6));
     let poses = (20 * want.iterations as u64 + want.iterations as u64 + 1) as u64;
-    assert!(clocks > poses * pficp_fpga::pipeline::clocks_per_particle(80, 300, 16));
-    assert!(clocks < 2 * poses * pficp_fpga::pipeline::clocks_per_particle(80, 300, 16));
+    let per_pose = pficp_fpga::grid_pipeline::clocks_bound(80, 300, 16);
+    assert!(per_pose >= pficp_fpga::pipeline::clocks_per_particle(80, 300, 16));
+    assert!(clocks > poses * per_pose);
+    assert!(clocks < 2 * poses * per_pose);
 }
 
 #[test]
@@ -110,7 +114,7 @@ fn a_lost_run_reply_is_not_run_twice_blindly() {
     let cfg = run_config(8, 4, 5);
     client.run(&cfg).unwrap();
     assert_eq!(client.stats().resends, 1);
-    let want = pf::run(&cfg, |pose| pf::evaluate(&model, &scan, pose));
+    let want = pf::run(&cfg, |pose| pf::evaluate(&grid(&model), &scan, pose));
     assert_eq!(client.result().unwrap(), ResultReply::of(&want));
 }
 
@@ -190,19 +194,24 @@ fn pf_icp_with_the_filter_on_the_board_registers_a_reduced_model_1() {
         b.result.iterations, b.cost_msd, b.polls, b.modelled, b.stats
     );
     assert!(Tolerance::SUCCESS.accepts(pose, &truth, diag), "{e:?}");
-    assert_eq!((b.model_points, b.model_subsampled, b.scan_points), (300, false, on_board::DEFAULT_BOARD_POINTS));
+    let sample = on_board::DEFAULT_BOARD_POINTS.min(ds.scan.len());
+    assert_eq!((b.model_points, b.model_subsampled, b.scan_points), (300, false, sample));
     assert_eq!(b.result.iterations as usize, r.pf.registration.iterations);
     assert!(b.result.iterations >= 1 && b.result.iterations <= 30);
     assert!(b.polls >= 1);
     assert_eq!(b.stats.resends, 0);
     // The board's outcome is exactly the functional reference's on the planned clouds.
-    let plan = on_board::plan(&nn, &ds.scan, &settings, on_board::DEFAULT_BOARD_POINTS, 4096);
+    // The software mode's emulation (`plan.emulate`) is the same to the bit.
+    let plan = on_board::plan(&nn, &ds.scan, &settings, on_board::DEFAULT_BOARD_POINTS, 4096).unwrap();
     assert_eq!(plan.config, b.config);
-    let want = pf::run(&plan.config, |p| pf::evaluate(&plan.model, &plan.scan, p));
+    let want = pf::run(&plan.config, |p| pf::evaluate(&plan.grid, &plan.scan, p));
     assert_eq!(b.result, ResultReply::of(&want));
-    // The uploads, then the filter's progress ending at the cap.
-    assert!(steps.contains(&(OnBoardStep::Upload(Upload::Model), 300, 300)));
-    assert!(steps.contains(&(OnBoardStep::Upload(Upload::Scan), 100, 100)));
+    assert_eq!(b.result, ResultReply::of(&plan.emulate()));
+    // The uploads (the model in data bytes with its cell table), then the filter's
+    // progress ending at the cap.
+    let model_bytes = 300 * 6 + 4097 * 2;
+    assert!(steps.contains(&(OnBoardStep::Upload(Upload::Model), model_bytes, model_bytes)));
+    assert!(steps.contains(&(OnBoardStep::Upload(Upload::Scan), sample, sample)));
     assert_eq!(steps.last(), Some(&(OnBoardStep::Filter, 30, 30)));
     // The same as the software mode's result, within the tolerance.
     let soft = pficp::pf_icp::register(&nn, &ds.scan, &settings);
@@ -354,18 +363,45 @@ fn an_iteration_count_that_goes_back_or_past_the_cap_is_an_error() {
     }
 }
 
-#[test]
-fn a_version_1_board_serves_the_host_driven_mode_only() {
-    // A board of protocol version 1 (Identify says so; it knows no Run, Status, Result).
-    let mut board = PtyBoard::serve(support::intercepting_handler(|f, b| {
+/// A board that says it speaks protocol `version` (1 or 2: brute-force search, no cell
+/// table) and knows no LoadTable, nor Run, Status and Result below version 2. The
+/// reference underneath searches through its table, so when the sizes are set it grids the
+/// model it was sent itself (a search over the same points, whatever their order).
+fn old_board(version: u16) -> PtyBoard {
+    use pficp_fpga::messages::{load_request, table_request, MAX_LOAD_ENTRIES, MAX_LOAD_POINTS};
+    PtyBoard::serve(support::intercepting_handler(move |f, b| {
         if f.code == Command::Identify as u8 && f.data.is_empty() {
             let mut id = Identity::decode(&b.execute(f).data).unwrap();
-            id.version = 1;
+            id.version = version;
             return Some(Frame { code: 0x81, seq: f.seq, data: id.encode() }.encode());
         }
-        (f.code >= Command::Run as u8 && f.code <= Command::Result as u8)
-            .then(|| Frame::error(f.seq, ErrorCode::UnknownCommand, f.code).encode())
-    }));
+        let unknown = f.code == Command::LoadTable as u8
+            || (version < 2 && f.code >= Command::Run as u8 && f.code <= Command::Result as u8);
+        if unknown {
+            return Some(Frame::error(f.seq, ErrorCode::UnknownCommand, f.code).encode());
+        }
+        if f.code == Command::SetSizes as u8 && f.data.len() == 4 {
+            let m = u16::from_le_bytes([f.data[0], f.data[1]]) as usize;
+            let model: Vec<_> =
+                b.model_store()[..m.min(4096)].iter().map(|&w| pficp_fpga::format::unpack_point(w)).collect();
+            let g = grid(&model);
+            let mut load = |code: Command, data| b.execute(&Frame { code: code as u8, seq: 1, data });
+            for (k, c) in g.points.chunks(MAX_LOAD_POINTS).enumerate() {
+                load(Command::LoadModel, load_request((k * MAX_LOAD_POINTS) as u16, c));
+            }
+            for (k, c) in g.first.chunks(MAX_LOAD_ENTRIES).enumerate() {
+                load(Command::LoadTable, table_request((k * MAX_LOAD_ENTRIES) as u16, c));
+            }
+        }
+        None
+    }))
+}
+
+#[test]
+fn a_version_1_board_serves_the_host_driven_mode_only() {
+    // A board of protocol version 1 (Identify says so; it knows no Run, Status, Result, nor
+    // LoadTable: the host sends it the model as it is).
+    let mut board = old_board(1);
     let mut client = board.client();
     let (ds, diag) = reduced_model_1();
     let nn = NearestNeighbours::new(&ds.model);
@@ -377,6 +413,59 @@ fn a_version_1_board_serves_the_host_driven_mode_only() {
     assert_eq!(r.board.iterations, r.pf.registration.iterations);
     let soft = pficp::pf_icp::register(&nn, &ds.scan, &settings);
     assert!(Tolerance::SUCCESS.accepts(&r.pf.registration.pose, &soft.registration.pose, diag));
+}
+
+#[test]
+fn the_on_board_filter_needs_protocol_3_and_the_host_driven_mode_takes_1_to_3() {
+    let (ds, _) = reduced_model_1();
+    let nn = NearestNeighbours::new(&ds.model);
+    let settings = PfIcpSettings { clusters: 25, particles: 20, iterations: 4, seed: 5, ..Default::default() };
+    // A version 2 board (brute force, Run without the grid): the on-board filter refuses it
+    // in one line before anything is uploaded; the host-driven mode serves it.
+    let mut board = old_board(2);
+    let mut client = board.client();
+    let e = on_board_50(&mut client, &nn, &ds.scan, &settings).unwrap_err();
+    let m = e.to_string();
+    assert!(
+        m.contains("version 2") && m.contains("needs 3") && m.contains("--host-driven") && !m.contains('\n'),
+        "{m}"
+    );
+    assert_eq!(client.stats().requests, 1, "only Identify");
+    host_driven::register(&mut client, &nn, &ds.scan, &settings, &mut |_, _, _| {}).unwrap();
+    // A board of a later version than the host: both modes refuse it.
+    let mut board = PtyBoard::serve(support::intercepting_handler(|f, b| {
+        (f.code == Command::Identify as u8).then(|| {
+            let mut id = Identity::decode(&b.execute(f).data).unwrap();
+            id.version = 4;
+            Frame { code: 0x81, seq: f.seq, data: id.encode() }.encode()
+        })
+    }));
+    let mut client = board.client();
+    let e = on_board_50(&mut client, &nn, &ds.scan, &settings).unwrap_err();
+    assert!(e.to_string().contains("version 4"), "{e}");
+    let e = host_driven::register(&mut client, &nn, &ds.scan, &settings, &mut |_, _, _| {}).unwrap_err();
+    assert!(matches!(&e, BoardError::Limit(m) if m.contains("version 4") && m.contains("1 to 3")), "{e}");
+}
+
+#[test]
+fn a_model_the_grid_refuses_is_a_one_line_error() {
+    // The host's normalisation puts every model point in the unit ball; a point outside the
+    // grid's cube (here one quantised by hand) or too many points is refused in one line.
+    let e = pficp::board::board_grid(&[[0, 0, 0], [0, 9000, 0]]).unwrap_err();
+    let m = e.to_string();
+    assert!(
+        matches!(e, BoardError::Limit(_)) && m.contains("point 1") && m.contains("outside") && !m.contains('\n'),
+        "{m}"
+    );
+    let e = pficp::board::board_grid(&vec![[0; 3]; 4097]).unwrap_err();
+    assert!(e.to_string().contains("4097"), "{e}");
+    // Every planned model fits, its sample in Morton order.
+    let (ds, _) = reduced_model_1();
+    let nn = NearestNeighbours::new(&ds.model);
+    let settings = PfIcpSettings { clusters: 25, particles: 20, iterations: 4, seed: 5, ..Default::default() };
+    let plan = on_board::plan(&nn, &ds.scan, &settings, 200, 4096).unwrap();
+    assert_eq!(plan.grid, grid(&plan.model));
+    assert!(plan.scan.windows(2).all(|w| pficp::board::morton_key(w[0]) <= pficp::board::morton_key(w[1])));
 }
 
 #[test]

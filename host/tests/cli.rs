@@ -208,8 +208,9 @@ fn board_info_prints_the_identity() {
     let o = pficp(&["board", "info", "--port", &board.path]);
     assert!(o.status.success(), "{}", stderr(&o));
     let out = String::from_utf8(o.stdout).unwrap();
+    let version = format!("protocol version  {}", pficp_fpga::protocol::VERSION);
     let baud = format!("baud              {}", pficp::board::DEFAULT_BAUD);
-    for line in ["protocol version  2", "lanes             16", "max particles     256", &baud] {
+    for line in [version.as_str(), "lanes             16", "max particles     256", &baud] {
         assert!(out.contains(line), "{line:?} not in {out}");
     }
 }
@@ -243,7 +244,9 @@ fn register_on_the_board_prints_the_software_form() {
         args.extend_from_slice(extra);
         let o = register(model, scan, &args);
         assert!(o.status.success(), "{}", stderr(&o));
-        assert!(stderr(&o).contains("uploaded the model: 300 points"), "{}", stderr(&o));
+        // The model goes with its cell table (protocol 3), counted in data bytes.
+        let bytes = format!("uploaded the model: {} bytes", 300 * 6 + 4097 * 2);
+        assert!(stderr(&o).contains(&bytes), "{}", stderr(&o));
         String::from_utf8(o.stdout).unwrap()
     };
     let json: serde_json::Value = serde_json::from_str(&on_board(&["--json"])).unwrap();

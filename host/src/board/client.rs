@@ -13,7 +13,8 @@
 //! - **Every read is bounded**: each reply must arrive within the timeout (default 2 s, at
 //!   most [`MAX_TIMEOUT`]) plus the time the board needs for it, modelled from the bytes at
 //!   the baud rate ([`MIN_BAUD`] to [`MAX_BAUD`]) and, for Evaluate and Nearest, the
-//!   pipeline's clocks ([`pficp_fpga::pipeline::clocks_per_particle`]) on the board's
+//!   grid pipeline's clocks bounded ([`pficp_fpga::grid_pipeline::clocks_bound`]: any pose,
+//!   any model of that size; at least the brute-force pipeline's) on the board's
 //!   lanes at its clock, never taken as slower than [`MIN_CLOCK_HZ`] whatever Identify says.
 //!   A silent board is a [`BoardError::Timeout`] (saying how many bytes came that were no
 //!   reply: a babbling line or a wrong baud rate), a port that goes away a
@@ -50,11 +51,14 @@
 
 use super::BoardError;
 use pficp_fpga::format::{FxPoint, FxPose, WeightScale};
+use pficp_fpga::grid::{Grid, CAP_D2};
+use pficp_fpga::grid_pipeline::clocks_bound;
 use pficp_fpga::messages::{
-    load_request, parse_two_u16, two_u16, EvaluateReply, EvaluateRequest, Identity, MessageError, NearestReply,
-    NearestRequest, WeightSummary, IDENTITY_BYTES, MAX_LOAD_POINTS, MAX_NEAREST, MAX_POSES,
+    load_request, parse_two_u16, table_request, two_u16, EvaluateReply, EvaluateRequest, Identity, MessageError,
+    NearestReply, NearestRequest, WeightSummary, IDENTITY_BYTES, MAX_LOAD_ENTRIES, MAX_LOAD_POINTS, MAX_NEAREST,
+    MAX_POSES, POINT_BYTES, TABLE_ENTRIES, TABLE_ENTRY_BYTES, TABLE_ENTRY_MASK,
 };
-use pficp_fpga::pipeline::{clocks_per_particle, COST_MASK};
+use pficp_fpga::pipeline::COST_MASK;
 use pficp_fpga::protocol::{Command, Deframer, VERSION};
 use serialport::SerialPort;
 use std::time::Duration;
@@ -125,6 +129,9 @@ pub struct BoardClient {
     stats: ClientStats,
     /// The iteration cap of the last Run sent (a Status beyond it is a broken board).
     run_iterations: Option<u16>,
+    /// `Grid::order` of the grid last uploaded whole ([`BoardClient::load_grid`]): the
+    /// host's index of each stored model point. `None` after any other model or table write.
+    grid_order: Option<Vec<u16>>,
 }
 
 impl std::fmt::Debug for BoardClient {
@@ -230,6 +237,7 @@ impl BoardClient {
             stored: 0,
             stats: ClientStats::default(),
             run_iterations: None,
+            grid_order: None,
         }
     }
 
@@ -271,9 +279,74 @@ impl BoardClient {
     }
 
     /// Write the model store from point 0, in frames of [`MAX_LOAD_POINTS`], each
-    /// acknowledged; `progress(done, total)` after each. Sizes are not changed.
+    /// acknowledged; `progress(done, total)` after each. Sizes are not changed. A protocol
+    /// 3 board searches the model through its cell table: use [`Self::load_grid`].
     pub fn load_model(&mut self, points: &[FxPoint], progress: impl FnMut(usize, usize)) -> Result<(), BoardError> {
+        self.grid_order = None;
         self.load(Command::LoadModel, points, progress)
+    }
+
+    /// Write the cell table (protocol 3, LoadTable) from entry 0, in frames of
+    /// [`MAX_LOAD_ENTRIES`], each acknowledged; `progress(done, total)` after each. At most
+    /// [`TABLE_ENTRIES`] entries of 13 bits.
+    pub fn load_table(&mut self, entries: &[u16], mut progress: impl FnMut(usize, usize)) -> Result<(), BoardError> {
+        if entries.is_empty() || entries.len() > TABLE_ENTRIES {
+            return Err(BoardError::Limit(format!(
+                "a cell table of {} entries; the board holds 1 to {TABLE_ENTRIES}",
+                entries.len()
+            )));
+        }
+        if let Some(i) = entries.iter().position(|&e| e > TABLE_ENTRY_MASK) {
+            return Err(BoardError::Limit(format!(
+                "cell table entry {i} is {}; entries have 13 bits (at most {TABLE_ENTRY_MASK})",
+                entries[i]
+            )));
+        }
+        self.grid_order = None;
+        let command = Command::LoadTable;
+        progress(0, entries.len());
+        let mut offset = 0;
+        for chunk in entries.chunks(MAX_LOAD_ENTRIES) {
+            let reply = self.transact(command, table_request(offset as u16, chunk), 4, 0, true)?;
+            self.check_ack(command, &reply.data, offset, chunk.len())?;
+            offset += chunk.len();
+            progress(offset, entries.len());
+        }
+        Ok(())
+    }
+
+    /// Upload a gridded model (protocol 3): the points sorted by cell ([`Grid::points`],
+    /// LoadModel) then the cell table ([`Grid::first`], LoadTable). `progress(done, total)`
+    /// counts the data bytes of both (6 a point, 2 a table entry), so it rises once from 0
+    /// to the total. Afterwards the board's (stored) model indices map to the host's
+    /// through [`Grid::order`] ([`Self::nearest_model`]). Sizes are not changed: the model
+    /// size in use is `grid.points.len()`.
+    pub fn load_grid(&mut self, grid: &Grid, mut progress: impl FnMut(usize, usize)) -> Result<(), BoardError> {
+        let point_bytes = grid.points.len() * POINT_BYTES;
+        let total = point_bytes + grid.first.len() * TABLE_ENTRY_BYTES;
+        self.load_model(&grid.points, |done, _| progress(done * POINT_BYTES, total))?;
+        self.load_table(&grid.first, |done, _| {
+            if done > 0 {
+                progress(point_bytes + done * TABLE_ENTRY_BYTES, total)
+            }
+        })?;
+        self.grid_order = Some(grid.order.clone());
+        Ok(())
+    }
+
+    fn check_ack(&self, command: Command, data: &[u8], offset: usize, count: usize) -> Result<(), BoardError> {
+        let ack = parse_two_u16(data).map_err(|problem| BoardError::Reply { command, problem })?;
+        if ack != (offset as u16, count as u16) {
+            return Err(BoardError::Reply {
+                command,
+                problem: MessageError::Field {
+                    field: "offset, count",
+                    got: ((ack.0 as u64) << 16) | ack.1 as u64,
+                    expected: ((offset as u64) << 16) | count as u64,
+                },
+            });
+        }
+        Ok(())
     }
 
     /// Write the scan store from point 0, as [`Self::load_model`].
@@ -299,17 +372,7 @@ impl BoardClient {
         let mut offset = 0;
         for chunk in points.chunks(MAX_LOAD_POINTS) {
             let reply = self.transact(command, load_request(offset as u16, chunk), 4, 0, true)?;
-            let ack = parse_two_u16(&reply.data).map_err(|problem| BoardError::Reply { command, problem })?;
-            if ack != (offset as u16, chunk.len() as u16) {
-                return Err(BoardError::Reply {
-                    command,
-                    problem: MessageError::Field {
-                        field: "offset, count",
-                        got: ((ack.0 as u64) << 16) | ack.1 as u64,
-                        expected: ((offset as u64) << 16) | chunk.len() as u64,
-                    },
-                });
-            }
+            self.check_ack(command, &reply.data, offset, chunk.len())?;
             offset += chunk.len();
             progress(offset, points.len());
         }
@@ -378,7 +441,7 @@ impl BoardClient {
         }
         let request = EvaluateRequest { first, last, scale, poses: poses.to_vec() };
         let reply_bytes = 6 * n + if last { 11 + 2 * after } else { 0 };
-        let clocks = n as u64 * clocks_per_particle(self.sizes.1 as usize, self.sizes.0 as usize, self.lanes())
+        let clocks = n as u64 * clocks_bound(self.sizes.1 as usize, self.sizes.0 as usize, self.lanes())
             + if last { after as u64 + 16 } else { 0 };
         // Appending costs twice would corrupt the iteration: only FIRST or weigh-only repeat.
         let repeatable = first || n == 0;
@@ -480,7 +543,10 @@ impl BoardClient {
     }
 
     /// Nearest model point and squared distance of scan points `first .. first + count` at
-    /// `pose`, in frames of [`MAX_NEAREST`]; `cost` is their sum.
+    /// `pose`, in frames of [`MAX_NEAREST`]; `cost` is their sum. The indices are the
+    /// board's: positions in its model store (for a gridded model, the sorted points;
+    /// [`Self::nearest_model`] gives the host's), and a protocol 3 board reports a point
+    /// farther than the cap as index 0 at distance [`CAP_D2`].
     pub fn nearest(&mut self, first: usize, count: usize, pose: &FxPose) -> Result<NearestReply, BoardError> {
         if count == 0 || first + count > MAX_POINTS {
             return Err(BoardError::Limit(format!(
@@ -493,7 +559,7 @@ impl BoardClient {
         while at < first + count {
             let n = (first + count - at).min(MAX_NEAREST);
             let request = NearestRequest { first: at as u16, count: n as u16, pose: *pose };
-            let clocks = clocks_per_particle(n, self.sizes.0 as usize, self.lanes());
+            let clocks = clocks_bound(n, self.sizes.0 as usize, self.lanes());
             let reply = self.transact(Command::Nearest, request.encode(), 10 + 7 * n, clocks, true)?;
             let bad = |problem| BoardError::Reply { command: Command::Nearest, problem };
             let r = NearestReply::decode(&reply.data, &request).map_err(bad)?;
@@ -513,6 +579,31 @@ impl BoardClient {
             at += n;
         }
         Ok(out)
+    }
+
+    /// [`Self::nearest`] in the host's terms: for each scan point, the index of its nearest
+    /// model point in the model as the host has it (before the grid's sort: through
+    /// [`Grid::order`] of the last [`Self::load_grid`]) and the squared distance, or `None`
+    /// when the distance is capped (`CAP_D2`, no point within `h`). After a plain
+    /// [`Self::load_model`] (a board of protocol 1 or 2, brute force, no cap) the indices
+    /// are the upload's as they are.
+    pub fn nearest_model(
+        &mut self,
+        first: usize,
+        count: usize,
+        pose: &FxPose,
+    ) -> Result<Vec<Option<(usize, u64)>>, BoardError> {
+        let r = self.nearest(first, count, pose)?;
+        let order = self.grid_order.as_deref();
+        if let Some(o) = order {
+            if let Some(&(i, _)) = r.results.iter().find(|&&(i, _)| i as usize >= o.len()) {
+                return Err(BoardError::Reply {
+                    command: Command::Nearest,
+                    problem: MessageError::Field { field: "model index", got: i as u64, expected: o.len() as u64 },
+                });
+            }
+        }
+        Ok(upload_order(&r.results, order))
     }
 
     fn max_particles(&self) -> usize {
@@ -535,6 +626,20 @@ fn no_answer(e: &BoardError) -> String {
         BoardError::Retries { attempts, .. } => format!("no valid reply in {attempts} attempts"),
         e => e.to_string(),
     }
+}
+
+/// Nearest results (stored index, squared distance) in the host's model order: through
+/// `order` ([`Grid::order`]) with a capped distance as `None` when the model was gridded,
+/// the indices as they are otherwise. Every index must lie within `order`.
+pub fn upload_order(results: &[(u16, u64)], order: Option<&[u16]>) -> Vec<Option<(usize, u64)>> {
+    results
+        .iter()
+        .map(|&(i, d2)| match order {
+            Some(_) if d2 >= CAP_D2 => None,
+            Some(o) => Some((o[i as usize] as usize, d2)),
+            None => Some((i as usize, d2)),
+        })
+        .collect()
 }
 
 /// The Identify fields, one per line (`pficp board info`).

@@ -7,8 +7,12 @@
 //!
 //! 1. Both clouds are normalised by their own similarity ([`Normalisation::of`]) and
 //!    quantised to Q3.13. The model goes to the model store (at most 4,096 points: a larger
-//!    model is subsampled, the same points for the same seed), the weight sample (the scan
-//!    points the software filter takes its costs over) to the scan store.
+//!    model is subsampled, the same points for the same seed): on a protocol 3 board
+//!    gridded (sorted by cell, with its cell table: [`BoardClient::load_grid`]; its costs
+//!    cap each distance at `h^2`), on a version 1 or 2 board as it is (brute force). The
+//!    weight sample (the scan points the software filter takes its costs over) goes to the
+//!    scan store in Morton order ([`super::morton_sorted`]; the costs are sums, so the
+//!    order only saves the grid pipeline's clocks).
 //! 2. Each iteration the particles' poses are normalised and quantised
 //!    ([`normalised_pose`], [`quantise_pose`]) and sent in Evaluate frames without LAST; the
 //!    board returns each cost (a sum of squared distances in Q8.26 units, normalised frame).
@@ -24,14 +28,17 @@
 
 use super::fixed::{normalised_pose, quantise_pose, Normalisation};
 use super::on_board::OnBoardStep;
-use super::{board_model, BoardClient, BoardError, ClientStats, Upload, MAX_PARTICLES, MAX_POINTS};
+use super::{
+    board_grid, board_model, morton_sorted, BoardClient, BoardError, ClientStats, Upload, MAX_PARTICLES, MAX_POINTS,
+};
 use crate::geometry::Pose;
 use crate::nn::NearestNeighbours;
 use crate::pf_icp::particle_filter::{tempered_q, WeighError, Weighed};
 use crate::pf_icp::{register_with, ParticleWeights, PfIcpResult, PfIcpSettings};
 use nalgebra::Point3;
 use pficp_fpga::format::{FxPoint, FxPose, WeightScale, DIST_FRAC};
-use pficp_fpga::messages::Identity;
+use pficp_fpga::grid::Grid;
+use pficp_fpga::messages::{Identity, POINT_BYTES};
 use pficp_fpga::protocol::VERSION;
 use std::sync::Mutex;
 
@@ -70,6 +77,9 @@ struct BoardWeights<'a> {
     model_norm: Normalisation,
     scan_norm: Normalisation,
     model: Vec<FxPoint>,
+    /// The model gridded, for a protocol 3 board (`None`: a brute-force board of version 1
+    /// or 2, which gets `model` as it is).
+    grid: Option<Grid>,
     /// Points in the scan store (set by `prepare`).
     sample: Mutex<usize>,
     iterations: Mutex<usize>,
@@ -94,8 +104,13 @@ impl ParticleWeights for BoardWeights<'_> {
                 sample.len()
             ))));
         }
-        let scan = self.scan_norm.quantise(sample);
-        client.load_model(&self.model, |done, total| progress(OnBoardStep::Upload(Upload::Model), done, total))?;
+        let scan = morton_sorted(&self.scan_norm.quantise(sample));
+        let mut upload = |done, total| progress(OnBoardStep::Upload(Upload::Model), done, total);
+        match &self.grid {
+            Some(grid) => client.load_grid(grid, upload)?,
+            // Progress in data bytes either way (6 a point).
+            None => client.load_model(&self.model, |done, total| upload(done * POINT_BYTES, total * POINT_BYTES))?,
+        }
         client.load_scan(&scan, |done, total| progress(OnBoardStep::Upload(Upload::Scan), done, total))?;
         client.set_sizes(self.model.len(), scan.len())?;
         *self.sample.lock().expect("not poisoned") = scan.len();
@@ -150,10 +165,11 @@ pub fn register_reporting(
     progress: &mut (dyn FnMut(OnBoardStep, usize, usize) + Send),
 ) -> Result<BoardPfResult, BoardError> {
     let identity = client.identify()?;
-    // Version 2 only added Run, Status and Result: the host-driven commands are version 1's.
-    if identity.version != VERSION && identity.version != 1 {
+    // Version 2 only added Run, Status and Result: the host-driven commands are version 1's;
+    // version 3 searches the model through a cell table, which the host uploads with it.
+    if !(1..=VERSION).contains(&identity.version) {
         return Err(BoardError::Limit(format!(
-            "the board speaks protocol version {}, this host {VERSION} (and 1 for the host-driven mode)",
+            "the board speaks protocol version {}, this host {VERSION} (1 to {VERSION} for the host-driven mode)",
             identity.version
         )));
     }
@@ -176,8 +192,11 @@ pub fn register_reporting(
     let board_points = board_model(model, max_model, settings.seed);
     let model_norm = Normalisation::of(model);
     let scan_norm = Normalisation::of(scan);
+    let model_q = model_norm.quantise(&board_points);
+    let grid = if identity.version >= 3 { Some(board_grid(&model_q)?) } else { None };
     let source = BoardWeights {
-        model: model_norm.quantise(&board_points),
+        model: model_q,
+        grid,
         client: Mutex::new(client),
         progress: Mutex::new(progress),
         cap: settings.iterations,

@@ -22,6 +22,8 @@ pub use client::*;
 pub use error::BoardError;
 
 use nalgebra::Point3;
+use pficp_fpga::format::FxPoint;
+use pficp_fpga::grid::{cell_of, Grid, CELLS_PER_AXIS, GRID_BITS};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
@@ -55,4 +57,33 @@ pub fn board_model(model: &[Point3<f64>], max: usize, seed: u64) -> Vec<Point3<f
     let mut picks = rand::seq::index::sample(&mut rng, model.len(), max).into_vec();
     picks.sort_unstable();
     picks.into_iter().map(|i| model[i]).collect()
+}
+
+/// The board's gridded model (protocol 3: the model store sorted by cell and the cell
+/// table, `pficp_fpga::grid`) of the normalised, quantised model points. A model the grid
+/// refuses (a point outside the cube `[-1, 1]^3`, more points than the board stores) is a
+/// one-line [`BoardError::Limit`]; the host's normalisation puts every model point in the
+/// unit ball, so it does not happen to a model planned by the host.
+pub fn board_grid(model: &[FxPoint]) -> Result<Grid, BoardError> {
+    Grid::build(model).map_err(|e| BoardError::Limit(format!("the board's grid refuses the model: {e}")))
+}
+
+/// The Morton key (Z order: the cell's bits interleaved, `x` lowest) of a point's grid
+/// cell, each axis clipped to the grid.
+pub fn morton_key(p: FxPoint) -> u32 {
+    let k = cell_of(p).map(|c| c.clamp(0, CELLS_PER_AXIS as i32 - 1) as u32);
+    (0..GRID_BITS).map(|b| ((k[0] >> b & 1) | (k[1] >> b & 1) << 1 | (k[2] >> b & 1) << 2) << (3 * b)).sum()
+}
+
+/// The scan sample in the order the grid pipeline wants it: sorted by the [`morton_key`]
+/// of each point's cell in the normalised scan frame, ties in the given order (a stable
+/// sort). The board's grid pipeline takes the scan in batches of its lanes and sweeps the
+/// rows of cells around each batch's points (docs/pipeline.md, "The grid pipeline"), so
+/// points close in space must be consecutive; a rigid motion with a scale keeps them close
+/// under any particle's pose, so one order serves the whole filter. Costs are sums over
+/// the sample, so the order changes no result, only the board's clocks.
+pub fn morton_sorted(scan: &[FxPoint]) -> Vec<FxPoint> {
+    let mut s = scan.to_vec();
+    s.sort_by_key(|&p| morton_key(p));
+    s
 }

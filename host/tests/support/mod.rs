@@ -182,6 +182,11 @@ pub fn poses(n: usize, seed: u64) -> Vec<FxPose> {
         .collect()
 }
 
+/// The model gridded as the host uploads it.
+pub fn grid(model: &[FxPoint]) -> pficp_fpga::grid::Grid {
+    pficp_fpga::grid::Grid::build(model).expect("a model in the cube")
+}
+
 /// A client on the reference with the model and scan loaded and sized.
 pub fn loaded(model: &[FxPoint], scan: &[FxPoint]) -> (PtyBoard, BoardClient) {
     let mut board = PtyBoard::reference();
@@ -190,10 +195,12 @@ pub fn loaded(model: &[FxPoint], scan: &[FxPoint]) -> (PtyBoard, BoardClient) {
     (board, client)
 }
 
-/// Identify, load the model and the scan, set the sizes.
+/// Identify, load the model gridded (protocol 3: sorted by cell, with its cell table; the
+/// board's indices are then the grid's, `grid(model).order` maps them to `model`'s) and
+/// the scan, set the sizes.
 pub fn upload(client: &mut BoardClient, model: &[FxPoint], scan: &[FxPoint]) {
     client.identify().unwrap();
-    client.load_model(model, |_, _| {}).unwrap();
+    client.load_grid(&grid(model), |_, _| {}).unwrap();
     client.load_scan(scan, |_, _| {}).unwrap();
     client.set_sizes(model.len(), scan.len()).unwrap();
 }

@@ -11,13 +11,14 @@
 //! bytes makes the figure an upper bound, by at most their wire time (printed).
 //!
 //! The board time is every clock from the first byte of the model load to the last byte of
-//! the Result reply: loading the model and the scan sample, SetSizes, Run, the filter, a
+//! the Result reply: loading the model (sorted by cell), the scan sample and the cell
+//! table, SetSizes, Run, the filter, a
 //! Status poll every 50 ms of board time (as the host client polls), Status and Result.
 //! The board's bytes are compared with the byte-level reference on the way (Status replies
 //! of a running filter excepted). The prior and the polish run on the host (not timed here:
 //! the host's stages are the software mode's).
 //!
-//! `pficp-onboard-bench [--model-points 2000] [--scan-points 1000] [--board-points 100]
+//! `pficp-onboard-bench [--model-points 2000] [--scan-points 1000] [--board-points 300]
 //! [--particles 50] [--iterations 50] [--runs 3] [--seed 1]`; run in release.
 
 use anyhow::{bail, Context, Result};
@@ -44,7 +45,7 @@ struct Args {
     #[arg(long, default_value_t = 1000)]
     scan_points: usize,
     /// Scan points on the board (the weight sample).
-    #[arg(long, default_value_t = 100)]
+    #[arg(long, default_value_t = on_board::DEFAULT_BOARD_POINTS)]
     board_points: usize,
     /// Particles.
     #[arg(long, default_value_t = 50)]
@@ -103,7 +104,7 @@ fn main() -> Result<()> {
     let soft = soft.context("no software run")?;
 
     // The board.
-    let plan = on_board::plan(&nn, &ds.scan, &settings, a.board_points, 4096);
+    let plan = on_board::plan(&nn, &ds.scan, &settings, a.board_points, 4096)?;
     let config = BoardConfig::default();
     let mut b = SerialBoard::new(config).with_reference();
     b.run(100);
@@ -114,13 +115,20 @@ fn main() -> Result<()> {
         *s = s.wrapping_add(1).max(1);
         *s
     };
-    for (cmd, pts) in [(Command::LoadModel, &plan.model), (Command::LoadScan, &plan.scan)] {
+    // The model gridded (sorted by cell, then its cell table), as the host uploads it.
+    let mut loads = Vec::new();
+    for (cmd, pts) in [(Command::LoadModel, &plan.grid.points), (Command::LoadScan, &plan.scan)] {
         for (k, chunk) in pts.chunks(messages::MAX_LOAD_POINTS).enumerate() {
-            let data = messages::load_request((k * messages::MAX_LOAD_POINTS) as u16, chunk);
-            let r = exchange(&mut b, &Frame { code: cmd as u8, seq: next(&mut seq), data })?;
-            if r.code != cmd as u8 | 0x80 {
-                bail!("load refused: {r:?}");
-            }
+            loads.push((cmd, messages::load_request((k * messages::MAX_LOAD_POINTS) as u16, chunk)));
+        }
+    }
+    for (k, chunk) in plan.grid.first.chunks(messages::MAX_LOAD_ENTRIES).enumerate() {
+        loads.push((Command::LoadTable, messages::table_request((k * messages::MAX_LOAD_ENTRIES) as u16, chunk)));
+    }
+    for (cmd, data) in loads {
+        let r = exchange(&mut b, &Frame { code: cmd as u8, seq: next(&mut seq), data })?;
+        if r.code != cmd as u8 | 0x80 {
+            bail!("load refused: {r:?}");
         }
     }
     let sizes = messages::two_u16(plan.model.len() as u16, plan.scan.len() as u16);

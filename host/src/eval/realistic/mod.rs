@@ -67,10 +67,14 @@ pub struct RealisticOptions {
     pub pf: PfIcpSettings,
     /// Also run PF-ICP with the filter on the board (column `pf-icp-board`): the host's
     /// prior and conclusion around `fpga::pf::run`, the bit-exact reference of the board's
-    /// filter (what the Verilated board computes, byte for byte), with the default board
-    /// sample ([`crate::board::on_board::DEFAULT_BOARD_POINTS`]) and at most
-    /// [`crate::board::MAX_POINTS`] model points.
+    /// filter (what the board computes, byte for byte: the grid search over the gridded
+    /// model), with `board_points` scan points and at most [`crate::board::MAX_POINTS`]
+    /// model points; and the board's pose alone, without the host's polish (column
+    /// `pf-icp-board-filter`).
     pub board: bool,
+    /// The board's scan sample with `board`
+    /// ([`crate::board::on_board::DEFAULT_BOARD_POINTS`] by default).
+    pub board_points: usize,
     /// Write `realistic.json` here (created if missing).
     pub out_dir: Option<PathBuf>,
     /// Export the cases (clouds and `cases.json`) for the peers' script here.
@@ -89,6 +93,7 @@ impl Default for RealisticOptions {
             methods: vec![Method::PfIcp],
             pf: PfIcpSettings::default(),
             board: false,
+            board_points: crate::board::on_board::DEFAULT_BOARD_POINTS,
             out_dir: None,
             export: None,
             progress: true,
@@ -202,13 +207,16 @@ pub struct RealisticReport {
     pub families: Vec<FamilyReport>,
 }
 
-/// Name of the on-board column.
+/// Name of the on-board column (the board's filter and the host's polish).
 pub const BOARD_COLUMN: &str = "pf-icp-board";
+/// Name of the column of the board's pose alone (no polish).
+pub const BOARD_FILTER_COLUMN: &str = "pf-icp-board-filter";
 
 fn method_columns(opts: &RealisticOptions) -> Vec<String> {
     let mut v: Vec<String> = opts.methods.iter().map(|m| m.name().to_string()).collect();
     if opts.board {
         v.push(BOARD_COLUMN.to_string());
+        v.push(BOARD_FILTER_COLUMN.to_string());
     }
     v
 }
@@ -218,15 +226,13 @@ fn on_board_reference(
     nn: &NearestNeighbours,
     scan: &[Point3<f64>],
     settings: &PfIcpSettings,
-) -> crate::pf_icp::PfIcpResult {
-    use crate::board::on_board::{finish, plan, DEFAULT_BOARD_POINTS};
-    use pficp_fpga::pf;
-    let plan = plan(nn, scan, settings, DEFAULT_BOARD_POINTS, crate::board::MAX_POINTS);
-    // Interim (the host's grid upload follows): the model as the board will hold it.
-    let grid = pficp_fpga::grid::Grid::build(&plan.model).unwrap_or_else(|e| panic!("board model: {e}"));
-    let out = pf::run(&plan.config, |p| pf::evaluate(&grid, &plan.scan, p));
+    board_points: usize,
+) -> anyhow::Result<crate::pf_icp::PfIcpResult> {
+    use crate::board::on_board::{finish, plan};
+    let plan = plan(nn, scan, settings, board_points, crate::board::MAX_POINTS)?;
+    let out = plan.emulate();
     let reply = pficp_fpga::messages::ResultReply::of(&out);
-    finish(&plan, nn, scan, settings, &reply, std::time::Duration::ZERO)
+    Ok(finish(&plan, nn, scan, settings, &reply, std::time::Duration::ZERO))
 }
 
 /// Case `index` of `family` in the options' split.
@@ -286,7 +292,8 @@ pub fn run(opts: &RealisticOptions) -> anyhow::Result<RealisticReport> {
                 .collect();
             if opts.board {
                 let t = Instant::now();
-                let pf = on_board_reference(&nn, &c.scan, &settings.pf);
+                let pf = on_board_reference(&nn, &c.scan, &settings.pf, opts.board_points)
+                    .with_context(|| format!("case {}", c.id))?;
                 let seconds = t.elapsed().as_secs_f64();
                 let sc = score(&pf.registration.pose, &c);
                 let g = c.shape.symmetries()[sc.symmetry];
@@ -301,6 +308,18 @@ pub fn run(opts: &RealisticOptions) -> anyhow::Result<RealisticReport> {
                     score: sc,
                     seconds,
                     cost: surface.cost(&c.scan, &pf.registration.pose, 0.05 * c.diag),
+                });
+                // The board's pose alone: no polish, no conclusion (so no region).
+                let sc = score(&pf.filter_pose, &c);
+                results.push(CaseResult {
+                    method: BOARD_FILTER_COLUMN.to_string(),
+                    alternatives: None,
+                    mahalanobis2: None,
+                    dof: None,
+                    inside_95: None,
+                    score: sc,
+                    seconds,
+                    cost: surface.cost(&c.scan, &pf.filter_pose, 0.05 * c.diag),
                 });
             }
             let mut truth = c.truth.to_params();
@@ -341,7 +360,7 @@ pub fn run(opts: &RealisticOptions) -> anyhow::Result<RealisticReport> {
             .enumerate()
             .map(|(j, m)| {
                 let held: Vec<&CaseRecord> = cases.iter().filter(|c| c.held_out).collect();
-                let pf = m.starts_with(Method::PfIcp.name());
+                let pf = m.starts_with(Method::PfIcp.name()) && m != BOARD_FILTER_COLUMN;
                 FamilyCell {
                     method: m.clone(),
                     successes: cases.iter().filter(|c| c.results[j].score.success).count(),
@@ -423,7 +442,7 @@ impl RealisticReport {
             header.push(format!("{m} success"));
             header.push(format!("{m} held-out"));
             header.push(format!("{m} median s"));
-            if m.starts_with(Method::PfIcp.name()) {
+            if m.starts_with(Method::PfIcp.name()) && m != BOARD_FILTER_COLUMN {
                 header.push("truth in 95% region".to_string());
                 header.push("ambiguous".to_string());
             }
