@@ -221,7 +221,11 @@ impl Identity {
 
     /// Parse the reply data.
     pub fn decode(d: &[u8]) -> Result<Self, MessageError> {
-        need(d, IDENTITY_BYTES)?;
+        // Boards before protocol 3 send no digest (26 bytes): it reads as `DIGEST_NONE`.
+        let old = d.len() == IDENTITY_BYTES - DIGEST_BYTES && d.len() >= 2 && le(&d[0..2]) < 3;
+        if !old {
+            need(d, IDENTITY_BYTES)?;
+        }
         Ok(Identity {
             version: le(&d[0..2]) as u16,
             lanes: d[2],
@@ -236,7 +240,7 @@ impl Identity {
             model_count: le(&d[20..22]) as u16,
             scan_count: le(&d[22..24]) as u16,
             stored: le(&d[24..26]) as u16,
-            model_digest: le(&d[26..30]) as u32,
+            model_digest: if old { crate::protocol::DIGEST_NONE } else { le(&d[26..30]) as u32 },
         })
     }
 }
@@ -589,6 +593,11 @@ mod tests {
         let id = Identity::of_board(16, 100_000_000, 921_600, 2000, 1000, 50);
         assert_eq!(id.encode().len(), IDENTITY_BYTES);
         assert_eq!(Identity::decode(&id.encode()), Ok(id));
+        // A protocol 2 board's 26 bytes read with no digest; a version 3 reply must have 30.
+        let old = Identity { version: 2, ..id.with_digest(0x1234_5678) };
+        let bytes = old.encode();
+        assert_eq!(Identity::decode(&bytes[..26]), Ok(old.with_digest(crate::protocol::DIGEST_NONE)));
+        assert!(Identity::decode(&id.encode()[..26]).is_err());
         let r = EvaluateReply {
             costs: vec![1, (1 << 48) - 1],
             summary: Some(WeightSummary { min_cost: 1, w_sum: 65535, weights: vec![65535, 0, 7] }),

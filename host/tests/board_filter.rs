@@ -487,3 +487,28 @@ fn a_board_without_the_on_board_filter_is_told_to_use_host_driven() {
     );
     assert_eq!(client.stats().requests, 1, "only Identify was answered: nothing uploaded");
 }
+
+/// The resident model: a second registration against the same board skips the model and
+/// table upload (Identify's digest matches) and gives the same pose; another model is
+/// uploaded again.
+#[test]
+fn a_resident_model_is_not_uploaded_twice() {
+    let (ds, _) = reduced_model_1();
+    let nn = NearestNeighbours::new(&ds.model);
+    let settings = PfIcpSettings { clusters: 25, particles: 20, iterations: 6, seed: 3, ..Default::default() };
+    let mut board = PtyBoard::reference();
+    let mut client = board.client();
+    let first = on_board_50(&mut client, &nn, &ds.scan, &settings).unwrap();
+    let after_first = client.stats();
+    assert_eq!(after_first.resident, 0);
+    let second = on_board_50(&mut client, &nn, &ds.scan, &settings).unwrap();
+    let s = client.stats();
+    assert_eq!(s.resident, 1, "the second registration found the model on the board");
+    let (sent1, sent2) = (after_first.bytes_sent, s.bytes_sent - after_first.bytes_sent);
+    assert!(sent2 * 3 < sent1, "the second sent {sent2} bytes, the first {sent1}");
+    assert_eq!(second.pf.filter_pose, first.pf.filter_pose);
+    // A different model (the scan's points as the model) is uploaded.
+    let other = NearestNeighbours::new(&ds.scan);
+    on_board_50(&mut client, &other, &ds.model, &settings).unwrap();
+    assert_eq!(client.stats().resident, 1);
+}

@@ -105,6 +105,8 @@ pub struct ClientStats {
     pub bytes_sent: usize,
     /// Bytes read.
     pub bytes_received: usize,
+    /// Model uploads skipped: the board already held the model (its digest matched).
+    pub resident: usize,
 }
 
 mod filter;
@@ -332,6 +334,20 @@ impl BoardClient {
         })?;
         self.grid_order = Some(grid.order.clone());
         Ok(())
+    }
+
+    /// [`Self::load_grid`] unless the board already holds `grid`: a fresh Identify whose
+    /// model digest is the one this upload would leave (`messages::grid_digest`;
+    /// docs/protocol.md, "Resident model"). True when it uploaded.
+    pub fn ensure_grid(&mut self, grid: &Grid, progress: impl FnMut(usize, usize)) -> Result<bool, BoardError> {
+        let id = self.identify()?;
+        if id.version >= 3 && id.model_digest == pficp_fpga::messages::grid_digest(grid) {
+            self.grid_order = Some(grid.order.clone());
+            self.stats.resident += 1;
+            return Ok(false);
+        }
+        self.load_grid(grid, progress)?;
+        Ok(true)
     }
 
     fn check_ack(&self, command: Command, data: &[u8], offset: usize, count: usize) -> Result<(), BoardError> {

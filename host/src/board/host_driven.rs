@@ -107,7 +107,9 @@ impl ParticleWeights for BoardWeights<'_> {
         let scan = morton_sorted(&self.scan_norm.quantise(sample));
         let mut upload = |done, total| progress(OnBoardStep::Upload(Upload::Model), done, total);
         match &self.grid {
-            Some(grid) => client.load_grid(grid, upload)?,
+            Some(grid) => {
+                client.ensure_grid(grid, upload)?;
+            }
             // Progress in data bytes either way (6 a point).
             None => client.load_model(&self.model, |done, total| upload(done * POINT_BYTES, total * POINT_BYTES))?,
         }

@@ -397,7 +397,7 @@ pub fn register_on_board(
     let max_model = (identity.max_model as usize).min(MAX_POINTS);
     let plan = plan(nn, scan, settings, board_points, max_model)?;
     let start = Instant::now();
-    client.load_grid(&plan.grid, |done, total| progress(OnBoardStep::Upload(Upload::Model), done, total))?;
+    client.ensure_grid(&plan.grid, |done, total| progress(OnBoardStep::Upload(Upload::Model), done, total))?;
     client.load_scan(&plan.scan, |done, total| progress(OnBoardStep::Upload(Upload::Scan), done, total))?;
     client.set_sizes(plan.model.len(), plan.scan.len())?;
     let modelled = client.modelled_run_time(&plan.config);
