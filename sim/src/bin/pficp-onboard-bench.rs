@@ -143,16 +143,8 @@ fn registration(b: &mut SerialBoard, plan: &on_board::OnBoardPlan, config: Board
     let r = exchange(b, &Frame { code: Command::Result as u8, seq: next(), data: vec![] })?;
     let result = ResultReply::decode(&r.data)?;
     let bytes1 = b.byte_counts();
-    let bytes = (bytes1.0 - bytes0.0 + bytes1.1 - bytes0.1) as u64;
-    Ok(Registration {
-        uploaded,
-        clocks: b.clocks() - t0,
-        load_clocks,
-        bytes,
-        poll_bytes: poll_bytes as u64,
-        polls,
-        result,
-    })
+    let bytes = bytes1.0 - bytes0.0 + bytes1.1 - bytes0.1;
+    Ok(Registration { uploaded, clocks: b.clocks() - t0, load_clocks, bytes, poll_bytes, polls, result })
 }
 
 fn main() -> Result<()> {
