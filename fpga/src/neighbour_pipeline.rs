@@ -42,9 +42,14 @@ pub const RANGE_QUEUE: usize = 4;
 /// table's two copies); the centre row, the one most likely to hold points, comes last so
 /// that a point's last slot seldom finds nothing (which costs a marker chunk).
 pub const SLOTS: [(usize, Option<usize>); 5] = [(0, Some(1)), (2, Some(3)), (5, Some(6)), (7, Some(8)), (4, None)];
-/// Edges from a chunk's issue to its result leaving the accumulator, less the tree's
-/// `log2 P` levels: bank read, difference, square, two sums, clamp, accumulate.
-pub const CHUNK_LATENCY: usize = 7;
+/// Levels of the min-tree (registered each), whatever `P`: the lanes are padded to
+/// [`TREE_LEAVES`] with the neutral key.
+pub const TREE_LEVELS: usize = 4;
+/// Leaves of the min-tree.
+pub const TREE_LEAVES: usize = 1 << TREE_LEVELS;
+/// Edges from a chunk's issue to its result leaving the accumulator: bank read, difference,
+/// square, two sums, clamp, the tree's levels, accumulate.
+pub const CHUNK_LATENCY: usize = 7 + TREE_LEVELS;
 
 /// A `(d2, index)` pair as one lexicographic key: `d2 << 12 | index` (`d2 <= CAP_D2`).
 fn key(d2: u64, index: u16) -> u64 {
@@ -156,7 +161,8 @@ struct Ctl {
     slast: bool,
 }
 
-/// The register state of the neighbour pipeline with `P` lanes.
+/// The register state of the neighbour pipeline with `P` lanes (`P` a power of two up to
+/// [`TREE_LEAVES`]).
 #[derive(Clone, Debug)]
 pub struct NeighbourPipelineModel {
     lanes: usize,
@@ -225,7 +231,7 @@ impl NeighbourPipelineModel {
             s2: (z(0), vec![false; lanes], vec![0; lanes], vec![[0; 3]; lanes]),
             s3: (z(0), vec![false; lanes], vec![0; lanes], vec![(0, 0); lanes]),
             s4: (z(0), vec![false; lanes], vec![0; lanes], vec![0; lanes]),
-            tree: (0..=log2).map(|l| (z(0), vec![0; lanes >> l])).collect(),
+            tree: (0..=TREE_LEVELS).map(|l| (z(0), vec![0; if l == 0 { lanes } else { TREE_LEAVES >> l }])).collect(),
             acc_used: false,
             acc: 0,
             fin: false,
@@ -412,9 +418,11 @@ impl NeighbourPipelineModel {
                 })
                 .collect();
         next.tree[0] = (*c4, keys);
+        // The tree has four levels whatever `P` (the lanes padded to 16 with the neutral key).
         for l in 1..self.tree.len() {
             let (c, k) = &self.tree[l - 1];
-            next.tree[l] = (*c, k.chunks(2).map(|pair| pair[0].min(pair[1])).collect());
+            let padded: Vec<u64> = (0..TREE_LEAVES >> (l - 1)).map(|j| k.get(j).copied().unwrap_or(CAP_KEY)).collect();
+            next.tree[l] = (*c, padded.chunks(2).map(|pair| pair[0].min(pair[1])).collect());
         }
         // Accumulate a point's chunks; its last chunk presents the result.
         let (ct, kt) = &self.tree[self.tree.len() - 1];

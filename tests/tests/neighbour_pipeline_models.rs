@@ -14,6 +14,7 @@ use pficp_fpga::grid::{cell_of, Grid};
 use pficp_fpga::grid_pipeline::{self, evaluate_grid};
 use pficp_fpga::neighbour_pipeline::{chunks_of, clocks_per_particle};
 use pficp_fpga::pipeline;
+use pficp_sim::NeighbourLockstep;
 
 const LANES: usize = 16;
 
@@ -56,6 +57,27 @@ fn shuffled(scan: &[FxPoint]) -> Vec<FxPoint> {
         s.swap(i, (x % (i as u64 + 1)) as usize);
     }
     s
+}
+
+#[test]
+fn models_in_lockstep_at_16_lanes() {
+    let mut ls = NeighbourLockstep::new(LANES);
+    for id in ModelId::ALL {
+        let (grid, scan, poses) = case(id, 300);
+        ls.upload(&grid).unwrap_or_else(|m| panic!("{}: {m}", id.name()));
+        for (k, pose) in poses.iter().enumerate() {
+            for (order, s) in [("random", shuffled(&scan)), ("Morton", sorted_by_morton(&scan, &poses[0]))] {
+                let (got, clocks) = ls
+                    .particle(&s, pose, |c| k == 1 && c % 7 == 0, |_, _| {})
+                    .unwrap_or_else(|m| panic!("{} pose {k} {order}: {m}", id.name()));
+                assert_eq!(got, evaluate_grid(&grid, &s, pose), "{} pose {k} {order}", id.name());
+                if k == 0 {
+                    assert_eq!(clocks, clocks_per_particle(&grid, &s, pose, LANES).clocks);
+                }
+            }
+        }
+    }
+    eprintln!("models 1-3: {} clocks compared in lockstep (P = 16)", ls.clocks_compared());
 }
 
 #[test]
