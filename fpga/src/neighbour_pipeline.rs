@@ -434,13 +434,18 @@ impl NeighbourPipelineModel {
                 next.out.nn_valid = true;
                 next.out.nn_index = (m & 0xfff) as u16;
                 next.out.nn_dist = m >> 12;
-                next.cost = (self.cost + (m >> 12)) & COST_MASK;
                 next.acc_used = false;
                 next.fin = ct.slast;
             } else {
                 next.acc = m;
                 next.acc_used = true;
             }
+        }
+        // The cost adds each result the edge after it is presented (off the accumulator's
+        // compare path); the particle's end presents the sum with the last result.
+        let cost_sum = (self.cost + self.out.nn_dist) & COST_MASK;
+        if self.out.nn_valid {
+            next.cost = cost_sum;
         }
         // Memories: read first (above), then written.
         if i.model_we {
@@ -472,7 +477,7 @@ impl NeighbourPipelineModel {
                 }
                 if self.fin {
                     next.out.cost_valid = true;
-                    next.out.cost = self.cost;
+                    next.out.cost = cost_sum;
                     next.fin = false;
                     next.state = State::Idle;
                 }

@@ -169,6 +169,7 @@ pub struct NeighbourPipeline<const P: usize> {
     ch_last: Signal<Local, Bit>,
     m: Signal<Local, Bits<33>>,
     nn_d: Signal<Local, Bits<34>>,
+    cost_sum: Signal<Local, Bits<48>>,
 }
 
 impl<const P: usize> NeighbourPipeline<P> {
@@ -305,6 +306,7 @@ impl<const P: usize> NeighbourPipeline<P> {
             ch_last: Default::default(),
             m: Default::default(),
             nn_d: Default::default(),
+            cost_sum: Default::default(),
         }
     }
 }
@@ -761,13 +763,18 @@ impl<const P: usize> Logic for NeighbourPipeline<P> {
                 self.nn_valid_r.d.next = true;
                 self.nn_index_r.d.next = self.m.val().get_bits::<12>(0);
                 self.nn_dist_r.d.next = self.nn_d.val();
-                self.cost_acc.d.next = self.cost_acc.q.val() + bit_cast::<48, 34>(self.nn_d.val());
                 self.acc_used.d.next = false;
                 self.fin.d.next = self.ctl_s[8].q.val();
             } else {
                 self.acc.d.next = self.m.val();
                 self.acc_used.d.next = true;
             }
+        }
+        // The cost adds each result the edge after it is presented (off the accumulator's
+        // compare path); the particle's end presents the sum with the last result.
+        self.cost_sum.next = self.cost_acc.q.val() + bit_cast::<48, 34>(self.nn_dist_r.q.val());
+        if self.nn_valid_r.q.val() {
+            self.cost_acc.d.next = self.cost_sum.val();
         }
         // State: idle or running a particle.
         if !self.run.q.val() {
@@ -782,7 +789,7 @@ impl<const P: usize> Logic for NeighbourPipeline<P> {
             }
             if self.fin.q.val() {
                 self.cost_valid_r.d.next = true;
-                self.cost_r.d.next = self.cost_acc.q.val();
+                self.cost_r.d.next = self.cost_sum.val();
                 self.fin.d.next = false;
                 self.run.d.next = false;
             }
