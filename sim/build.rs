@@ -5,6 +5,8 @@
 //!   `pficp_fpga::rtl::particle_weights_verilog(P)` (prefix `VpwP`);
 //! - `grid_pipeline`: `GridPipeline<P>` from `pficp_fpga::rtl::grid_pipeline_verilog(P)`
 //!   (prefix `VgridP`);
+//! - `neighbour_pipeline`: `NeighbourPipeline<P>` from
+//!   `pficp_fpga::rtl::neighbour_pipeline_verilog(P)` (prefix `VnbrP`; the grid pipeline's ports);
 //! - `weight_stage`: `WeightStage` from `pficp_fpga::rtl::weight_stage_verilog()` (prefix
 //!   `Vweights`);
 //! - `sequencer`: `PfSequencer` alone, from `pficp_fpga::rtl::sequencer_verilog()`;
@@ -64,7 +66,7 @@ struct Design {
 }
 
 /// Every design that is verilated.
-const DESIGNS: [Design; 7] = [
+const DESIGNS: [Design; 8] = [
     Design {
         name: "pipeline",
         prefix: "Vpipe",
@@ -88,6 +90,14 @@ const DESIGNS: [Design; 7] = [
         verilog: pficp_fpga::rtl::grid_pipeline_verilog,
         ports: &[GRID_PIPELINE_PORTS],
         spec: "docs/pipeline.md (sim/src/ports.rs GRID_PIPELINE_PORTS)",
+    },
+    Design {
+        name: "neighbour_pipeline",
+        prefix: "Vnbr",
+        per_lane: true,
+        verilog: pficp_fpga::rtl::neighbour_pipeline_verilog,
+        ports: &[GRID_PIPELINE_PORTS],
+        spec: "docs/pipeline.md, the neighbour pipeline (sim/src/ports.rs GRID_PIPELINE_PORTS)",
     },
     Design {
         name: "weight_stage",

@@ -7,6 +7,8 @@
 //! - [`grid_pipeline`]: the cycle-accurate reference of the grid pipeline (the
 //!   nearest-neighbour pipeline sweeping only the rows of cells around a batch).
 //! - [`pipeline`]: the cycle-accurate reference of the nearest-neighbour pipeline.
+//! - [`neighbour_pipeline`]: the cycle-accurate reference of the neighbour pipeline (lanes
+//!   over one scan point's candidates in its 27 cells) and its functional reference.
 //! - [`weights`]: the cycle-accurate reference of the weight stage (minimum cost, exp table).
 //! - [`particle_weights`]: the two wired together, as the RTL top of that name.
 //! - [`pf`]: the on-board particle filter's bit-exact functional reference (`pf::run`), its
@@ -26,6 +28,7 @@ pub mod format;
 pub mod grid;
 pub mod grid_pipeline;
 pub mod messages;
+pub mod neighbour_pipeline;
 pub mod particle_weights;
 pub mod pf;
 pub mod pipeline;

@@ -27,7 +27,7 @@ struct Cli {
     lanes: usize,
     /// Which design to generate: the whole board (pins, UART, protocol engine, pipeline), the
     /// particle-weight pipeline (nearest-neighbour pipeline and weight stage), the
-    /// nearest-neighbour pipeline alone, the grid pipeline alone, or the weight stage alone. Only the board has pins,
+    /// nearest-neighbour pipeline alone, the grid pipeline alone, the neighbour pipeline alone, or the weight stage alone. Only the board has pins,
     /// so only the board gets a UCF and an ISE script.
     #[arg(long, value_enum, default_value_t = Design::Board, conflicts_with = "verilog")]
     design: Design,
@@ -111,6 +111,9 @@ enum Design {
     /// `GridPipeline`: the nearest-neighbour pipeline with the grid search (not yet on the
     /// board).
     GridPipeline,
+    /// `NeighbourPipeline`: lanes over one scan point's candidates in its 27 cells (not yet
+    /// on the board; the grid pipeline's ports).
+    NeighbourPipeline,
     /// `WeightStage` alone.
     Weights,
 }
@@ -124,8 +127,8 @@ fn design_name(design: Design) -> String {
 /// The design's Verilog with `lanes` lanes, from the RTL crate, and where it came from.
 fn generated_verilog(design: Design, lanes: usize, board: &BoardConfig) -> Result<(String, String)> {
     use pficp_fpga::rtl::{
-        board_verilog, grid_pipeline_verilog, particle_weights_verilog, pipeline_verilog, weight_stage_verilog,
-        SUPPORTED_LANES,
+        board_verilog, grid_pipeline_verilog, neighbour_pipeline_verilog, particle_weights_verilog, pipeline_verilog,
+        weight_stage_verilog, SUPPORTED_LANES,
     };
     if design != Design::Weights && !SUPPORTED_LANES.contains(&lanes) {
         bail!("--lanes {lanes} is not supported by the RTL; use one of {SUPPORTED_LANES:?}");
@@ -144,6 +147,10 @@ fn generated_verilog(design: Design, lanes: usize, board: &BoardConfig) -> Resul
         Design::Nn => (pipeline_verilog(lanes), format!("pficp_fpga::rtl::pipeline_verilog({lanes})")),
         Design::GridPipeline => {
             (grid_pipeline_verilog(lanes), format!("pficp_fpga::rtl::grid_pipeline_verilog({lanes})"))
+        }
+        Design::NeighbourPipeline if lanes < 2 => bail!("--design neighbour-pipeline needs at least 2 lanes"),
+        Design::NeighbourPipeline => {
+            (neighbour_pipeline_verilog(lanes), format!("pficp_fpga::rtl::neighbour_pipeline_verilog({lanes})"))
         }
         Design::Weights => (weight_stage_verilog(), "pficp_fpga::rtl::weight_stage_verilog()".to_string()),
     })

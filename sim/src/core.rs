@@ -39,6 +39,7 @@ pub use ffi::BUILD_REPORT;
 pub(crate) const PIPELINE: &str = "pipeline";
 pub(crate) const PARTICLE_WEIGHTS: &str = "particle_weights";
 pub(crate) const GRID_PIPELINE: &str = "grid_pipeline";
+pub(crate) const NEIGHBOUR_PIPELINE: &str = "neighbour_pipeline";
 pub(crate) const WEIGHT_STAGE: &str = "weight_stage";
 pub(crate) const BOARD: &str = "board";
 pub(crate) const BOARD_FAST: &str = "board_fast";

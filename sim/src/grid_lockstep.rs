@@ -1,8 +1,9 @@
-//! The grid pipeline (`GridPipeline<P>`) in lockstep with its cycle model: [`GridLockstep`]
-//! and its drivers (upload a gridded model, run a particle).
+//! The grid pipeline (`GridPipeline<P>`) and the neighbour pipeline (`NeighbourPipeline<P>`,
+//! the same ports) in lockstep with their cycle models: [`GridLockstep`],
+//! [`NeighbourLockstep`] and their drivers (upload a gridded model, run a particle).
 
 use crate::lockstep::{LockstepOf, Mismatch};
-use crate::wrappers::VerilatedGridPipeline;
+use crate::wrappers::{VerilatedGridPipeline, VerilatedNeighbourPipeline};
 use pficp_fpga::format::{FxPoint, FxPose};
 use pficp_fpga::grid::Grid;
 use pficp_fpga::grid_pipeline::{upload, GridInputs};
@@ -11,57 +12,81 @@ use pficp_fpga::pipeline::Evaluation;
 /// The Verilated grid pipeline and `GridPipelineModel` in lockstep.
 pub type GridLockstep = LockstepOf<VerilatedGridPipeline>;
 
+/// The Verilated neighbour pipeline and `NeighbourPipelineModel` in lockstep.
+pub type NeighbourLockstep = LockstepOf<VerilatedNeighbourPipeline>;
+
 impl LockstepOf<VerilatedGridPipeline> {
     /// The `lanes`-lane RTL and `GridPipelineModel::new(lanes)`, both after reset.
     pub fn new(lanes: usize) -> Self {
         Self::from_rtl(VerilatedGridPipeline::new(lanes))
     }
+}
 
-    /// Write the model (sorted by cell) and the cell table, one word a clock.
-    pub fn upload(&mut self, grid: &Grid) -> Result<(), Mismatch> {
-        upload(grid).iter().try_for_each(|w| self.step(w))
-    }
-
-    /// One particle: wait for `busy` to drop, `start` with `pose`, stream `scan` (offering a
-    /// point on the clocks, counted from the start edge = 1, where `gap(clock)` is false),
-    /// collect the results until `cost_valid`. `extra(clock, inputs)` may add model or
-    /// table writes to any clock's inputs. Returns the evaluation and the clocks from `start`
-    /// to `cost_valid`.
-    pub fn particle(
-        &mut self,
-        scan: &[FxPoint],
-        pose: &FxPose,
-        mut gap: impl FnMut(u64) -> bool,
-        mut extra: impl FnMut(u64, &mut GridInputs),
-    ) -> Result<(Evaluation, u64), Mismatch> {
-        assert!(!scan.is_empty());
-        let mut wait = 0u64;
-        while self.outputs().busy {
-            self.step(&GridInputs::default())?;
-            wait += 1;
-            assert!(wait < 1 << 32, "the pipeline never became idle");
-        }
-        self.step(&GridInputs::start(pose))?;
-        let (mut next, mut clocks) = (0, 1u64);
-        let mut nearest = Vec::with_capacity(scan.len());
-        // Generous bound: every batch sweeps 256 rows of at most 8,191 addresses (any table).
-        let limit = 1000 + (scan.len() as u64 + 1) * (256 * 8192 + 300);
-        loop {
-            let offer = next < scan.len() && !gap(clocks);
-            let mut inputs = GridInputs::offer(scan, next, offer);
-            extra(clocks, &mut inputs);
-            let took = offer && self.outputs().scan_ready;
-            self.step(&inputs)?;
-            clocks += 1;
-            next += usize::from(took);
-            let now = self.outputs();
-            if now.nn_valid {
-                nearest.push((now.nn_index, now.nn_dist));
-            }
-            if now.cost_valid {
-                return Ok((Evaluation { cost: now.cost, nearest }, clocks));
-            }
-            assert!(clocks < limit, "no cost_valid after {clocks} clocks ({next} of {} points taken)", scan.len());
-        }
+impl LockstepOf<VerilatedNeighbourPipeline> {
+    /// The `lanes`-lane RTL and `NeighbourPipelineModel::new(lanes)`, both after reset.
+    pub fn new(lanes: usize) -> Self {
+        Self::from_rtl(VerilatedNeighbourPipeline::new(lanes))
     }
 }
+
+/// Drivers shared by the two pipelines with the grid's ports.
+macro_rules! grid_port_drivers {
+    ($rtl:ty) => {
+        impl LockstepOf<$rtl> {
+            /// Write the model (sorted by cell) and the cell table, one word a clock.
+            pub fn upload(&mut self, grid: &Grid) -> Result<(), Mismatch> {
+                upload(grid).iter().try_for_each(|w| self.step(w))
+            }
+
+            /// One particle: wait for `busy` to drop, `start` with `pose`, stream `scan` (offering a
+            /// point on the clocks, counted from the start edge = 1, where `gap(clock)` is false),
+            /// collect the results until `cost_valid`. `extra(clock, inputs)` may add model or
+            /// table writes to any clock's inputs. Returns the evaluation and the clocks from `start`
+            /// to `cost_valid`.
+            pub fn particle(
+                &mut self,
+                scan: &[FxPoint],
+                pose: &FxPose,
+                mut gap: impl FnMut(u64) -> bool,
+                mut extra: impl FnMut(u64, &mut GridInputs),
+            ) -> Result<(Evaluation, u64), Mismatch> {
+                assert!(!scan.is_empty());
+                let mut wait = 0u64;
+                while self.outputs().busy {
+                    self.step(&GridInputs::default())?;
+                    wait += 1;
+                    assert!(wait < 1 << 32, "the pipeline never became idle");
+                }
+                self.step(&GridInputs::start(pose))?;
+                let (mut next, mut clocks) = (0, 1u64);
+                let mut nearest = Vec::with_capacity(scan.len());
+                // Generous bound: every batch sweeps 256 rows of at most 8,191 addresses (any table).
+                let limit = 1000 + (scan.len() as u64 + 1) * (256 * 8192 + 300);
+                loop {
+                    let offer = next < scan.len() && !gap(clocks);
+                    let mut inputs = GridInputs::offer(scan, next, offer);
+                    extra(clocks, &mut inputs);
+                    let took = offer && self.outputs().scan_ready;
+                    self.step(&inputs)?;
+                    clocks += 1;
+                    next += usize::from(took);
+                    let now = self.outputs();
+                    if now.nn_valid {
+                        nearest.push((now.nn_index, now.nn_dist));
+                    }
+                    if now.cost_valid {
+                        return Ok((Evaluation { cost: now.cost, nearest }, clocks));
+                    }
+                    assert!(
+                        clocks < limit,
+                        "no cost_valid after {clocks} clocks ({next} of {} points taken)",
+                        scan.len()
+                    );
+                }
+            }
+        }
+    };
+}
+
+grid_port_drivers!(VerilatedGridPipeline);
+grid_port_drivers!(VerilatedNeighbourPipeline);

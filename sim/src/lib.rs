@@ -4,6 +4,7 @@
 //! |---|---|---|---|
 //! | `pipeline_verilog(P)` (docs/pipeline.md), P in [`verilated_lanes`] | [`VerilatedPipeline`] | [`PipelineModel`](pficp_fpga::pipeline::PipelineModel) | [`Lockstep`] |
 //! | `grid_pipeline_verilog(P)` (docs/pipeline.md, the grid pipeline), the same P | [`VerilatedGridPipeline`] | [`GridPipelineModel`](pficp_fpga::grid_pipeline::GridPipelineModel) | [`GridLockstep`] |
+//! | `neighbour_pipeline_verilog(P)` (docs/pipeline.md, the neighbour pipeline), the same P | [`VerilatedNeighbourPipeline`] | [`NeighbourPipelineModel`](pficp_fpga::neighbour_pipeline::NeighbourPipelineModel) | [`NeighbourLockstep`] |
 //! | `particle_weights_verilog(P)`, the same P | [`VerilatedParticleWeights`] | [`ParticleWeightModel`](pficp_fpga::particle_weights::ParticleWeightModel) | [`PwLockstep`] |
 //! | `weight_stage_verilog()` (docs/weights.md) | [`VerilatedWeightStage`] | [`WeightModel`](pficp_fpga::weights::WeightModel) | [`WeightLockstep`] |
 //! | the sequencer `PfSequencer` alone (docs/sequencer.md) | [`VerilatedSequencer`] | [`SequencerModel`](pficp_fpga::sequencer::SequencerModel) | [`SeqLockstep`] |
@@ -35,6 +36,6 @@ pub mod serial;
 mod wrappers;
 
 pub use crate::core::{verilated_lanes, verilated_models, verilog_path, BUILD_REPORT};
-pub use grid_lockstep::GridLockstep;
+pub use grid_lockstep::{GridLockstep, NeighbourLockstep};
 pub use lockstep::*;
 pub use wrappers::*;

@@ -6,6 +6,7 @@ use crate::lockstep::Rtl;
 use crate::ports;
 use pficp_fpga::board::BoardConfig;
 use pficp_fpga::grid_pipeline::{GridInputs, GridPipelineModel};
+use pficp_fpga::neighbour_pipeline::NeighbourPipelineModel;
 use pficp_fpga::particle_weights::ParticleWeightModel;
 use pficp_fpga::particle_weights::{PwInputs, PwOutputs};
 use pficp_fpga::pipeline::PipelineModel;
@@ -103,23 +104,59 @@ impl VerilatedGridPipeline {
 
     /// Drive the input ports (masked to the port widths).
     pub fn set_inputs(&mut self, i: &GridInputs) {
-        let pose = i.pose.pack();
-        self.core.set_inputs(&[
-            i.model_we as u64,
-            i.model_waddr as u64,
-            i.model_wdata,
-            i.table_we as u64,
-            i.table_waddr as u64,
-            i.table_wdata as u64,
-            i.start as u64,
-            pose[0],
-            pose[1],
-            pose[2],
-            pose[3],
-            i.scan_valid as u64,
-            i.scan_data,
-            i.scan_last as u64,
-        ])
+        self.core.set_inputs(&grid_input_words(i))
+    }
+
+    /// The output ports now.
+    pub fn outputs(&self) -> Outputs {
+        pipeline_outputs(&self.core.outputs::<7>())
+    }
+}
+
+pub(crate) fn grid_input_words(i: &GridInputs) -> [u64; 14] {
+    let pose = i.pose.pack();
+    [
+        i.model_we as u64,
+        i.model_waddr as u64,
+        i.model_wdata,
+        i.table_we as u64,
+        i.table_waddr as u64,
+        i.table_wdata as u64,
+        i.start as u64,
+        pose[0],
+        pose[1],
+        pose[2],
+        pose[3],
+        i.scan_valid as u64,
+        i.scan_data,
+        i.scan_last as u64,
+    ]
+}
+
+/// The Verilated neighbour pipeline (`NeighbourPipeline<P>`: lanes over one scan point's
+/// candidates; the grid pipeline's ports).
+pub struct VerilatedNeighbourPipeline {
+    pub(crate) core: Core,
+}
+
+verilated_common!(VerilatedNeighbourPipeline, GridInputs);
+
+impl VerilatedNeighbourPipeline {
+    /// The `lanes`-lane neighbour pipeline after reset.
+    ///
+    /// Panics if no model was verilated for `lanes` (see [`verilated_lanes`]).
+    pub fn new(lanes: usize) -> Self {
+        VerilatedNeighbourPipeline { core: Core::new(NEIGHBOUR_PIPELINE, lanes, 14, &GRID_OUTPUT_PORTS) }
+    }
+
+    /// Number of lanes.
+    pub fn lanes(&self) -> usize {
+        self.core.model.lanes
+    }
+
+    /// Drive the input ports (masked to the port widths).
+    pub fn set_inputs(&mut self, i: &GridInputs) {
+        self.core.set_inputs(&grid_input_words(i))
     }
 
     /// The output ports now.
@@ -432,6 +469,29 @@ impl Rtl for VerilatedGridPipeline {
         r.outputs()
     }
     fn reference_step(r: &mut GridPipelineModel, i: &GridInputs) {
+        r.step(i)
+    }
+    fn fresh(&self) -> Self {
+        Self::new(self.lanes())
+    }
+    rtl_common!(GridInputs);
+}
+
+impl Rtl for VerilatedNeighbourPipeline {
+    type Inputs = GridInputs;
+    type Outputs = Outputs;
+    type Reference = NeighbourPipelineModel;
+    const OUTPUT_PORTS: &'static [&'static str] = &GRID_OUTPUT_PORTS;
+    fn port_values(o: &Outputs) -> Vec<u64> {
+        port_values(o).to_vec()
+    }
+    fn new_reference(&self) -> NeighbourPipelineModel {
+        NeighbourPipelineModel::new(self.lanes())
+    }
+    fn reference_outputs(r: &NeighbourPipelineModel) -> Outputs {
+        r.outputs()
+    }
+    fn reference_step(r: &mut NeighbourPipelineModel, i: &GridInputs) {
         r.step(i)
     }
     fn fresh(&self) -> Self {

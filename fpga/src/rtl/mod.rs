@@ -9,6 +9,9 @@
 //!   `P` lanes, Reduce ([`crate::pipeline::PipelineModel`]);
 //! - [`grid_pipeline`]: `GridPipeline<P>`, the same with the grid search: model sorted by
 //!   cell, cell table, rows around a batch ([`crate::grid_pipeline::GridPipelineModel`]);
+//! - [`neighbour_pipeline`]: `NeighbourPipeline<P>`, lanes over one scan point's candidates
+//!   in its 27 cells, with [`neighbour_lane`]'s lanes and model-RAM banks
+//!   ([`crate::neighbour_pipeline::NeighbourPipelineModel`]);
 //! - [`weights`]: `WeightStage`, minimum cost and exp-table weights
 //!   ([`crate::weights::WeightModel`]);
 //! - [`particle_weights`]: the two wired together ([`crate::particle_weights`]);
@@ -22,6 +25,8 @@ pub mod board;
 pub mod grid_pipeline;
 pub mod lane;
 pub mod mul18;
+pub mod neighbour_lane;
+pub mod neighbour_pipeline;
 pub mod particle_weights;
 pub mod pipeline;
 pub mod transform;
@@ -30,6 +35,8 @@ pub mod weights;
 pub use grid_pipeline::GridPipeline;
 pub use lane::Lane;
 pub use mul18::{Mul18, MUL18_MODULE};
+pub use neighbour_lane::NeighbourLane;
+pub use neighbour_pipeline::NeighbourPipeline;
 pub use pipeline::NnPipeline;
 pub use transform::Transform;
 
@@ -152,6 +159,27 @@ pub fn grid_pipeline_verilog(lanes: usize) -> String {
         8 => grid_of::<8>(),
         16 => grid_of::<16>(),
         _ => panic!("grid_pipeline_verilog: {lanes} lanes is not supported; use one of {SUPPORTED_LANES:?}"),
+    }
+}
+
+fn neighbour_of<const P: usize>() -> String {
+    let mut uut = NeighbourPipeline::<P>::new();
+    uut.connect_all();
+    dedup_modules(&generate_verilog(&uut))
+}
+
+/// The Verilog of `NeighbourPipeline<lanes>` (lanes over one scan point's candidates,
+/// docs/pipeline.md "The neighbour pipeline"), top module `top`; the ports are the grid
+/// pipeline's.
+///
+/// Panics unless `lanes` is one of [`SUPPORTED_LANES`] other than 1.
+pub fn neighbour_pipeline_verilog(lanes: usize) -> String {
+    match lanes {
+        2 => neighbour_of::<2>(),
+        4 => neighbour_of::<4>(),
+        8 => neighbour_of::<8>(),
+        16 => neighbour_of::<16>(),
+        _ => panic!("neighbour_pipeline_verilog: {lanes} lanes is not supported; use 2, 4, 8 or 16"),
     }
 }
 

@@ -1,0 +1,552 @@
+//! The bit-exact, cycle-accurate reference of the neighbour pipeline
+//! (`NeighbourPipeline<P>`, docs/pipeline.md "The neighbour pipeline"), and its functional
+//! reference over the raw stores ([`evaluate_stored`]).
+//!
+//! Where the grid pipeline puts one scan point in each lane and broadcasts the model, this
+//! one puts **the candidates of one scan point in the lanes**: scan points go through one at
+//! a time, each looks up the nine rows of its own 27-cell neighbourhood (two rows a clock,
+//! from two copies of the cell table) and sends each row's stored range through the `P`
+//! lanes `P` consecutive addresses a clock (one *chunk*), the model RAM banked `P` ways by
+//! address so that any `P` consecutive addresses are one read of each bank. A pipelined
+//! min-tree reduces a chunk to one `(d2, index)`, an accumulator the chunks of a point.
+//!
+//! **Rule** ([`evaluate_stored`]). For a transformed scan point `q`: the candidates are the
+//! addresses of the nine row ranges of [`crate::grid::Grid::ranges`], read from the stored
+//! table (`first[(z, y, x0)] .. first[(z, y, x1) + 1]`, 13-bit entries, a range empty unless
+//! its start is below its end, addresses modulo 4,096); the result is the lexicographic
+//! minimum of `(CAP_D2, 0)` and of every candidate's `(d2, address & 0xfff)`. The order the
+//! rows and chunks are visited in therefore does not matter (the lanes need no order). With
+//! a table built by [`Grid::build`] the ranges are disjoint, increasing and inside the model,
+//! so this is the nearest stored point with the lowest index on ties, capped: exactly
+//! [`crate::grid::nearest_capped`] (capped ⇔ `nn_dist == CAP_D2`, index 0), i.e.
+//! [`crate::grid_pipeline::evaluate_grid`], whatever `P`. On a table that does not describe
+//! the model it differs from "the first strictly smaller distance in visiting order" only
+//! where a range wraps past 4,095 or the ranges overlap or go backwards: then the lowest
+//! index still wins a tie.
+//!
+//! [`NeighbourPipelineModel::step`] is one rising edge, [`NeighbourPipelineModel::outputs`]
+//! the output ports after it, as for [`crate::grid_pipeline::GridPipelineModel`]; the ports
+//! are the grid pipeline's ([`GridInputs`], [`Outputs`]).
+
+use crate::format::{dist2, transform, unpack_point, FxPoint, FxPose, MAX_POINTS, POINT_WORD_BITS};
+use crate::grid::{axis_cell, Grid, CAP_D2, CELLS, CELLS_PER_AXIS};
+use crate::grid_pipeline::{upload, GridInputs};
+use crate::pipeline::{transform_products, transform_result, transform_sums, Evaluation, Outputs, COST_MASK};
+use std::collections::VecDeque;
+
+/// Depth of the queue of transformed scan points waiting for their row lookups.
+pub const POINT_QUEUE: usize = 4;
+/// Depth of the queue of looked-up row pairs waiting for the chunk issue.
+pub const RANGE_QUEUE: usize = 4;
+/// The lookup slots: the rows (`(dz + 1) * 3 + (dy + 1)`) each slot reads, two a clock (the
+/// table's two copies); the centre row, the one most likely to hold points, comes last so
+/// that a point's last slot seldom finds nothing (which costs a marker chunk).
+pub const SLOTS: [(usize, Option<usize>); 5] = [(0, Some(1)), (2, Some(3)), (5, Some(6)), (7, Some(8)), (4, None)];
+/// Levels of the min-tree (registered each), whatever `P`: the lanes are padded to
+/// [`TREE_LEAVES`] with the neutral key.
+pub const TREE_LEVELS: usize = 4;
+/// Leaves of the min-tree.
+pub const TREE_LEAVES: usize = 1 << TREE_LEVELS;
+/// Edges from a chunk's issue to its result leaving the accumulator: bank read, difference,
+/// square, two sums, clamp, the tree's levels, accumulate.
+pub const CHUNK_LATENCY: usize = 7 + TREE_LEVELS;
+
+/// A `(d2, index)` pair as one lexicographic key: `d2 << 12 | index` (`d2 <= CAP_D2`).
+fn key(d2: u64, index: u16) -> u64 {
+    (d2 << 12) | index as u64
+}
+
+/// The neutral key: the capped result.
+const CAP_KEY: u64 = CAP_D2 << 12;
+
+/// The functional reference over the board's raw stores, whatever they hold (the module
+/// doc's rule): the model RAM (`ram`, [`MAX_POINTS`] packed words) and the cell table as
+/// written (`first`, the [`CELLS`]` + 1` entries of 13 bits). Each transformed scan point's
+/// lexicographic minimum `(d2, address & 0xfff)` over its nine row ranges, starting at
+/// `(CAP_D2, 0)`; the cost the sum of the distances. Independent of the lane count. With a
+/// table built by [`Grid::build`] this is [`crate::grid_pipeline::evaluate_grid`].
+pub fn evaluate_stored(ram: &[u64], first: &[u16], scan: &[FxPoint], pose: &FxPose) -> Evaluation {
+    assert!(ram.len() == MAX_POINTS && first.len() == CELLS + 1);
+    let n = CELLS_PER_AXIS as i32;
+    let nearest: Vec<(u16, u64)> = scan
+        .iter()
+        .map(|&p| {
+            let q = transform(pose, p);
+            let k = q.map(axis_cell);
+            let mut best = CAP_KEY;
+            let (x0, x1) = ((k[0] - 1).max(0), (k[0] + 1).min(n - 1));
+            for dz in -1..=1 {
+                for dy in -1..=1 {
+                    let (y, z) = (k[1] + dy, k[2] + dz);
+                    if !(0..n).contains(&y) || !(0..n).contains(&z) || x0 > x1 {
+                        continue;
+                    }
+                    let row = ((z * n + y) * n) as usize;
+                    let (lo, hi) = (first[row + x0 as usize] & 0x1fff, first[row + x1 as usize + 1] & 0x1fff);
+                    for a in lo..hi {
+                        let d = dist2(q, unpack_point(ram[a as usize % MAX_POINTS]));
+                        if d < CAP_D2 {
+                            best = best.min(key(d, a & 0xfff));
+                        }
+                    }
+                }
+            }
+            ((best & 0xfff) as u16, best >> 12)
+        })
+        .collect();
+    let cost = nearest.iter().fold(0u64, |c, n| (c + n.1) & COST_MASK);
+    Evaluation { cost, nearest }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum State {
+    Idle,
+    Run,
+}
+
+/// The lookup stage: the point whose rows are being looked up.
+#[derive(Clone, Copy, Debug, Default)]
+struct Lookup {
+    have: bool,
+    q: FxPoint,
+    last: bool,
+    /// Cell coordinates (may lie outside the grid).
+    k: [i32; 3],
+    /// The slot to look up next.
+    slot: usize,
+}
+
+/// A looked-up slot in the table's read registers.
+#[derive(Clone, Copy, Debug, Default)]
+struct Read {
+    valid: bool,
+    /// Row A, row B inside the grid.
+    in_a: bool,
+    in_b: bool,
+    /// The point's last slot.
+    last: bool,
+    slast: bool,
+    q: FxPoint,
+}
+
+/// A queued slot: range `a` (empty only for a marker), optionally range `b`.
+#[derive(Clone, Copy, Debug, Default)]
+struct Entry {
+    a: (u16, u16),
+    b: Option<(u16, u16)>,
+    marker: bool,
+    last: bool,
+    slast: bool,
+    q: FxPoint,
+}
+
+/// The chunk issue: the entry being issued (`addr .. end`, then `b`).
+#[derive(Clone, Copy, Debug, Default)]
+struct Issue {
+    have: bool,
+    addr: u16,
+    end: u16,
+    b: Option<(u16, u16)>,
+    marker: bool,
+    last: bool,
+    slast: bool,
+    q: FxPoint,
+}
+
+/// Per-chunk control through the lane and tree stages.
+#[derive(Clone, Copy, Debug, Default)]
+struct Ctl {
+    valid: bool,
+    last: bool,
+    slast: bool,
+}
+
+/// The register state of the neighbour pipeline with `P` lanes (`P` a power of two up to
+/// [`TREE_LEAVES`]).
+#[derive(Clone, Debug)]
+pub struct NeighbourPipelineModel {
+    lanes: usize,
+    log2: u32,
+    ram: Vec<u64>,
+    lo_ram: Vec<u16>,
+    hi_ram: Vec<u16>,
+    state: State,
+    pose: FxPose,
+    last_taken: bool,
+    t1: (bool, bool, [i64; 9]),
+    t2: (bool, bool, [i64; 3]),
+    points: VecDeque<(FxPoint, bool)>,
+    lk: Lookup,
+    rd: Read,
+    /// The table's read registers: (lo, hi) of row A and of row B.
+    tq: [(u16, u16); 2],
+    queue: VecDeque<Entry>,
+    is: Issue,
+    /// Chunk register (c0): control, query, lane valid bits, bank rows; and the banks' read
+    /// registers.
+    c0: (Ctl, FxPoint, Vec<bool>, Vec<u16>),
+    bank_q: Vec<u64>,
+    s1: (Ctl, Vec<bool>, Vec<u16>, Vec<[i32; 3]>),
+    s2: (Ctl, Vec<bool>, Vec<u16>, Vec<[u64; 3]>),
+    s3: (Ctl, Vec<bool>, Vec<u16>, Vec<(u64, u64)>),
+    s4: (Ctl, Vec<bool>, Vec<u16>, Vec<u64>),
+    /// Clamped keys, then the tree's levels (each half the previous).
+    tree: Vec<(Ctl, Vec<u64>)>,
+    acc_used: bool,
+    acc: u64,
+    fin: bool,
+    cost: u64,
+    out: Outputs,
+    chunks: u64,
+    distances: u64,
+}
+
+impl NeighbourPipelineModel {
+    /// A pipeline with `lanes` lanes (a power of two, 1 to 16), after reset: idle, model RAM
+    /// and table all zero.
+    pub fn new(lanes: usize) -> Self {
+        assert!(lanes.is_power_of_two() && lanes <= 16, "1, 2, 4, 8 or 16 lanes");
+        let log2 = lanes.trailing_zeros();
+        let z = |_| Ctl::default();
+        NeighbourPipelineModel {
+            lanes,
+            log2,
+            ram: vec![0; MAX_POINTS],
+            lo_ram: vec![0; CELLS],
+            hi_ram: vec![0; CELLS],
+            state: State::Idle,
+            pose: FxPose::default(),
+            last_taken: false,
+            t1: (false, false, [0; 9]),
+            t2: (false, false, [0; 3]),
+            points: VecDeque::new(),
+            lk: Lookup::default(),
+            rd: Read::default(),
+            tq: [(0, 0); 2],
+            queue: VecDeque::new(),
+            is: Issue::default(),
+            c0: (z(0), [0; 3], vec![false; lanes], vec![0; lanes]),
+            bank_q: vec![0; lanes],
+            s1: (z(0), vec![false; lanes], vec![0; lanes], vec![[0; 3]; lanes]),
+            s2: (z(0), vec![false; lanes], vec![0; lanes], vec![[0; 3]; lanes]),
+            s3: (z(0), vec![false; lanes], vec![0; lanes], vec![(0, 0); lanes]),
+            s4: (z(0), vec![false; lanes], vec![0; lanes], vec![0; lanes]),
+            tree: (0..=TREE_LEVELS).map(|l| (z(0), vec![0; if l == 0 { lanes } else { TREE_LEAVES >> l }])).collect(),
+            acc_used: false,
+            acc: 0,
+            fin: false,
+            cost: 0,
+            out: Outputs::default(),
+            chunks: 0,
+            distances: 0,
+        }
+    }
+
+    /// Number of lanes.
+    pub fn lanes(&self) -> usize {
+        self.lanes
+    }
+
+    /// Chunks issued since reset (marker chunks included).
+    pub fn chunks(&self) -> u64 {
+        self.chunks
+    }
+
+    /// Distances computed since reset in lanes holding a candidate.
+    pub fn distances(&self) -> u64 {
+        self.distances
+    }
+
+    /// Output ports now.
+    pub fn outputs(&self) -> Outputs {
+        Outputs { scan_ready: self.scan_ready(), busy: self.state != State::Idle, ..self.out }
+    }
+
+    fn scan_ready(&self) -> bool {
+        let queued = self.points.len() + self.t1.0 as usize + self.t2.0 as usize;
+        self.state == State::Run && !self.last_taken && queued < POINT_QUEUE
+    }
+
+    /// The two rows of slot `s` for a point in cells `k`: (inside the grid, lo address, hi
+    /// address) each; a missing row B is outside.
+    fn slot_rows(k: [i32; 3], s: usize) -> [(bool, usize, usize); 2] {
+        let n = CELLS_PER_AXIS as i32;
+        let (x0, x1) = ((k[0] - 1).max(0), (k[0] + 1).min(n - 1));
+        let row = |r: Option<usize>| match r {
+            None => (false, 0, 0),
+            Some(r) => {
+                let (dz, dy) = (r as i32 / 3 - 1, r as i32 % 3 - 1);
+                let (y, z) = (k[1] + dy, k[2] + dz);
+                let inside = (0..n).contains(&y) && (0..n).contains(&z) && x0 <= x1;
+                let base = (((z & 15) << 8) | ((y & 15) << 4)) as usize;
+                (inside, base | (x0 & 15) as usize, base | (x1 & 15) as usize)
+            }
+        };
+        [row(Some(SLOTS[s].0)), row(SLOTS[s].1)]
+    }
+
+    /// The first slot at or after `from` with a row inside the grid; the last slot (4) is
+    /// always visited.
+    fn next_slot(k: [i32; 3], from: usize) -> usize {
+        (from..4).find(|&s| Self::slot_rows(k, s).iter().any(|r| r.0)).unwrap_or(4)
+    }
+
+    /// One rising edge with the given inputs.
+    #[allow(clippy::needless_range_loop)] // register indices mirror the RTL's
+    pub fn step(&mut self, i: &GridInputs) {
+        let p = self.lanes;
+        let take = self.scan_ready() && i.scan_valid;
+        let mut ram = std::mem::take(&mut self.ram);
+        let mut lo_ram = std::mem::take(&mut self.lo_ram);
+        let mut hi_ram = std::mem::take(&mut self.hi_ram);
+        let mut next = self.clone();
+        // Transform pipeline; its result joins the point queue.
+        next.t1 =
+            (take, take && i.scan_last, if take { transform_products(&self.pose, i.scan_data) } else { self.t1.2 });
+        next.t2 = (self.t1.0, self.t1.1, if self.t1.0 { transform_sums(&self.pose, &self.t1.2) } else { self.t2.2 });
+        if self.t2.0 {
+            next.points.push_back((transform_result(&self.t2.2), self.t2.1));
+        }
+        // Lookup: one slot (two rows) a clock while the range queue has room for it.
+        let lookup = self.lk.have && self.queue.len() + (self.rd.valid as usize) < RANGE_QUEUE;
+        let rows = Self::slot_rows(self.lk.k, self.lk.slot);
+        next.tq = [0, 1].map(|r| (lo_ram[rows[r].1], hi_ram[rows[r].2]));
+        next.rd = Read {
+            valid: lookup,
+            in_a: rows[0].0,
+            in_b: rows[1].0,
+            last: self.lk.slot == 4,
+            slast: self.lk.last,
+            q: self.lk.q,
+        };
+        let lk_free = !self.lk.have || (lookup && self.lk.slot == 4);
+        if lookup && self.lk.slot < 4 {
+            next.lk.slot = Self::next_slot(self.lk.k, self.lk.slot + 1);
+        }
+        if lk_free {
+            next.lk.have = !self.points.is_empty();
+            if let Some(&(q, last)) = self.points.front() {
+                next.points.pop_front();
+                let k = q.map(axis_cell);
+                next.lk = Lookup { have: true, q, last, k, slot: Self::next_slot(k, 0) };
+            }
+        }
+        // The read slot joins the range queue (rows outside the grid or empty are dropped;
+        // a point's last slot is queued as a marker if it has no range).
+        if self.rd.valid {
+            let ra = (self.rd.in_a && self.tq[0].0 < self.tq[0].1).then_some(self.tq[0]);
+            let rb = (self.rd.in_b && self.tq[1].0 < self.tq[1].1).then_some(self.tq[1]);
+            if ra.is_some() || rb.is_some() || self.rd.last {
+                let (a, b) = match (ra, rb) {
+                    (Some(a), b) => (a, b),
+                    (None, Some(b)) => (b, None),
+                    (None, None) => ((0, 0), None),
+                };
+                let marker = ra.is_none() && rb.is_none();
+                next.queue.push_back(Entry { a, b, marker, last: self.rd.last, slast: self.rd.slast, q: self.rd.q });
+            }
+        }
+        // Issue: one chunk a clock, `addr .. min(addr + P, end)`; lane `b` takes bank `b`,
+        // row `(addr >> log2 P) + (b < addr mod P)`, valid if its address is below `end`.
+        let is = self.is;
+        let (base, off) = ((is.addr >> self.log2) as usize, is.addr as usize & (p - 1));
+        let bank_row: Vec<u16> = (0..p).map(|b| ((base + (b < off) as usize) % (MAX_POINTS / p)) as u16).collect();
+        next.bank_q = (0..p).map(|b| ram[((bank_row[b] as usize) << self.log2) | b]).collect();
+        let span = is.end as usize - (is.addr as usize).min(is.end as usize);
+        let lane_valid: Vec<bool> = (0..p).map(|b| is.have && !is.marker && (b + p - off) % p < span.min(p)).collect();
+        let mut done = false;
+        let mut chunk_last = false;
+        if is.have {
+            next.chunks += 1;
+            next.distances += lane_valid.iter().filter(|&&v| v).count() as u64;
+            if is.marker || is.addr as usize + p >= is.end as usize {
+                if let (false, Some((lo, hi))) = (is.marker, is.b) {
+                    next.is.addr = lo;
+                    next.is.end = hi;
+                    next.is.b = None;
+                } else {
+                    done = true;
+                    chunk_last = is.last;
+                }
+            } else {
+                next.is.addr = is.addr + p as u16;
+            }
+        }
+        next.c0 = (Ctl { valid: is.have, last: chunk_last, slast: is.slast }, is.q, lane_valid, bank_row);
+        if !is.have || done {
+            next.is.have = !self.queue.is_empty();
+            if let Some(e) = self.queue.front() {
+                next.queue.pop_front();
+                next.is = Issue {
+                    have: true,
+                    addr: e.a.0,
+                    end: e.a.1,
+                    b: e.b,
+                    marker: e.marker,
+                    last: e.last,
+                    slast: e.slast,
+                    q: e.q,
+                };
+            }
+        }
+        // Lanes: difference, square, two sums (the brute-force pipeline's stages).
+        let (c0, q, v0, r0) = &self.c0;
+        let d1 = (0..p)
+            .map(|b| {
+                let m = unpack_point(self.bank_q[b]);
+                [0, 1, 2].map(|k| q[k] as i32 - m[k] as i32)
+            })
+            .collect();
+        next.s1 = (*c0, v0.clone(), r0.clone(), d1);
+        let (c1, v1, r1, d) = &self.s1;
+        next.s2 = (*c1, v1.clone(), r1.clone(), d.iter().map(|d| d.map(|v| (v as i64 * v as i64) as u64)).collect());
+        let (c2, v2, r2, sq) = &self.s2;
+        next.s3 = (*c2, v2.clone(), r2.clone(), sq.iter().map(|s| (s[0] + s[1], s[2])).collect());
+        let (c3, v3, r3, s) = &self.s3;
+        next.s4 = (*c3, v3.clone(), r3.clone(), s.iter().map(|(a, b)| a + b).collect());
+        // Clamp: a lane without a candidate, or at a distance of at least CAP_D2, is the
+        // neutral (CAP_D2, 0); the index is the bank row and the lane number.
+        let (c4, v4, r4, s4) = &self.s4;
+        let keys =
+            (0..p)
+                .map(|b| {
+                    if v4[b] && s4[b] < CAP_D2 {
+                        key(s4[b], ((r4[b] as usize) << self.log2 | b) as u16)
+                    } else {
+                        CAP_KEY
+                    }
+                })
+                .collect();
+        next.tree[0] = (*c4, keys);
+        // The tree has four levels whatever `P` (the lanes padded to 16 with the neutral key).
+        for l in 1..self.tree.len() {
+            let (c, k) = &self.tree[l - 1];
+            let padded: Vec<u64> = (0..TREE_LEAVES >> (l - 1)).map(|j| k.get(j).copied().unwrap_or(CAP_KEY)).collect();
+            next.tree[l] = (*c, padded.chunks(2).map(|pair| pair[0].min(pair[1])).collect());
+        }
+        // Accumulate a point's chunks; its last chunk presents the result.
+        let (ct, kt) = &self.tree[self.tree.len() - 1];
+        next.out.nn_valid = false;
+        next.out.cost_valid = false;
+        if ct.valid {
+            let m = if self.acc_used { self.acc.min(kt[0]) } else { kt[0] };
+            if ct.last {
+                next.out.nn_valid = true;
+                next.out.nn_index = (m & 0xfff) as u16;
+                next.out.nn_dist = m >> 12;
+                next.acc_used = false;
+                next.fin = ct.slast;
+            } else {
+                next.acc = m;
+                next.acc_used = true;
+            }
+        }
+        // The cost adds each result the edge after it is presented (off the accumulator's
+        // compare path); the particle's end presents the sum with the last result.
+        let cost_sum = (self.cost + self.out.nn_dist) & COST_MASK;
+        if self.out.nn_valid {
+            next.cost = cost_sum;
+        }
+        // Memories: read first (above), then written.
+        if i.model_we {
+            ram[(i.model_waddr as usize) % MAX_POINTS] = i.model_wdata & ((1 << POINT_WORD_BITS) - 1);
+        }
+        let (wa, wd) = (i.table_waddr as usize & 0x1fff, i.table_wdata & 0x1fff);
+        if i.table_we && wa < CELLS {
+            lo_ram[wa] = wd;
+        }
+        if i.table_we && (1..=CELLS).contains(&wa) {
+            hi_ram[wa - 1] = wd;
+        }
+        next.ram = ram;
+        next.lo_ram = lo_ram;
+        next.hi_ram = hi_ram;
+        // State machine.
+        match self.state {
+            State::Idle => {
+                if i.start {
+                    next.state = State::Run;
+                    next.pose = i.pose;
+                    next.cost = 0;
+                    next.last_taken = false;
+                }
+            }
+            State::Run => {
+                if take {
+                    next.last_taken = i.scan_last;
+                }
+                if self.fin {
+                    next.out.cost_valid = true;
+                    next.out.cost = cost_sum;
+                    next.fin = false;
+                    next.state = State::Idle;
+                }
+            }
+        }
+        *self = next;
+    }
+}
+
+/// What one particle took: the results, clocks from `start` to `cost_valid`, chunks issued
+/// and distances computed in lanes holding a candidate.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct NeighbourRun {
+    /// Results and cost.
+    pub evaluation: Evaluation,
+    /// Clocks from the `start` edge to the `cost_valid` edge.
+    pub clocks: u64,
+    /// Chunks issued (marker chunks included).
+    pub chunks: u64,
+    /// Distances computed in lanes holding a candidate.
+    pub distances: u64,
+}
+
+/// Drive a [`NeighbourPipelineModel`] (its model and table already written) through one
+/// particle, offering a scan point on clocks where `gap(clock)` is false.
+pub fn run_particle(
+    pipe: &mut NeighbourPipelineModel,
+    scan: &[FxPoint],
+    pose: &FxPose,
+    mut gap: impl FnMut(u64) -> bool,
+) -> NeighbourRun {
+    assert!(!scan.is_empty());
+    let (chunks0, distances0) = (pipe.chunks, pipe.distances);
+    pipe.step(&GridInputs::start(pose));
+    let mut next = 0;
+    let mut nearest = Vec::with_capacity(scan.len());
+    let mut clocks = 1u64;
+    loop {
+        let offer = next < scan.len() && !gap(clocks);
+        let inputs = GridInputs::offer(scan, next, offer);
+        let took = offer && pipe.outputs().scan_ready;
+        pipe.step(&inputs);
+        clocks += 1;
+        next += took as usize;
+        let o = pipe.outputs();
+        if o.nn_valid {
+            nearest.push((o.nn_index, o.nn_dist));
+        }
+        if o.cost_valid {
+            let (chunks, distances) = (pipe.chunks - chunks0, pipe.distances - distances0);
+            return NeighbourRun { evaluation: Evaluation { cost: o.cost, nearest }, clocks, chunks, distances };
+        }
+        assert!(clocks < 1 << 40, "pipeline never finished");
+    }
+}
+
+/// Clocks, chunks and distances of one particle with no gaps in the scan stream, counted on
+/// the cycle model: `grid` uploaded, then one particle.
+pub fn clocks_per_particle(grid: &Grid, scan: &[FxPoint], pose: &FxPose, lanes: usize) -> NeighbourRun {
+    let mut pipe = NeighbourPipelineModel::new(lanes);
+    for w in upload(grid) {
+        pipe.step(&w);
+    }
+    run_particle(&mut pipe, scan, pose, |_| false)
+}
+
+/// The chunks a point's rows take, `sum over its non-empty rows of ceil(len / P)`, at least
+/// one (a point whose last slot finds no range takes a marker chunk): a lower bound of the
+/// issue clocks it needs.
+pub fn chunks_of(grid: &Grid, q: FxPoint, lanes: usize) -> usize {
+    grid.ranges(q).iter().map(|r| r.len().div_ceil(lanes)).sum::<usize>().max(1)
+}

@@ -1,0 +1,254 @@
+//! `NeighbourLane`: one lane of the neighbour pipeline (docs/pipeline.md, "The neighbour
+//! pipeline"; model [`crate::neighbour_pipeline::NeighbourPipelineModel`]) with its bank of
+//! the model RAM ([`BankRam`]). Lane `b` of `P` owns the stored points at addresses
+//! `≡ b (mod P)`; for a chunk starting at `addr` it reads the one of them among
+//! `addr .. addr + P`, bank row `(addr >> log2 P) + (b < addr mod P)`, valid if that address
+//! is below the range's end (`span = end - addr` ahead). Then the brute-force lane's
+//! distance pipeline against the chunk's query (s1 differences, s2 squares in 3 [`Mul18`],
+//! s3 `dx^2 + dy^2` and `dz^2`, s4 the sum), and the clamp: the registered key
+//! `d2 << 12 | index`, or the neutral `CAP_D2 << 12` if the lane has no candidate or
+//! `d2 >= CAP_D2`.
+
+use super::mul18::Mul18;
+use super::signed_bit_cast_safe;
+use crate::grid::CAP_D2;
+use rust_hdl::prelude::*;
+use std::collections::BTreeMap;
+
+/// A bank of the model RAM: `4096 / P` words of 48 bits, word `a >> lsb` for a 12-bit
+/// address `a` (synchronous read, read-first, one write port). A Verilog block of its own
+/// because its depth depends on `P` at run time.
+#[derive(LogicBlock, Default)]
+pub struct BankRam {
+    /// Clock.
+    pub clock: Signal<In, Clock>,
+    /// Read address (bits `11..lsb` select the word).
+    pub read_address: Signal<In, Bits<12>>,
+    /// The word read at the last edge.
+    pub read_data: Signal<Out, Bits<48>>,
+    /// Write `write_data` at this edge.
+    pub write_enable: Signal<In, Bit>,
+    /// Write address (bits `11..lsb`).
+    pub write_address: Signal<In, Bits<12>>,
+    /// The word written.
+    pub write_data: Signal<In, Bits<48>>,
+    _lsb: usize,
+    _sim: Box<BTreeMap<u64, Bits<48>>>,
+}
+
+impl BankRam {
+    /// A bank addressed by bits `11..lsb`.
+    pub fn new(lsb: usize) -> BankRam {
+        assert!(lsb < 12);
+        BankRam { _lsb: lsb, ..Default::default() }
+    }
+}
+
+impl Logic for BankRam {
+    fn update(&mut self) {
+        if self.clock.pos_edge() {
+            let r = self.read_address.val().to_u64() >> self._lsb;
+            self.read_data.next = *self._sim.get(&r).unwrap_or(&Bits::<48>::default());
+            if self.write_enable.val() {
+                self._sim.insert(self.write_address.val().to_u64() >> self._lsb, self.write_data.val());
+            }
+        }
+    }
+
+    fn connect(&mut self) {
+        self.read_data.connect();
+    }
+
+    fn hdl(&self) -> Verilog {
+        let words = 1usize << (12 - self._lsb);
+        let unused = if self._lsb == 0 {
+            String::new()
+        } else {
+            // The low address bits select the bank, outside.
+            format!(
+                "/* verilator lint_off UNUSEDSIGNAL */\nwire [{l}:0] unused_low = read_address[{l}:0] ^ write_address[{l}:0];\n\
+                 /* verilator lint_on UNUSEDSIGNAL */\n",
+                l = self._lsb - 1
+            )
+        };
+        Verilog::Custom(format!(
+            "\
+reg [47:0] mem[{last}:0];
+{unused}
+always @(posedge clock) begin
+   read_data <= mem[read_address[11:{lsb}]];
+   if (write_enable) begin
+      mem[write_address[11:{lsb}]] <= write_data;
+   end
+end
+",
+            last = words - 1,
+            lsb = self._lsb,
+        ))
+    }
+}
+
+/// One lane (number `id` of `P`) with its bank.
+#[derive(LogicBlock)]
+pub struct NeighbourLane {
+    /// Clock.
+    pub clock: Signal<In, Clock>,
+    /// A chunk of a range is issued at this edge (not a marker).
+    pub issue: Signal<In, Bit>,
+    /// The chunk's first address.
+    pub addr: Signal<In, Bits<13>>,
+    /// The range's end less `addr` (14 bits; at least 1 when `issue`).
+    pub span: Signal<In, Bits<14>>,
+    /// The chunk's query point (the top's chunk register, one edge after the issue).
+    pub q: Signal<In, Bits<48>>,
+    /// Model RAM write port (the lane's bank takes the addresses `≡ id (mod P)`).
+    pub model_we: Signal<In, Bit>,
+    /// Model write address.
+    pub model_waddr: Signal<In, Bits<12>>,
+    /// Model write data.
+    pub model_wdata: Signal<In, Bits<48>>,
+    /// The clamped key `d2 << 12 | index` (or `CAP_D2 << 12`), five edges after the issue.
+    pub key: Signal<Out, Bits<33>>,
+    id: Constant<Bits<12>>,
+    pmask: Constant<Bits<12>>,
+    pc: Constant<Bits<14>>,
+    cap_key: Constant<Bits<33>>,
+    bank: BankRam,
+    v0: DFF<Bit>,
+    i0: DFF<Bits<12>>,
+    d1: [DFF<Signed<17>>; 3],
+    d1b: [DFF<Signed<17>>; 3],
+    v1: DFF<Bit>,
+    i1: DFF<Bits<12>>,
+    mul: [Mul18; 3],
+    v2: DFF<Bit>,
+    i2: DFF<Bits<12>>,
+    s3a: DFF<Bits<34>>,
+    s3b: DFF<Bits<34>>,
+    v3: DFF<Bit>,
+    i3: DFF<Bits<12>>,
+    s4: DFF<Bits<34>>,
+    v4: DFF<Bit>,
+    i4: DFF<Bits<12>>,
+    key_r: DFF<Bits<33>>,
+    off: Signal<Local, Bits<12>>,
+    rel: Signal<Local, Bits<12>>,
+    idx: Signal<Local, Bits<12>>,
+    mq: [Signal<Local, Signed<16>>; 3],
+    qq: [Signal<Local, Signed<16>>; 3],
+    sq: [Signal<Local, Bits<36>>; 3],
+}
+
+impl NeighbourLane {
+    /// Lane `id` of `lanes` (a power of two, 2 to 16).
+    pub fn new(id: usize, lanes: usize) -> NeighbourLane {
+        assert!(lanes.is_power_of_two() && (2..=16).contains(&lanes) && id < lanes);
+        NeighbourLane {
+            clock: Default::default(),
+            issue: Default::default(),
+            addr: Default::default(),
+            span: Default::default(),
+            q: Default::default(),
+            model_we: Default::default(),
+            model_waddr: Default::default(),
+            model_wdata: Default::default(),
+            key: Default::default(),
+            id: Constant::new((id as u64).into()),
+            pmask: Constant::new(((lanes - 1) as u64).into()),
+            pc: Constant::new((lanes as u64).into()),
+            cap_key: Constant::new((CAP_D2 << 12).into()),
+            bank: BankRam::new(lanes.trailing_zeros() as usize),
+            v0: Default::default(),
+            i0: Default::default(),
+            d1: Default::default(),
+            d1b: Default::default(),
+            v1: Default::default(),
+            i1: Default::default(),
+            mul: Default::default(),
+            v2: Default::default(),
+            i2: Default::default(),
+            s3a: Default::default(),
+            s3b: Default::default(),
+            v3: Default::default(),
+            i3: Default::default(),
+            s4: Default::default(),
+            v4: Default::default(),
+            i4: Default::default(),
+            key_r: Default::default(),
+            off: Default::default(),
+            rel: Default::default(),
+            idx: Default::default(),
+            mq: Default::default(),
+            qq: Default::default(),
+            sq: Default::default(),
+        }
+    }
+}
+
+impl Logic for NeighbourLane {
+    #[hdl_gen]
+    fn update(&mut self) {
+        dff_setup!(self, clock, v0, i0, v1, i1, v2, i2, s3a, s3b, v3, i3, s4, v4, i4, key_r);
+        self.bank.clock.next = self.clock.val();
+        for k in 0..3 {
+            self.d1[k].clock.next = self.clock.val();
+            self.d1b[k].clock.next = self.clock.val();
+            self.d1b[k].d.next = self.d1b[k].q.val();
+            self.mul[k].clock.next = self.clock.val();
+        }
+        // Issue: the lane's address in the chunk, `addr + ((id - addr) mod P)`, is its bank
+        // row (`addr >> log2 P`, plus one if `id < addr mod P`) and its number: the index.
+        self.off.next = bit_cast::<12, 13>(self.addr.val()) & self.pmask.val();
+        self.rel.next = (self.id.val() - self.off.val()) & self.pmask.val();
+        if self.id.val() < self.off.val() {
+            self.idx.next = (bit_cast::<12, 13>(self.addr.val()) & !self.pmask.val())
+                + self.pc.val().get_bits::<12>(0)
+                + self.id.val();
+        } else {
+            self.idx.next = (bit_cast::<12, 13>(self.addr.val()) & !self.pmask.val()) + self.id.val();
+        }
+        self.bank.read_address.next = self.idx.val();
+        self.bank.write_enable.next =
+            self.model_we.val() && ((self.model_waddr.val() & self.pmask.val()) == self.id.val());
+        self.bank.write_address.next = self.model_waddr.val();
+        self.bank.write_data.next = self.model_wdata.val();
+        // c0: the lane holds a candidate if its address is below the end.
+        self.v0.d.next = self.issue.val()
+            && ((self.span.val() >= self.pc.val()) || (bit_cast::<14, 12>(self.rel.val()) < self.span.val()));
+        self.i0.d.next = self.idx.val();
+        // s1: differences (17-bit), twice (see `Lane`: Yosys 0.23 and the DSP48A1 pre-adder).
+        for k in 0..3 {
+            self.mq[k].next = signed_cast(self.bank.read_data.val().get_bits::<16>(16 * k));
+            self.qq[k].next = signed_cast(self.q.val().get_bits::<16>(16 * k));
+            self.d1[k].d.next = signed_bit_cast_safe(self.qq[k].val()) - signed_bit_cast_safe(self.mq[k].val());
+            if self.v0.q.val() {
+                self.d1b[k].d.next = signed_bit_cast_safe(self.qq[k].val()) - signed_bit_cast_safe(self.mq[k].val());
+            }
+        }
+        self.v1.d.next = self.v0.q.val();
+        self.i1.d.next = self.i0.q.val();
+        // s2: squares.
+        for k in 0..3 {
+            self.mul[k].a.next = signed_bit_cast_safe(self.d1[k].q.val());
+            self.mul[k].b.next = signed_bit_cast_safe(self.d1b[k].q.val());
+            self.sq[k].next = unsigned_cast(self.mul[k].p.val());
+        }
+        self.v2.d.next = self.v1.q.val();
+        self.i2.d.next = self.i1.q.val();
+        // s3, s4: the sum.
+        self.s3a.d.next = bit_cast::<34, 36>(self.sq[0].val()) + bit_cast::<34, 36>(self.sq[1].val());
+        self.s3b.d.next = bit_cast::<34, 36>(self.sq[2].val());
+        self.v3.d.next = self.v2.q.val();
+        self.i3.d.next = self.i2.q.val();
+        self.s4.d.next = self.s3a.q.val() + self.s3b.q.val();
+        self.v4.d.next = self.v3.q.val();
+        self.i4.d.next = self.i3.q.val();
+        // Clamp: `d2 < CAP_D2 = 2^20` iff bits 33..20 are zero.
+        if self.v4.q.val() && (self.s4.q.val().get_bits::<14>(20) == 0) {
+            self.key_r.d.next = (bit_cast::<33, 34>(self.s4.q.val()) << 12) | bit_cast::<33, 12>(self.i4.q.val());
+        } else {
+            self.key_r.d.next = self.cap_key.val();
+        }
+        self.key.next = self.key_r.q.val();
+    }
+}
