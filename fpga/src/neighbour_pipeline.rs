@@ -161,6 +161,9 @@ struct Ctl {
     slast: bool,
 }
 
+/// A lane stage's register: control, lane valid bits, bank rows, per-lane values.
+type Stage<T> = (Ctl, Vec<bool>, Vec<u16>, Vec<T>);
+
 /// The register state of the neighbour pipeline with `P` lanes (`P` a power of two up to
 /// [`TREE_LEAVES`]).
 #[derive(Clone, Debug)]
@@ -186,10 +189,10 @@ pub struct NeighbourPipelineModel {
     /// registers.
     c0: (Ctl, FxPoint, Vec<bool>, Vec<u16>),
     bank_q: Vec<u64>,
-    s1: (Ctl, Vec<bool>, Vec<u16>, Vec<[i32; 3]>),
-    s2: (Ctl, Vec<bool>, Vec<u16>, Vec<[u64; 3]>),
-    s3: (Ctl, Vec<bool>, Vec<u16>, Vec<(u64, u64)>),
-    s4: (Ctl, Vec<bool>, Vec<u16>, Vec<u64>),
+    s1: Stage<[i32; 3]>,
+    s2: Stage<[u64; 3]>,
+    s3: Stage<(u64, u64)>,
+    s4: Stage<u64>,
     /// Clamped keys, then the tree's levels (each half the previous).
     tree: Vec<(Ctl, Vec<u64>)>,
     acc_used: bool,

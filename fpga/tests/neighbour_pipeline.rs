@@ -111,9 +111,9 @@ proptest! {
         }
         // A write past the table writes nothing.
         pipe.step(&GridInputs { table_we: true, table_waddr: 4097 + (entries.len() as u16), table_wdata: 1, ..Default::default() });
-        for k in 0..entries.len().min(60) {
+        for (k, &(_, v)) in entries.iter().take(60).enumerate() {
             let a = (4096 - 1 - k * 7) % MAX_POINTS;
-            let q = [entries[k].1 as i16 - 4096, (k as i16) * 100 - 3000, 17];
+            let q = [v as i16 - 4096, (k as i16) * 100 - 3000, 17];
             pipe.step(&GridInputs { model_we: true, model_waddr: a as u16, model_wdata: pack_point(q), ..Default::default() });
             ram[a] = pack_point(q);
         }

@@ -412,9 +412,9 @@ fn phase_clocks() {
         // particles' run while the next particle is propagated (EvLaunch, EvSync): a launch
         // each, one EvSync clock for the first, two for each later one (before and after
         // storing the previous), and the last's whole evaluation plus its store's return.
-        let (its_n, sync_evals) = (outcome.iterations as u64, evals - n as u64 * outcome.iterations as u64);
+        let (its_n, sync_evals) = (outcome.iterations as u64, evals - n * outcome.iterations as u64);
         assert_eq!(c(&["EvStart", "EvWait"]), eval_each * sync_evals, "evaluation clocks");
-        let overlapped = 3 * n as u64 + eval_each;
+        let overlapped = 3 * n + eval_each;
         assert!(eval_each < 7 * PROPAGATE_CLOCKS + POSE_CLOCKS, "no particle waits for the one before");
         assert_eq!(c(&["EvLaunch", "EvSync"]), overlapped * its_n, "overlapped evaluation clocks");
         let prop = c(&["PropAddr", "PropRead", "PropMul", "PropClamp", "PropWrite"]);

@@ -33,7 +33,7 @@ pub struct BankRam {
     /// The word written.
     pub write_data: Signal<In, Bits<48>>,
     _lsb: usize,
-    _sim: Box<BTreeMap<u64, Bits<48>>>,
+    _sim: BTreeMap<u64, Bits<48>>,
 }
 
 impl BankRam {

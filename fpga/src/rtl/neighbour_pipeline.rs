@@ -13,6 +13,9 @@ use crate::grid::CAP_D2;
 use crate::neighbour_pipeline::{POINT_QUEUE, RANGE_QUEUE, TREE_LEAVES};
 use rust_hdl::prelude::*;
 
+// The RTL's queues hold four entries.
+const _: () = assert!(POINT_QUEUE == 4 && RANGE_QUEUE == 4);
+
 /// The neighbour pipeline with `P` lanes (a power of two, 2 to 16).
 #[derive(LogicBlock)]
 pub struct NeighbourPipeline<const P: usize> {
@@ -176,7 +179,6 @@ impl<const P: usize> NeighbourPipeline<P> {
     /// After reset: idle, model RAM and table all zero.
     pub fn new() -> Self {
         assert!(P.is_power_of_two() && (2..=TREE_LEAVES).contains(&P), "2, 4, 8 or 16 lanes");
-        assert!(POINT_QUEUE == 4 && RANGE_QUEUE == 4, "the RTL's queues hold four entries");
         NeighbourPipeline {
             clock: Default::default(),
             model_we: Default::default(),

@@ -8,7 +8,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
         dff_setup!(self, clock, state, ret, dlen, cur_cmd, cur_seq, e_code, e_cmd, e_seq, pending, p_cmd, p_seq);
         dff_setup!(self, clock, err_led, faddr, fcount, inbuf, outbuf, ecount, hdr, model_count, scan_count, idx);
         dff_setup!(self, clock, waddr, eval_mode, start_r, wi, ncost, dig_sr, dig_restart);
-        self.digest.clock.next = self.clock.val();
+        self.model_digest.clock.next = self.clock.val();
         self.nn.clock.next = self.clock.val();
         self.ws.clock.next = self.clock.val();
         self.filter.clock.next = self.clock.val();
@@ -66,9 +66,9 @@ impl<const P: usize> Logic for CommandEngine<P> {
         self.nn.scan_last.next = self.feeder.last.val();
 
         // Defaults.
-        self.digest.restart.next = false;
-        self.digest.feed.next = false;
-        self.digest.data_in.next = self.frame_buf.read_data.val();
+        self.model_digest.restart.next = false;
+        self.model_digest.feed.next = false;
+        self.model_digest.data_in.next = self.frame_buf.read_data.val();
         self.sender.open.next = false;
         self.sender.put.next = false;
         self.sender.put_data.next = self.outbuf.q.val().get_bits::<8>(0);
@@ -162,7 +162,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
             EngState::FetchData => {
                 // A LoadModel's or LoadTable's data bytes go into the model digest.
                 if (self.ret.q.val() == EngState::LoadWrite) && !self.cur_cmd.q.val().get_bit(0) {
-                    self.digest.feed.next = true;
+                    self.model_digest.feed.next = true;
                 }
                 self.inbuf.d.next =
                     (self.inbuf.q.val() >> 8) | (bit_cast::<216, 8>(self.frame_buf.read_data.val()) << 208);
@@ -329,9 +329,9 @@ impl<const P: usize> Logic for CommandEngine<P> {
                 self.state.d.next = EngState::Emit;
             }
             EngState::DigHead => {
-                self.digest.restart.next = self.dig_restart.q.val();
-                self.digest.feed.next = true;
-                self.digest.data_in.next = self.dig_sr.q.val().get_bits::<8>(0);
+                self.model_digest.restart.next = self.dig_restart.q.val();
+                self.model_digest.feed.next = true;
+                self.model_digest.data_in.next = self.dig_sr.q.val().get_bits::<8>(0);
                 self.dig_restart.d.next = false;
                 self.dig_sr.d.next = self.dig_sr.q.val() >> 8;
                 self.wi.d.next = self.wi.q.val() + 1;
@@ -340,7 +340,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
                 }
             }
             EngState::IdDigest => {
-                self.outbuf.d.next = bit_cast::<216, 32>(self.digest.digest.val());
+                self.outbuf.d.next = bit_cast::<216, 32>(self.model_digest.digest.val());
                 self.ecount.d.next = self.n_digest.val();
                 self.ret.d.next = EngState::Send;
                 self.state.d.next = EngState::Emit;
