@@ -108,7 +108,9 @@ impl ParticleWeights for BoardWeights<'_> {
         let mut upload = |done, total| progress(OnBoardStep::Upload(Upload::Model), done, total);
         match &self.grid {
             Some(grid) => {
-                client.ensure_grid(grid, upload)?;
+                if !client.ensure_grid(grid, upload)? {
+                    progress(OnBoardStep::Resident, 0, 0);
+                }
             }
             // Progress in data bytes either way (6 a point).
             None => client.load_model(&self.model, |done, total| upload(done * POINT_BYTES, total * POINT_BYTES))?,

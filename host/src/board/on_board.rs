@@ -41,6 +41,9 @@ pub enum OnBoardStep {
     Upload(Upload),
     /// The filter running: (iterations done, the iteration cap).
     Filter,
+    /// The board holds the model and its cell table already (Identify's model digest is
+    /// the upload's, docs/protocol.md "Resident model"): nothing uploaded; (0, 0).
+    Resident,
 }
 
 /// What the on-board filter gets from the host: the clouds on the board and the Run
@@ -397,7 +400,9 @@ pub fn register_on_board(
     let max_model = (identity.max_model as usize).min(MAX_POINTS);
     let plan = plan(nn, scan, settings, board_points, max_model)?;
     let start = Instant::now();
-    client.ensure_grid(&plan.grid, |done, total| progress(OnBoardStep::Upload(Upload::Model), done, total))?;
+    if !client.ensure_grid(&plan.grid, |done, total| progress(OnBoardStep::Upload(Upload::Model), done, total))? {
+        progress(OnBoardStep::Resident, 0, 0);
+    }
     client.load_scan(&plan.scan, |done, total| progress(OnBoardStep::Upload(Upload::Scan), done, total))?;
     client.set_sizes(plan.model.len(), plan.scan.len())?;
     let modelled = client.modelled_run_time(&plan.config);
