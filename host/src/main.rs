@@ -548,7 +548,9 @@ fn on_board_progress() -> impl FnMut(pficp::board::on_board::OnBoardStep, usize,
     let mut filter: Option<Progress> = None;
     move |step, done, total| match step {
         OnBoardStep::Upload(store) => uploads(store, done, total),
-        OnBoardStep::Resident => note(format_args!("the board holds the model already (its digest matches): not uploaded")),
+        OnBoardStep::Resident => {
+            note(format_args!("the board holds the model already (its digest matches): not uploaded"))
+        }
         OnBoardStep::Filter => {
             let b = filter.get_or_insert_with(|| Progress::bar("filter on the board", total as u64, "iterations"));
             b.set(done as u64);
