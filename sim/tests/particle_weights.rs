@@ -47,6 +47,8 @@ fn every_design_is_verilated() {
             ("particle_weights", 16, "Vpw16"),
             ("grid_pipeline", 4, "Vgrid4"),
             ("grid_pipeline", 16, "Vgrid16"),
+            ("neighbour_pipeline", 4, "Vnbr4"),
+            ("neighbour_pipeline", 16, "Vnbr16"),
             ("weight_stage", 0, "Vweights"),
             ("board", 0, "Vboard"),
             ("sequencer", 0, "Vseq"),
