@@ -553,3 +553,27 @@ pub fn clocks_per_particle(grid: &Grid, scan: &[FxPoint], pose: &FxPose, lanes: 
 pub fn chunks_of(grid: &Grid, q: FxPoint, lanes: usize) -> usize {
     grid.ranges(q).iter().map(|r| r.len().div_ceil(lanes)).sum::<usize>().max(1)
 }
+
+/// Clocks a scan point may take beyond its chunks in [`clocks_bound`]: its five lookups,
+/// the lookup's read and queue registers, and its marker chunk.
+pub const BOUND_POINT_EXTRA: u64 = SLOTS.len() as u64 + 4 + 1;
+
+/// Clocks of fill and drain in [`clocks_bound`]: the transform, the lookup, the chunk's
+/// [`CHUNK_LATENCY`] and the cost, with room to spare.
+pub const BOUND_FILL: u64 = 64;
+
+/// An upper bound of [`clocks_per_particle`]'s count (start edge to `cost_valid` edge, no
+/// gaps in the scan stream) for `scan_points` scan points under any pose, over any model of
+/// `model_points` points uploaded as [`Grid::build`] stores it, on `lanes` lanes; for the
+/// host's deadlines, where the data-dependent count is not worth running the cycle model.
+///
+/// A point's nine row ranges are disjoint ranges of the stored model, so its chunks are at
+/// most `sum over rows of ceil(len / P) <= ceil(model_points / P) + 9`; on top come its
+/// lookups and their registers and a marker ([`BOUND_POINT_EXTRA`]), as if nothing of one
+/// point overlapped the next, and [`BOUND_FILL`] once. `fpga/tests/neighbour_pipeline.rs`
+/// checks it against the cycle model on dense, sparse and empty neighbourhoods.
+pub fn clocks_bound(scan_points: usize, model_points: usize, lanes: usize) -> u64 {
+    let lanes = lanes.max(1) as u64;
+    let per_point = (model_points as u64).div_ceil(lanes) + 9 + BOUND_POINT_EXTRA;
+    1 + scan_points as u64 * per_point + BOUND_FILL
+}

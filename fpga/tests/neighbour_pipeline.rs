@@ -7,7 +7,10 @@
 use pficp_fpga::format::{pack_point, transform, FxPoint, FxPose, MAX_POINTS};
 use pficp_fpga::grid::{Grid, CAP_D2, CELLS, CELL_LSBS, NONE};
 use pficp_fpga::grid_pipeline::{evaluate_grid, upload, GridInputs};
-use pficp_fpga::neighbour_pipeline::{evaluate_stored, run_particle, NeighbourPipelineModel};
+use pficp_fpga::neighbour_pipeline::{
+    clocks_bound, clocks_per_particle, evaluate_stored, run_particle, NeighbourPipelineModel, BOUND_FILL,
+    BOUND_POINT_EXTRA,
+};
 use proptest::prelude::*;
 
 fn inside_coord() -> impl Strategy<Value = i16> {
@@ -173,4 +176,48 @@ fn start_while_busy_is_ignored_and_an_empty_model_caps_everything() {
     assert!(pipe.outputs().busy && pipe.outputs().scan_ready);
     pipe.step(&GridInputs { start: true, ..Default::default() });
     assert!(pipe.outputs().scan_ready);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 150, failure_persistence: None, ..ProptestConfig::default() })]
+
+    /// `clocks_bound` (the host's deadlines) is never below the cycle model's count: dense
+    /// and sparse models, scans inside, on and outside the grid, any lane count.
+    #[test]
+    fn the_clock_bound_holds(
+        lanes in prop::sample::select(vec![2usize, 4, 8, 16]),
+        m in model(),
+        scan in prop::collection::vec([inside_coord(), inside_coord(), inside_coord()], 1..80),
+        p in pose(),
+    ) {
+        let g = Grid::build(&m).unwrap();
+        let r = clocks_per_particle(&g, &scan, &p, lanes);
+        let bound = clocks_bound(scan.len(), m.len(), lanes);
+        prop_assert!(r.clocks <= bound, "{} clocks above the bound {bound}", r.clocks);
+    }
+}
+
+/// The bound's worst case: every model point in one cell, every scan point beside them (one
+/// long row a point, the others empty); the bound is above the count by at most the per-point
+/// extra and the rows' rounding, and the fill. An empty neighbourhood (markers only) too.
+#[test]
+fn the_clock_bound_is_tight_on_one_dense_cell() {
+    let id = FxPose::from_f64(&[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0], &[0.0; 3]);
+    let dense: Vec<FxPoint> = (0..2000).map(|i| [10 + (i % 40) as i16, 10 + (i / 40) as i16, 300]).collect();
+    let g = Grid::build(&dense).unwrap();
+    let near: Vec<FxPoint> = (0..50).map(|i| [20 + i as i16, 30, 200]).collect();
+    let far: Vec<FxPoint> = (0..50).map(|i| [-8000 + i as i16, 8000, -8000]).collect();
+    for lanes in [2, 16] {
+        for (name, scan) in [("dense", &near), ("empty", &far)] {
+            let r = clocks_per_particle(&g, scan, &id, lanes);
+            let bound = clocks_bound(scan.len(), dense.len(), lanes);
+            eprintln!("{name}, {lanes} lanes: {} clocks, bound {bound}", r.clocks);
+            assert!(r.clocks <= bound, "{name}: {} clocks above the bound {bound}", r.clocks);
+            if name == "dense" {
+                let slack = scan.len() as u64 * (BOUND_POINT_EXTRA + 9) + BOUND_FILL + 1;
+                assert!(bound - r.clocks <= slack, "{name}: {} clocks, bound {bound}", r.clocks);
+            }
+        }
+    }
+    assert_eq!(clocks_bound(0, 2000, 16), 1 + BOUND_FILL);
 }
