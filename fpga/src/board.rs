@@ -117,13 +117,13 @@ impl std::fmt::Display for BitPeriod {
 }
 
 use crate::format::{unpack_point, FxPoint, WeightScale, MAX_POINTS};
-use crate::neighbour_pipeline::evaluate_stored;
 use crate::messages::{
     pose_from_bytes, two_u16, EvaluateReply, Identity, NearestReply, ResultReply, RunState, StatusReply, WeightSummary,
     EVALUATE_HEADER_BYTES, FLAG_FIRST, FLAG_LAST, LOAD_HEADER_BYTES, MAX_LOAD_ENTRIES, MAX_LOAD_POINTS, MAX_NEAREST,
     MAX_POSES, NEAREST_REQUEST_BYTES, POINT_BYTES, POSE_BYTES, RUN_REPLY_BYTES, TABLE_ENTRIES, TABLE_ENTRY_BYTES,
     TABLE_ENTRY_MASK, TWO_U16_BYTES, W_SUM_MASK,
 };
+use crate::neighbour_pipeline::evaluate_stored;
 use crate::pf::{PfConfig, PfOutcome};
 use crate::protocol::{digest_update, Command, Deframer, ErrorCode, Frame, DIGEST_INIT, DIGEST_NONE};
 use crate::weights::{weights, COST_MAX, MAX_PARTICLES};

@@ -7,11 +7,11 @@
 
 use pficp_fpga::board::{BoardConfig, BoardModel};
 use pficp_fpga::format::{unpack_point, FxPoint, WeightScale};
-use pficp_fpga::neighbour_pipeline::evaluate_stored;
 use pficp_fpga::messages::{
     parse_two_u16, pose_from_bytes, EvaluateReply, Identity, NearestReply, NearestRequest, ResultReply, RunState,
     StatusReply, FLAG_FIRST, FLAG_LAST,
 };
+use pficp_fpga::neighbour_pipeline::evaluate_stored;
 use pficp_fpga::pf::{self, PfConfig, PfOutcome, RUN_BYTES};
 use pficp_fpga::pipeline::Evaluation;
 use pficp_fpga::protocol::{digest_update, Deframer, ErrorCode, Frame, DIGEST_INIT, MAX_FRAME};

@@ -52,12 +52,12 @@
 use super::BoardError;
 use pficp_fpga::format::{FxPoint, FxPose, WeightScale};
 use pficp_fpga::grid::{Grid, CAP_D2};
-use pficp_fpga::neighbour_pipeline::clocks_bound;
 use pficp_fpga::messages::{
     load_request, parse_two_u16, table_request, two_u16, EvaluateReply, EvaluateRequest, Identity, MessageError,
     NearestReply, NearestRequest, WeightSummary, IDENTITY_BYTES, MAX_LOAD_ENTRIES, MAX_LOAD_POINTS, MAX_NEAREST,
     MAX_POSES, POINT_BYTES, TABLE_ENTRIES, TABLE_ENTRY_BYTES, TABLE_ENTRY_MASK,
 };
+use pficp_fpga::neighbour_pipeline::clocks_bound;
 use pficp_fpga::pipeline::COST_MASK;
 use pficp_fpga::protocol::{Command, Deframer, VERSION};
 use serialport::SerialPort;

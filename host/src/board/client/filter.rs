@@ -2,10 +2,10 @@
 //! take: the modelled board time from the sequencer's clock count, the allowance, the wait.
 
 use super::{BoardClient, BoardError, MAX_RETRIES, MIN_CLOCK_HZ, RUN_SAFETY};
-use pficp_fpga::neighbour_pipeline::clocks_bound;
 use pficp_fpga::messages::{
     parse_two_u16, MessageError, ResultReply, RunState, StatusReply, RESULT_BYTES, RUN_REPLY_BYTES, STATUS_BYTES,
 };
+use pficp_fpga::neighbour_pipeline::clocks_bound;
 use pficp_fpga::pf::PfConfig;
 use pficp_fpga::protocol::Command;
 use std::time::{Duration, Instant};
