@@ -83,8 +83,10 @@ seq_states! {
     TPass,
     /// Temperature: address cost `i`, count excesses below `2^p` (streamed, one a clock).
     TRun,
-    /// Temperature: enough counted?
+    /// Temperature: enough counted? Halve the search interval.
     TCheck,
+    /// Temperature: the interval's middle is the next pass's `p`, or the search is done.
+    TMid,
     /// Temperature: the exponent.
     TSet,
     /// Weights: address cost `i`, shift the excess, look up, store and sum (streamed).

@@ -13,8 +13,8 @@ use pficp_fpga::format::{FxPoint, FxPose};
 use pficp_fpga::pf::{self, example_cloud, example_config, PfConfig, PfOutcome, PARAMS, SCALE_FRAC};
 use pficp_fpga::sequencer::{
     clocks_per_iteration, config_writes, resample_clocks, run_clocks, sum_clocks, temper_pass_clocks, unpack_pose,
-    weight_clocks, IterationShape, PipelineStandIn, SeqInputs, SeqOutputs, SeqState, SequencerModel, POSE_CLOCKS,
-    PROPAGATE_CLOCKS,
+    weight_clocks, IterationShape, PipelineStandIn, SeqInputs, SeqOutputs, SeqState, SequencerModel, MAX_TEMPER_PASSES,
+    POSE_CLOCKS, PROPAGATE_CLOCKS,
 };
 use std::collections::HashMap;
 
@@ -458,7 +458,7 @@ fn phase_clocks() {
                 resample_advances: advances,
             });
         }
-        let temper = c(&["TPass", "TRun", "TCheck"]);
+        let temper = c(&["TPass", "TRun", "TCheck", "TMid"]);
         assert_eq!(temper, passes_total * temper_pass_clocks(n), "temperature clocks");
         let resampling = c(&[
             "RsBegin", "RsL", "RsWAddr", "RsWWait", "RsWData", "RsWMul", "RsLoop", "CpWait", "CpData", "CpNext",
@@ -488,7 +488,7 @@ fn phase_clocks() {
 /// The closed form in the module documentation.
 #[test]
 fn the_documented_iteration_formula() {
-    for (n, passes, a) in [(1u64, 1u64, 0u64), (12, 25, 7), (256, 49, 255)] {
+    for (n, passes, a) in [(1u64, 5u64, 0u64), (12, 6, 7), (256, 6, 255)] {
         let s = IterationShape {
             particles: n,
             eval_clocks: 0,
@@ -496,15 +496,33 @@ fn the_documented_iteration_formula() {
             best_copied: true,
             resample_advances: Some(a),
         };
-        let want = n * (49 + 220 + 1) + 14 * (n + 33) + passes * (n + 4) + 11 * n + 7 * a + 248;
+        let want = n * (49 + 220 + 1) + 14 * (n + 33) + passes * (n + 5) + 11 * n + 7 * a + 248;
         assert_eq!(clocks_per_iteration(&s), want);
         let last = IterationShape { resample_advances: None, best_copied: false, ..s };
         assert_eq!(clocks_per_iteration(&last), want - (9 + 10 * n + 7 * a) - 9);
     }
 }
 
-/// Temperature passes: the bit length found, plus one (`p` counts from 0).
+/// Temperature passes: the steps of a binary search over `p` in `0..=48` for the first `p`
+/// with more than half the excesses below `2^p`, from `p = 24`.
 fn temper_passes(excess: &[u64]) -> u64 {
     let k = excess.len() / 2;
-    (0..=48u32).find(|&p| excess.iter().filter(|&&e| p == 48 || e < (1u64 << p)).count() > k).unwrap() as u64 + 1
+    let enough = |p: u32| excess.iter().filter(|&&e| p == 48 || e < (1u64 << p)).count() > k;
+    let (mut lo, mut hi, mut p, mut passes) = (0u32, 48u32, 24u32, 0u64);
+    loop {
+        passes += 1;
+        if enough(p) {
+            hi = p;
+        } else {
+            lo = p + 1;
+        }
+        if lo == hi {
+            break;
+        }
+        p = (lo + hi) / 2;
+    }
+    // The linear search's answer.
+    assert_eq!(Some(lo), (0..=48u32).find(|&p| enough(p)));
+    assert!((5..=MAX_TEMPER_PASSES).contains(&passes));
+    passes
 }

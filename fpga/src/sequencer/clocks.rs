@@ -17,10 +17,13 @@ pub const DIV_WAIT: u64 = 25;
 pub const PROPAGATE_CLOCKS: u64 = 4 + MUL_WAIT;
 
 /// Clocks of one temperature pass over `n` costs (`TPass`, `TRun`: a cost a clock and two of
-/// RAM latency, `TCheck`).
+/// RAM latency, `TCheck`, `TMid`).
 pub const fn temper_pass_clocks(n: u64) -> u64 {
-    n + 4
+    n + 5
 }
+
+/// The most temperature passes: a binary search over the 49 candidate bit lengths.
+pub const MAX_TEMPER_PASSES: u64 = 6;
 
 /// Clocks of one parameter of the estimate or of the spread over `n` particles (`SumBegin`,
 /// `SumRun`: a particle a clock and six of RAM, register and multiplier latency,
@@ -54,7 +57,8 @@ pub struct IterationShape {
     /// when an evaluation outlasts a propagation and pose), and `EvStart` and `EvWait` for
     /// the estimate (`1 +` clocks from `start` to `cost_valid`, when ready).
     pub eval_clocks: u64,
-    /// Temperature passes: the bit length of the median excess, plus one (1 to 49).
+    /// Temperature passes: the steps of the binary search for the bit length of the median
+    /// excess (5 or 6, [`MAX_TEMPER_PASSES`]).
     pub temper_passes: u64,
     /// The best particle beat the best so far (its record and parameters are copied).
     pub best_copied: bool,

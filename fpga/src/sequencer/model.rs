@@ -517,8 +517,11 @@ impl SequencerModel {
                     if r.havep {
                         n.state = S::PartStore;
                     } else if r.i == r.n_part {
-                        n.p = 0;
-                        n.mask = 0;
+                        // The temperature's binary search over p in 0..=48, from the middle.
+                        n.lo = 0;
+                        n.hi = 48;
+                        n.p = 24;
+                        n.mask = m(24);
                         n.state = S::TPass;
                     } else {
                         n.state = S::EvLaunch;
@@ -569,11 +572,22 @@ impl SequencerModel {
                 }
             }
             S::TCheck => {
+                // More than half the excesses below 2^p: the bit length is at most p.
                 if r.cnt > (r.n_part >> 1) {
+                    n.hi = r.p;
+                } else {
+                    n.lo = (r.p + 1) & m(6);
+                }
+                n.state = S::TMid;
+            }
+            S::TMid => {
+                let mid = ((r.lo + r.hi) >> 1) & m(6);
+                if r.lo == r.hi {
+                    n.p = r.lo;
                     n.state = S::TSet;
                 } else {
-                    n.p = (r.p + 1) & m(6);
-                    n.mask = ((r.mask << 1) | 1) & m(48);
+                    n.p = mid;
+                    n.mask = !(m(48) << mid) & m(48);
                     n.state = S::TPass;
                 }
             }

@@ -67,6 +67,8 @@ pub(super) struct Regs {
     pub(super) best_cost_r: u64,
     pub(super) best_max_r: u64,
     pub(super) p: u64,
+    pub(super) lo: u64,
+    pub(super) hi: u64,
     pub(super) mask: u64,
     pub(super) cnt: u64,
     pub(super) pre: u64,

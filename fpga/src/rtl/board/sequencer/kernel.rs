@@ -8,7 +8,7 @@ impl Logic for PfSequencer {
         dff_setup!(self, clock, n_part, n_iter, tq, seed, thr_cost, thr_max, state, ret, ret2, rng, k, iter_done);
         dff_setup!(self, clock, run_r, fin_r, first, half, i, j, pd, spread, pa, cra, wra, x_r, off, start_r, pose_r);
         dff_setup!(self, clock, maxd, costr, cmin, imin, best_cost_r, best_max_r, p, mask, cnt, w_sum, acc);
-        dff_setup!(self, clock, cj, ie, inflight, havep, w_r, sq);
+        dff_setup!(self, clock, cj, ie, inflight, havep, w_r, sq, lo, hi);
         self.pram.read_clock.next = self.clock.val();
         self.pram.write_clock.next = self.clock.val();
         self.cram.read_clock.next = self.clock.val();
@@ -71,6 +71,7 @@ impl Logic for PfSequencer {
         self.propagate.scale.next = self.pd.q.val() == 3;
         self.ex_now.next = self.cram.read_data.val().get_bits::<48>(0) - self.cmin.q.val();
         self.ex_masked.next = self.ex_now.val() & !self.mask.q.val();
+        self.t_mid.next = bit_cast::<7, 6>(self.lo.q.val()) + bit_cast::<7, 6>(self.hi.q.val());
 
         // CORDIC.
         self.cordic.angle.next = self.bank.angle.val();
@@ -337,8 +338,11 @@ impl Logic for PfSequencer {
                     if self.havep.q.val() {
                         self.state.d.next = SeqState::PartStore;
                     } else if self.i.q.val() == self.n_part.q.val() {
-                        self.p.d.next = 0.into();
-                        self.mask.d.next = 0.into();
+                        // The temperature's binary search over p in 0..=48, from the middle.
+                        self.lo.d.next = 0.into();
+                        self.hi.d.next = bits::<6>(48);
+                        self.p.d.next = bits::<6>(24);
+                        self.mask.d.next = bits::<48>(0xff_ffff);
                         self.state.d.next = SeqState::TPass;
                     } else {
                         self.state.d.next = SeqState::EvLaunch;
@@ -393,11 +397,22 @@ impl Logic for PfSequencer {
                 }
             }
             SeqState::TCheck => {
+                // More than half the excesses below 2^p: the bit length is at most p (the
+                // count grows with p, so a binary search finds the linear search's p).
                 if self.cnt.q.val() > (self.n_part.q.val() >> 1) {
+                    self.hi.d.next = self.p.q.val();
+                } else {
+                    self.lo.d.next = self.p.q.val() + 1;
+                }
+                self.state.d.next = SeqState::TMid;
+            }
+            SeqState::TMid => {
+                if self.lo.q.val() == self.hi.q.val() {
+                    self.p.d.next = self.lo.q.val();
                     self.state.d.next = SeqState::TSet;
                 } else {
-                    self.p.d.next = self.p.q.val() + 1;
-                    self.mask.d.next = (self.mask.q.val() << 1) | bits::<48>(1);
+                    self.p.d.next = self.t_mid.val().get_bits::<6>(1);
+                    self.mask.d.next = !(self.all48.val() << self.t_mid.val().get_bits::<6>(1));
                     self.state.d.next = SeqState::TPass;
                 }
             }
