@@ -526,3 +526,47 @@ fn temper_passes(excess: &[u64]) -> u64 {
     assert!((5..=MAX_TEMPER_PASSES).contains(&passes));
     passes
 }
+
+/// Fifty particles, the board's design point: the clocks of an iteration outside the
+/// evaluations (temperature, weights, best copy, estimate and spread, the estimate's pose,
+/// resampling; everything but the particles' propagation, poses and evaluations and the
+/// start's and the end's), and a particle's propagation and pose, measured on the model.
+/// `cargo test -p pficp-fpga --test sequencer_model fifty -- --nocapture` prints them.
+#[test]
+fn fifty_particles_clocks_outside_the_evaluations() {
+    let (model, scan) = data();
+    let cfg = example_config(50, 4, 5);
+    let (outcome, ref_poses) = reference(&cfg, &model, &scan);
+    let mut b = Bench::new(&model, &scan, FIXED);
+    let r = run(&mut b, &cfg, &outcome);
+    check_record(&cfg, &r, &outcome, &ref_poses);
+    let (n, its) = (cfg.particles as u64, outcome.iterations as u64);
+    let not_outside = [
+        "Idle",
+        "StartDone",
+        "Fin",
+        "FinDone",
+        "EvStart",
+        "EvWait",
+        "EvLaunch",
+        "EvSync",
+        "PartStore",
+        "PropAddr",
+        "PropRead",
+        "PropMul",
+        "PropClamp",
+        "PropWrite",
+    ];
+    let all: u64 = b.per_state.values().sum();
+    let excluded: u64 = not_outside.iter().map(|s| b.per_state.get(s).copied().unwrap_or(0)).sum();
+    let outside = all - excluded - POSE_CLOCKS * (n * its + 2);
+    let prop: u64 = ["PropAddr", "PropRead", "PropMul", "PropClamp", "PropWrite"].iter().map(|s| b.per_state[s]).sum();
+    let per_particle = prop / (n * its) + POSE_CLOCKS;
+    println!(
+        "{n} particles, {its} iterations: {} clocks outside the evaluations per iteration; propagation and pose \
+         {per_particle} clocks per particle",
+        outside / its
+    );
+    assert_eq!(per_particle, PARAMS as u64 * PROPAGATE_CLOCKS + POSE_CLOCKS);
+    assert!(outside / its < 3_000, "{} clocks outside the evaluations per iteration", outside / its);
+}
