@@ -71,7 +71,9 @@ impl Logic for PfSequencer {
         self.propagate.scale.next = self.pd.q.val() == 3;
         self.ex_now.next = self.cram.read_data.val().get_bits::<48>(0) - self.cmin.q.val();
         self.ex_masked.next = self.ex_now.val() & !self.mask.q.val();
-        self.t_mid.next = bit_cast::<7, 6>(self.lo.q.val()) + bit_cast::<7, 6>(self.hi.q.val());
+        // `(lo + hi) / 2` in 6 bits.
+        self.t_mid.next =
+            (self.lo.q.val() >> 1) + (self.hi.q.val() >> 1) + (self.lo.q.val() & self.hi.q.val() & bits::<6>(1));
 
         // CORDIC.
         self.cordic.angle.next = self.bank.angle.val();
@@ -411,8 +413,8 @@ impl Logic for PfSequencer {
                     self.p.d.next = self.lo.q.val();
                     self.state.d.next = SeqState::TSet;
                 } else {
-                    self.p.d.next = self.t_mid.val().get_bits::<6>(1);
-                    self.mask.d.next = !(self.all48.val() << self.t_mid.val().get_bits::<6>(1));
+                    self.p.d.next = self.t_mid.val();
+                    self.mask.d.next = !(self.all48.val() << self.t_mid.val());
                     self.state.d.next = SeqState::TPass;
                 }
             }

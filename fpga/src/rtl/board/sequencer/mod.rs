@@ -188,7 +188,7 @@ pub struct PfSequencer {
     u_hi: Signal<Local, Bits<16>>,
     ex_now: Signal<Local, Bits<48>>,
     ex_masked: Signal<Local, Bits<48>>,
-    t_mid: Signal<Local, Bits<7>>,
+    t_mid: Signal<Local, Bits<6>>,
     // Sign extensions, as a mux on the sign bit (no carry chain).
     u_hi_s18: Signal<Local, Bits<18>>,
     scale_s26: Signal<Local, Bits<26>>,
