@@ -3,7 +3,7 @@
 //! and of the board's Run command (docs/sequencer.md).
 //!
 //! Everything here is integers with the formats below; the RTL computes the same values
-//! with a serial multiplier, a serial divider and a CORDIC, and its cycle-accurate mirror
+//! with a pipelined multiplier, a serial divider and a CORDIC, and its cycle-accurate mirror
 //! ([`crate::sequencer`]) is checked against [`run`] and against the Verilated RTL.
 //!
 //! | quantity | bits | format |

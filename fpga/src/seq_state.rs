@@ -81,46 +81,29 @@ seq_states! {
     PartStore,
     /// Temperature: a pass over the costs.
     TPass,
-    /// Temperature: address cost `i`.
-    TAddr,
-    /// Temperature: RAM latency.
-    TWait,
-    /// Temperature: count excesses below `2^p`.
-    TData,
-    /// Temperature: enough counted?
+    /// Temperature: address cost `i`, count excesses below `2^p` (streamed, one a clock).
+    TRun,
+    /// Temperature: enough counted? Halve the search interval.
     TCheck,
+    /// Temperature: the interval's middle is the next pass's `p`, or the search is done.
+    TMid,
     /// Temperature: the exponent.
     TSet,
-    /// Weights: address cost `i`.
-    WAddr,
-    /// Weights: RAM latency.
-    WWait,
-    /// Weights: shift the excess.
-    WData,
-    /// Weights: table lookup, store, sum.
-    WIdx,
+    /// Weights: address cost `i`, shift the excess, look up, store and sum (streamed).
+    WRun,
     /// Best: a better particle?
     BestCheck,
     /// Best: read its cost record.
     BestRec,
-    /// Best: copy parameter `d`: address.
+    /// Best: take its cost, address the next parameter.
     BestAddr,
-    /// Best: RAM latency.
-    BestWait,
-    /// Best: take parameter `d`.
+    /// Best: take parameter `d` (one a clock).
     BestData,
     /// Estimate / spread: begin parameter `d`.
     SumBegin,
-    /// Estimate / spread: address particle `i`.
-    SumAddr,
-    /// Estimate / spread: RAM latency.
-    SumWait,
-    /// Estimate / spread: start the multiply.
-    SumData,
-    /// Estimate / spread: accumulate.
-    SumMul,
-    /// Estimate / spread: wait for the product, accumulate.
-    SumDiv,
+    /// Estimate / spread: address particle `i`, multiply and accumulate (streamed, one a
+    /// clock through the pipelined multiplier).
+    SumRun,
     /// Estimate / spread: start the division.
     SumDivGo,
     /// Estimate / spread: wait for it, write the result.
@@ -147,9 +130,9 @@ seq_states! {
     RsWMul,
     /// Resample: advance the pointer or copy.
     RsLoop,
-    /// Resample: RAM latency.
+    /// Resample: address the survivor's next parameter.
     CpWait,
-    /// Resample: write parameter `d`.
+    /// Resample: write parameter `d` (one a clock).
     CpData,
     /// Resample: the next survivor.
     CpNext,

@@ -1,6 +1,6 @@
 //! The sequencer's blocks, each alone in rust_hdl's simulator against the
-//! [`pficp_fpga::pf`] function it implements: the serial multiplier against `i64`
-//! products, the divider against `pf::div_signed`, the PRNG step against
+//! [`pficp_fpga::pf`] function it implements: the pipelined multiplier against `i64`
+//! products (one at a time and one a clock), the divider against `pf::div_signed`, the PRNG step against
 //! `pf::Xorshift32`, the CORDIC against `pf::cordic`, the pose program against
 //! `pf::run_program`, the propagation against `pf::propagate`, the estimate and spread
 //! against `pf::estimate_param` and `pf::spread`, the translation against
@@ -12,8 +12,7 @@
 use pficp_fpga::format::exp_table;
 use pficp_fpga::pf::{self, CORDIC_STEPS, POSE_PROGRAM};
 use pficp_fpga::rtl::board::sequencer::{
-    Cordic, Estimate, ParamBank, PoseProgram, Propagate, Resample, SerialDiv, SerialMul, Translation, Weight,
-    Xorshift32,
+    Cordic, Estimate, ParamBank, PipeMul, PoseProgram, Propagate, Resample, SerialDiv, Translation, Weight, Xorshift32,
 };
 use rust_hdl::prelude::*;
 use std::sync::{Arc, Mutex};
@@ -81,7 +80,7 @@ macro_rules! clocked {
     };
 }
 
-clocked!(SerialMul, SerialDiv, Cordic, PoseProgram, Weight, Resample, ParamBank);
+clocked!(PipeMul, SerialDiv, Cordic, PoseProgram, Weight, Resample, ParamBank);
 
 /// [`run_bench`] on a clocked block.
 fn run_clocked<U: Block + Clocked + Send + 'static>(
@@ -108,8 +107,8 @@ fn run_comb<U: Block + Send + 'static>(
 }
 
 #[test]
-fn serial_mul_matches_i64_products_in_18_clocks() {
-    let checks = run_clocked(SerialMul::new(), |sim, mut x, errors| {
+fn pipe_mul_matches_i64_products_in_2_clocks_one_a_clock() {
+    let checks = run_clocked(PipeMul::new(), |sim, mut x, errors| {
         let mut seed = 7u64;
         let mut cases: Vec<(i64, i64)> = vec![
             (0, 0),
@@ -142,9 +141,38 @@ fn serial_mul_matches_i64_products_in_18_clocks() {
                 }
             }
             let got = signed::<44>(x.product.val());
-            if got != a * b || clocks != 18 {
+            if got != a * b || clocks != 2 || !x.valid.val() {
                 errors.push(format!("case {n}: {a} * {b} = {}, rtl {got} after {clocks} clocks", a * b));
             }
+            // `valid` is one clock long.
+            wait_clock_cycle!(sim, clock, x);
+            if x.valid.val() || signed::<44>(x.product.val()) != a * b {
+                errors.push(format!("case {n}: valid twice or the product not held"));
+            }
+        }
+        // One pair a clock: every product comes out, in order, a `valid` clock each, two clocks
+        // after its pair is taken.
+        let mut out = Vec::new();
+        for k in 0..cases.len() + 3 {
+            x.go.next = k < cases.len();
+            if let Some(&(a, b)) = cases.get(k) {
+                x.a.next = word::<26>(a);
+                x.b.next = word::<18>(b);
+            }
+            wait_clock_cycle!(sim, clock, x);
+            if x.valid.val() {
+                out.push((k, signed::<44>(x.product.val())));
+            }
+        }
+        x.go.next = false;
+        let want: Vec<(usize, i64)> = cases.iter().enumerate().map(|(k, &(a, b))| (k + 2, a * b)).collect();
+        if out != want {
+            let first = out.iter().zip(&want).position(|(o, w)| o != w);
+            errors.push(format!(
+                "streamed: {} products out of {}, first difference at {first:?}",
+                out.len(),
+                want.len()
+            ));
         }
         // A reset stops a product in progress.
         x.go.next = true;
@@ -152,8 +180,10 @@ fn serial_mul_matches_i64_products_in_18_clocks() {
         x.go.next = false;
         x.reset.next = true;
         wait_clock_cycle!(sim, clock, x);
-        if x.busy.val() {
-            errors.push("busy after reset".into());
+        wait_clock_cycle!(sim, clock, x);
+        x.reset.next = false;
+        if x.busy.val() || x.valid.val() {
+            errors.push("busy or valid after reset".into());
         }
         Ok((x, cases.len() + 1))
     });
@@ -161,15 +191,22 @@ fn serial_mul_matches_i64_products_in_18_clocks() {
 }
 
 #[test]
-fn serial_div_matches_div_signed_in_48_clocks() {
+fn serial_div_matches_div_signed_in_24_clocks_for_quotients_below_2_24() {
     let checks = run_clocked(SerialDiv::new(), |sim, mut x, errors| {
         let mut seed = 11u64;
-        let mut cases: Vec<(u64, u32)> =
-            vec![(0, 1), ((1 << 48) - 1, 1), ((1 << 48) - 1, (1 << 24) - 1), (5, 7), (1 << 40, 3)];
+        // The domain: `n < d 2^24` (the filter's `|sum w x| <= 2^23 W`), its edges included.
+        let mut cases: Vec<(u64, u32)> = vec![
+            (0, 1),
+            ((1 << 24) - 1, 1),
+            ((1 << 48) - (1 << 24) - 1, (1 << 24) - 1),
+            (5, 7),
+            (1 << 40, 1 << 17),
+            ((1 << 23) * 65_535 * 256, 65_535 * 256),
+        ];
         for _ in 0..1000 {
-            let n = lcg(&mut seed) & ((1 << 48) - 1);
             let shift = lcg(&mut seed) % 24;
             let d = ((lcg(&mut seed) as u32) >> (8 + shift)).max(1);
+            let n = (lcg(&mut seed) & ((1 << 48) - 1)) % ((d as u64) << 24);
             cases.push((n >> (lcg(&mut seed) % 40), d));
         }
         x.reset.next = false;
@@ -188,13 +225,13 @@ fn serial_div_matches_div_signed_in_48_clocks() {
             }
             let want = pf::div_signed(n as i64, d) as u64 & ((1 << 26) - 1);
             let got = x.quotient.val().to_u64();
-            if got != want || clocks != 48 {
+            if got != want || clocks != 24 {
                 errors.push(format!("case {k}: {n} / {d} = {want}, rtl {got} after {clocks} clocks"));
             }
         }
         Ok((x, cases.len()))
     });
-    assert_eq!(checks, 1005);
+    assert_eq!(checks, 1006);
 }
 
 #[test]

@@ -12,8 +12,9 @@
 use pficp_fpga::format::{FxPoint, FxPose};
 use pficp_fpga::pf::{self, example_cloud, example_config, PfConfig, PfOutcome, PARAMS, SCALE_FRAC};
 use pficp_fpga::sequencer::{
-    clocks_per_iteration, config_writes, run_clocks, sum_clocks, temper_pass_clocks, unpack_pose, IterationShape,
-    PipelineStandIn, SeqInputs, SeqOutputs, SeqState, SequencerModel, POSE_CLOCKS, PROPAGATE_CLOCKS,
+    clocks_per_iteration, config_writes, resample_clocks, run_clocks, sum_clocks, temper_pass_clocks, unpack_pose,
+    weight_clocks, IterationShape, PipelineStandIn, SeqInputs, SeqOutputs, SeqState, SequencerModel, MAX_TEMPER_PASSES,
+    POSE_CLOCKS, PROPAGATE_CLOCKS,
 };
 use std::collections::HashMap;
 
@@ -267,9 +268,9 @@ fn one_particle_odd_counts_wrapping_angles_and_random_latencies() {
     for (seed, n) in [(1u32, 16u16), (2, 5), (3, 13)] {
         check(&example_config(n, 4, seed * 7919), &model, &scan, Timing { lat: (2, 45), gap: 4, seed });
     }
-    // Evaluations longer and shorter than a propagation and pose (749 clocks): the next
+    // Evaluations longer and shorter than a propagation and pose (269 clocks): the next
     // particle waits in EvSync for some, not for others.
-    check(&example_config(11, 3, 77), &model, &scan, Timing { lat: (400, 1300), gap: 3, seed: 21 });
+    check(&example_config(11, 3, 77), &model, &scan, Timing { lat: (100, 500), gap: 3, seed: 21 });
 }
 
 #[test]
@@ -310,16 +311,19 @@ fn reset_in_the_middle_of_a_run() {
     let want = run(&mut fresh, &cfg, &outcome);
     check_record(&cfg, &want, &outcome, &ref_poses);
     // Resets in the pose program, in an evaluation (results streaming in), in the
-    // propagation, the temperature, the divider, the resampling, the final pose, and after
-    // the end: `(state, its n-th entry, clocks after entering it)`.
-    let points: [(&str, usize, u64); 10] = [
+    // propagation, the temperature, the weights, a weighted sum with products in flight, the
+    // divider, the resampling, the final pose, and after the end: `(state, its n-th entry,
+    // clocks after entering it)`.
+    let points: [(&str, usize, u64); 12] = [
         ("CorStep", 1, 3),
-        ("OpMul", 5, 7),
+        ("OpMul", 5, 1),
         ("EvWait", 3, 25),
-        ("PropMul", 20, 4),
-        ("TData", 10, 0),
-        ("SumDivWait", 9, 30),
-        ("RsWMul", 2, 10),
+        ("PropMul", 20, 1),
+        ("TRun", 10, 5),
+        ("WRun", 2, 6),
+        ("SumRun", 5, 9),
+        ("SumDivWait", 9, 10),
+        ("RsWMul", 2, 1),
         ("CpData", 12, 0),
         ("Fin", 1, 100),
         ("Idle", 1, 50),
@@ -419,9 +423,10 @@ fn phase_clocks() {
         assert_eq!(c(&["EvLaunch", "EvSync"]), overlapped * its_n, "overlapped evaluation clocks");
         let prop = c(&["PropAddr", "PropRead", "PropMul", "PropClamp", "PropWrite"]);
         assert_eq!(prop, PROPAGATE_CLOCKS * p * n * its, "propagation clocks");
-        let sums = c(&["SumBegin", "SumAddr", "SumWait", "SumData", "SumMul", "SumDiv", "SumDivGo", "SumDivWait"]);
+        let sums = c(&["SumBegin", "SumRun", "SumDivGo", "SumDivWait"]);
         assert_eq!(sums, 2 * p * sum_clocks(n) * its, "estimate and spread clocks");
-        assert_eq!(c(&["WAddr", "WWait", "WData", "WIdx"]), 4 * n * its, "weight clocks");
+        let weights = c(&["WRun", "BestCheck"]);
+        assert_eq!(weights, weight_clocks(n) * its, "weight clocks");
         // The whole run, iteration by iteration: the temperature passes, whether the best
         // particle is copied and the resampling pointer's advances from the reference (the
         // PRNG replayed for `u0`).
@@ -453,14 +458,21 @@ fn phase_clocks() {
                 resample_advances: advances,
             });
         }
-        let temper = c(&["TPass", "TAddr", "TWait", "TData", "TCheck"]);
+        let temper = c(&["TPass", "TRun", "TCheck", "TMid"]);
         assert_eq!(temper, passes_total * temper_pass_clocks(n), "temperature clocks");
         let resampling = c(&[
             "RsBegin", "RsL", "RsWAddr", "RsWWait", "RsWData", "RsWMul", "RsLoop", "CpWait", "CpData", "CpNext",
             "RsDone",
         ]);
         let resamplings = shapes.iter().filter(|s| s.resample_advances.is_some()).count() as u64;
-        assert_eq!(resampling, resamplings * (41 + 16 * n) + 23 * advances_total, "resampling clocks");
+        assert_eq!(
+            resampling,
+            resamplings * resample_clocks(n, 0) + (resample_clocks(n, 1) - resample_clocks(n, 0)) * advances_total,
+            "resampling clocks"
+        );
+        let copies = c(&["BestRec", "BestAddr", "BestData"]);
+        let copied = shapes.iter().filter(|s| s.best_copied).count() as u64;
+        assert_eq!(copies, copied * (2 + p), "best copy clocks");
         assert_eq!(r.clocks, run_clocks(eval_each, &shapes), "run clocks ({n} particles)");
         println!(
             "{n} particles x {its} iterations: {} clocks (pose {pose}, evaluation {}, propagation {prop}, \
@@ -468,7 +480,7 @@ fn phase_clocks() {
              {resampling})",
             r.clocks,
             eval_each * sync_evals + overlapped * its,
-            4 * n * its
+            weights
         );
     }
 }
@@ -476,7 +488,7 @@ fn phase_clocks() {
 /// The closed form in the module documentation.
 #[test]
 fn the_documented_iteration_formula() {
-    for (n, passes, a) in [(1u64, 1u64, 0u64), (12, 25, 7), (256, 49, 255)] {
+    for (n, passes, a) in [(1u64, 5u64, 0u64), (12, 6, 7), (256, 6, 255)] {
         let s = IterationShape {
             particles: n,
             eval_clocks: 0,
@@ -484,15 +496,77 @@ fn the_documented_iteration_formula() {
             best_copied: true,
             resample_advances: Some(a),
         };
-        let want = n * (161 + 588 + 1) + 14 * (23 * n + 51) + passes * (3 * n + 2) + 20 * n + 23 * a + 652;
+        let want = n * (49 + 220 + 1) + 14 * (n + 33) + passes * (n + 5) + 11 * n + 7 * a + 248;
         assert_eq!(clocks_per_iteration(&s), want);
         let last = IterationShape { resample_advances: None, best_copied: false, ..s };
-        assert_eq!(clocks_per_iteration(&last), want - (41 + 16 * n + 23 * a) - 16);
+        assert_eq!(clocks_per_iteration(&last), want - (9 + 10 * n + 7 * a) - 9);
     }
 }
 
-/// Temperature passes: the bit length found, plus one (`p` counts from 0).
+/// Temperature passes: the steps of a binary search over `p` in `0..=48` for the first `p`
+/// with more than half the excesses below `2^p`, from `p = 24`.
 fn temper_passes(excess: &[u64]) -> u64 {
     let k = excess.len() / 2;
-    (0..=48u32).find(|&p| excess.iter().filter(|&&e| p == 48 || e < (1u64 << p)).count() > k).unwrap() as u64 + 1
+    let enough = |p: u32| excess.iter().filter(|&&e| p == 48 || e < (1u64 << p)).count() > k;
+    let (mut lo, mut hi, mut p, mut passes) = (0u32, 48u32, 24u32, 0u64);
+    loop {
+        passes += 1;
+        if enough(p) {
+            hi = p;
+        } else {
+            lo = p + 1;
+        }
+        if lo == hi {
+            break;
+        }
+        p = (lo + hi) / 2;
+    }
+    // The linear search's answer.
+    assert_eq!(Some(lo), (0..=48u32).find(|&p| enough(p)));
+    assert!((5..=MAX_TEMPER_PASSES).contains(&passes));
+    passes
+}
+
+/// Fifty particles, the board's design point: the clocks of an iteration outside the
+/// evaluations (temperature, weights, best copy, estimate and spread, the estimate's pose,
+/// resampling; everything but the particles' propagation, poses and evaluations and the
+/// start's and the end's), and a particle's propagation and pose, measured on the model.
+/// `cargo test -p pficp-fpga --test sequencer_model fifty -- --nocapture` prints them.
+#[test]
+fn fifty_particles_clocks_outside_the_evaluations() {
+    let (model, scan) = data();
+    let cfg = example_config(50, 4, 5);
+    let (outcome, ref_poses) = reference(&cfg, &model, &scan);
+    let mut b = Bench::new(&model, &scan, FIXED);
+    let r = run(&mut b, &cfg, &outcome);
+    check_record(&cfg, &r, &outcome, &ref_poses);
+    let (n, its) = (cfg.particles as u64, outcome.iterations as u64);
+    let not_outside = [
+        "Idle",
+        "StartDone",
+        "Fin",
+        "FinDone",
+        "EvStart",
+        "EvWait",
+        "EvLaunch",
+        "EvSync",
+        "PartStore",
+        "PropAddr",
+        "PropRead",
+        "PropMul",
+        "PropClamp",
+        "PropWrite",
+    ];
+    let all: u64 = b.per_state.values().sum();
+    let excluded: u64 = not_outside.iter().map(|s| b.per_state.get(s).copied().unwrap_or(0)).sum();
+    let outside = all - excluded - POSE_CLOCKS * (n * its + 2);
+    let prop: u64 = ["PropAddr", "PropRead", "PropMul", "PropClamp", "PropWrite"].iter().map(|s| b.per_state[s]).sum();
+    let per_particle = prop / (n * its) + POSE_CLOCKS;
+    println!(
+        "{n} particles, {its} iterations: {} clocks outside the evaluations per iteration; propagation and pose \
+         {per_particle} clocks per particle",
+        outside / its
+    );
+    assert_eq!(per_particle, PARAMS as u64 * PROPAGATE_CLOCKS + POSE_CLOCKS);
+    assert!(outside / its < 3_000, "{} clocks outside the evaluations per iteration", outside / its);
 }

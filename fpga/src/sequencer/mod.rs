@@ -15,27 +15,28 @@
 //! # Clocks per phase
 //!
 //! Measured on the model and checked exactly by `tests/sequencer_model.rs` (`n` particles;
-//! a state waiting for the serial multiplier spends 19 clocks in it, for the divider 49):
+//! a state waiting for the pipelined multiplier spends 3 clocks in it, for the divider 25;
+//! the streamed passes take one particle or cost a clock, plus their pipeline's latency):
 //!
 //! | phase | clocks | states |
 //! |---|---|---|
-//! | pose ([`POSE_CLOCKS`]) | 588 | 3 x (CorInit, 18 CorStep, CorCos, CorSin) = 63, PoseScale 1, 23 multiplies x 22 (OpFetch, OpA, OpB, 19 OpMul), 5 additions x 3, 3 PoseT |
+//! | pose ([`POSE_CLOCKS`]) | 220 | 3 x (CorInit, 18 CorStep, CorCos, CorSin) = 63, PoseScale 1, 23 multiplies x 6 (OpFetch, OpA, OpB, 3 OpMul), 5 additions x 3, 3 PoseT |
 //! | evaluation of the start and each estimate | 1 + pipeline | EvStart (1 when `nn_ready`), EvWait from `start` to the clock `cost_valid` is taken |
-//! | evaluation of the particles, per iteration | 3n + the last one's (1 + pipeline + 1), or more | EvLaunch (1 when `nn_ready`) starts particle `i` and goes on propagating `i + 1`; EvSync waits until its cost is in (1 clock when the evaluation took less than the next particle's propagation and pose, 749 clocks), PartStore stores it, EvSync again launches the next or, after the last, waits for it and goes on to the temperature |
-//! | propagation, per parameter ([`PROPAGATE_CLOCKS`]) | 23 | PropAddr, PropRead, 19 PropMul, PropClamp, PropWrite (161 per particle, + PartStore 1 for its evaluation; IterBegin 1 per iteration) |
-//! | temperature, per pass ([`temper_pass_clocks`]) | 3n + 2 | TPass, n x (TAddr, TWait, TData), TCheck; passes = bit length of the median excess + 1 (1 to 49); then TSet 1 |
-//! | weights | 4n + 1 | n x (WAddr, WWait, WData, WIdx), BestCheck; + 16 when the best particle beats the best so far (BestRec, BestAddr, 7 x (BestWait, BestData)) |
-//! | estimate, spread: per parameter ([`sum_clocks`]) | 23n + 51 | SumBegin, n x (SumAddr, SumWait, SumData, SumMul, 19 SumDiv), SumDivGo, 49 SumDivWait; 7 parameters each: 14 (23n + 51) |
-//! | the estimate's evaluation, region, stop | 592 + evaluation | EstEval, pose, evaluation, EstDone, Centre, StopCheck |
-//! | resampling (not after the last iteration) | 41 + 16n + 23a | RsBegin, 19 RsL, RsWData, 19 RsWMul, RsDone; a = the last survivor's index: per advance RsLoop, RsWAddr, RsWWait, RsWData, 19 RsWMul; per survivor RsLoop, 7 x (CpWait, CpData), CpNext |
-//! | a run ([`run_clocks`]) | 590 + start evaluation + iterations + 590 | go (Idle), pose, evaluation, StartDone; ...; Fin, pose, FinDone |
+//! | evaluation of the particles, per iteration | 3n + the last one's (1 + pipeline + 1), or more | EvLaunch (1 when `nn_ready`) starts particle `i` and goes on propagating `i + 1`; EvSync waits until its cost is in (1 clock when the evaluation took less than the next particle's propagation and pose, 269 clocks), PartStore stores it, EvSync again launches the next or, after the last, waits for it and goes on to the temperature |
+//! | propagation, per parameter ([`PROPAGATE_CLOCKS`]) | 7 | PropAddr, PropRead, 3 PropMul, PropClamp, PropWrite (49 per particle, + PartStore 1 for its evaluation; IterBegin 1 per iteration) |
+//! | temperature, per pass ([`temper_pass_clocks`]) | n + 5 | TPass, TRun (n + 2: a cost a clock, 2 of RAM latency), TCheck, TMid; passes: a binary search over the bit length `p` in 0..=48 from 24, 5 or 6 ([`MAX_TEMPER_PASSES`]); then TSet 1 |
+//! | weights ([`weight_clocks`]) | n + 4 | WRun (n + 3), BestCheck; + 9 when the best particle beats the best so far (BestRec, BestAddr, 7 BestData) |
+//! | estimate, spread: per parameter ([`sum_clocks`]) | n + 33 | SumBegin, SumRun (n + 6: a particle a clock; RAM 2, operand register 1, multiplier 2, the last addition 1), SumDivGo, 25 SumDivWait; 7 parameters each: 14 (n + 33) |
+//! | the estimate's evaluation, region, stop | 224 + evaluation | EstEval, pose, evaluation, EstDone, Centre, StopCheck |
+//! | resampling, not after the last iteration ([`resample_clocks`]) | 9 + 10n + 7a | RsBegin, 3 RsL, RsWData, 3 RsWMul, RsDone; a = the last survivor's index: per advance RsLoop, RsWAddr, RsWWait, RsWData, 3 RsWMul; per survivor RsLoop, CpWait, 7 CpData, CpNext |
+//! | a run ([`run_clocks`]) | 222 + start evaluation + iterations + 222 | go (Idle), pose, evaluation, StartDone; ...; Fin, pose, FinDone |
 //!
 //! [`clocks_per_iteration`] adds these up exactly. Without the pipeline's time an iteration
-//! is `n (161 + 588 + 1) + 14 (23n + 51) + passes (3n + 2) + 20n + 23a + 652` clocks (with
-//! the best copied): about 1,100 to 1,200 clocks per particle with ~25 temperature passes,
-//! against the pipeline's ~10^4 per evaluation.
-//! For example 12 particles, 5 iterations, a 30-point scan with a 20-clock latency: 82,351
-//! clocks, of which 39,396 are poses and 22,890 estimate and spread.
+//! is `n (49 + 220 + 1) + 14 (n + 33) + passes (n + 5) + 11n + 7a + 248` clocks (with the best
+//! copied): for 50 particles, 2,400 to 2,650 clocks besides the particles' propagation and
+//! poses (13,500, hidden behind their evaluations when these take at least 269 clocks each),
+//! against ~23,400 with the serial multiplier (18 clocks), the 48-step divider and the
+//! unstreamed passes. `tests/sequencer_model.rs` (`fifty_particles_...`) measures it.
 
 mod clocks;
 mod model;

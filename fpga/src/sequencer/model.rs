@@ -272,7 +272,11 @@ impl SequencerModel {
         let mut cram_w =
             WritePort { we: false, addr: (r.i & m(8)) as usize, data: r.costr as u128 | (r.maxd as u128) << 48 };
         let cram_ra = r.cra as usize;
-        let wram_w = WritePort { we: r.state == SeqState::WIdx, addr: (r.i & m(8)) as usize, data: exp_data as u16 };
+        let wram_w = WritePort {
+            we: r.state == SeqState::WRun && (r.sq >> 2) & 1 == 1,
+            addr: (r.cnt & m(8)) as usize,
+            data: exp_data as u16,
+        };
         let wram_ra = r.wra as usize;
         let mut rf_ra = r.op_b as usize;
         let mut rf_w = WritePort { we: false, addr: r.op_dst as usize, data: sx(cor_v, 20) as u64 & m(26) };
@@ -513,8 +517,11 @@ impl SequencerModel {
                     if r.havep {
                         n.state = S::PartStore;
                     } else if r.i == r.n_part {
-                        n.p = 0;
-                        n.mask = 0;
+                        // The temperature's binary search over p in 0..=48, from the middle.
+                        n.lo = 0;
+                        n.hi = 48;
+                        n.p = 24;
+                        n.mask = m(24);
                         n.state = S::TPass;
                     } else {
                         n.state = S::EvLaunch;
@@ -546,50 +553,72 @@ impl SequencerModel {
             S::TPass => {
                 n.i = 0;
                 n.cnt = 0;
-                n.state = S::TAddr;
+                n.sq = 0;
+                n.state = S::TRun;
             }
-            S::TAddr => {
-                n.cra = r.i & m(8);
-                n.state = S::TWait;
-            }
-            S::TWait => n.state = S::TData,
-            S::TData => {
-                if ex_masked == 0 {
+            S::TRun => {
+                // Address cost `i` while there is one; count the cost read two clocks ago.
+                let issue = r.i != r.n_part;
+                if issue {
+                    n.cra = r.i & m(8);
+                    n.i = (r.i + 1) & m(9);
+                }
+                n.sq = ((r.sq << 1) | issue as u64) & m(2);
+                if (r.sq >> 1) & 1 == 1 && ex_masked == 0 {
                     n.cnt = (r.cnt + 1) & m(9);
                 }
-                n.i = (r.i + 1) & m(9);
-                n.state = if last(r.i) { S::TCheck } else { S::TAddr };
+                if !issue && r.sq & 1 == 0 {
+                    n.state = S::TCheck;
+                }
             }
             S::TCheck => {
+                // More than half the excesses below 2^p: the bit length is at most p.
                 if r.cnt > (r.n_part >> 1) {
+                    n.hi = r.p;
+                } else {
+                    n.lo = (r.p + 1) & m(6);
+                }
+                n.state = S::TMid;
+            }
+            S::TMid => {
+                let mid = ((r.lo + r.hi) >> 1) & m(6);
+                if r.lo == r.hi {
+                    n.p = r.lo;
                     n.state = S::TSet;
                 } else {
-                    n.p = (r.p + 1) & m(6);
-                    n.mask = ((r.mask << 1) | 1) & m(48);
+                    n.p = mid;
+                    n.mask = !(m(48) << mid) & m(48);
                     n.state = S::TPass;
                 }
             }
             S::TSet => {
                 n.pre = if e_tmp > 5 { (e_tmp - 5) & m(6) } else { 0 };
                 n.i = 0;
+                n.cnt = 0;
+                n.sq = 0;
                 n.w_sum = 0;
-                n.state = S::WAddr;
+                n.state = S::WRun;
             }
             // ---- Weights.
-            S::WAddr => {
-                n.cra = r.i & m(8);
-                n.state = S::WWait;
-            }
-            S::WWait => n.state = S::WData,
-            S::WData => {
-                n.sh = if r.pre >= 64 { 0 } else { ex_now >> r.pre };
-                n.state = S::WIdx;
-            }
-            S::WIdx => {
-                // (The write enable is in `wram_w`.)
-                n.w_sum = (r.w_sum + exp_data) & m(24);
-                n.i = (r.i + 1) & m(9);
-                n.state = if last(r.i) { S::BestCheck } else { S::WAddr };
+            S::WRun => {
+                // Address cost `i` while there is one; shift the excess read two clocks ago;
+                // store and sum the weight of the one before (`cnt`, in `wram_w`).
+                let issue = r.i != r.n_part;
+                if issue {
+                    n.cra = r.i & m(8);
+                    n.i = (r.i + 1) & m(9);
+                }
+                n.sq = ((r.sq << 1) | issue as u64) & m(3);
+                if (r.sq >> 1) & 1 == 1 {
+                    n.sh = if r.pre >= 64 { 0 } else { ex_now >> r.pre };
+                }
+                if (r.sq >> 2) & 1 == 1 {
+                    n.w_sum = (r.w_sum + exp_data) & m(24);
+                    n.cnt = (r.cnt + 1) & m(9);
+                }
+                if !issue && r.sq & 3 == 0 {
+                    n.state = S::BestCheck;
+                }
             }
             // ---- The best particle.
             S::BestCheck => {
@@ -609,9 +638,9 @@ impl SequencerModel {
             S::BestAddr => {
                 n.best_cost_r = (r.cram_q as u64) & m(48);
                 n.best_max_r = ((r.cram_q >> 48) as u64) & m(34);
-                n.state = S::BestWait;
+                n.pa = (r.pa + 1) & m(12);
+                n.state = S::BestData;
             }
-            S::BestWait => n.state = S::BestData,
             S::BestData => {
                 if (r.pd as usize) < PARAMS {
                     n.best[r.pd as usize] = r.pram_q;
@@ -622,38 +651,39 @@ impl SequencerModel {
                     n.pd = 0;
                     n.spread = false;
                     n.state = S::SumBegin;
-                } else {
-                    n.state = S::BestWait;
                 }
             }
             // ---- Estimate and spread.
             S::SumBegin => {
                 n.acc = 0;
                 n.i = 0;
-                n.state = S::SumAddr;
+                n.sq = 0;
+                n.state = S::SumRun;
             }
-            S::SumAddr => {
-                n.pa = pa_of(r.half, r.i) | r.pd;
-                n.wra = r.i & m(8);
-                n.state = S::SumWait;
-            }
-            S::SumWait => n.state = S::SumData,
-            S::SumData => {
+            S::SumRun => {
+                // Address particle `i` while there is one; take the parameter and weight read
+                // two clocks ago; multiply the ones taken a clock ago; add the product that
+                // comes out of the multiplier.
+                let issue = r.i != r.n_part;
+                if issue {
+                    n.pa = pa_of(r.half, r.i) | r.pd;
+                    n.wra = r.i & m(8);
+                    n.i = (r.i + 1) & m(9);
+                }
+                n.sq = ((r.sq << 1) | issue as u64) & m(3);
                 n.x_r = r.pram_q;
-                n.state = S::SumMul;
-            }
-            S::SumMul => {
-                n.state = S::SumDiv;
-                mul_go = true;
-                mul_b_in = r.wram_q & m(18);
-                mul_a_in = if r.spread { abs26 } else { diff26 };
-            }
-            S::SumDiv => {
-                if r.m_cnt == 0 {
+                n.w_r = r.wram_q;
+                if (r.sq >> 2) & 1 == 1 {
+                    mul_go = true;
+                    mul_b_in = r.w_r & m(18);
+                    mul_a_in = if r.spread { abs26 } else { diff26 };
+                }
+                if (r.m_v >> 2) & 1 == 1 {
                     let prod48 = (sx(r.m_acc, 44) as u64) & m(48);
                     n.acc = (r.acc + prod48) & m(48);
-                    n.i = (r.i + 1) & m(9);
-                    n.state = if last(r.i) { S::SumDivGo } else { S::SumAddr };
+                }
+                if !issue && r.sq == 0 && r.m_cnt == 0 {
+                    n.state = S::SumDivGo;
                 }
             }
             S::SumDivGo => {
@@ -754,12 +784,15 @@ impl SequencerModel {
                     n.state = S::CpWait;
                 }
             }
-            S::CpWait => n.state = S::CpData,
+            S::CpWait => {
+                n.pa = (r.pa + 1) & m(12);
+                n.state = S::CpData;
+            }
             S::CpData => {
                 // (The write port is `pram_port`.)
                 n.pa = (r.pa + 1) & m(12);
                 n.pd = (r.pd + 1) & m(3);
-                n.state = if r.pd == 6 { S::CpNext } else { S::CpWait };
+                n.state = if r.pd == 6 { S::CpNext } else { S::CpData };
             }
             S::CpNext => {
                 n.lft = (r.lft + (r.w_sum << 16)) & m(50);
@@ -784,29 +817,26 @@ impl SequencerModel {
             }
         }
 
-        // ---- The serial multiplier.
-        let m_neg = 0u64.wrapping_sub(r.m_a) & m(44);
+        // ---- The pipelined multiplier: operands, the carry-save product (`m_p`, the sum
+        // of the RTL's two rows), the product; `m_v` marks which stages hold a started one.
         if mul_go {
             n.m_a = sx(mul_a_in & m(26), 26) as u64 & m(44);
             n.m_b = mul_b_in & m(18);
-            n.m_acc = 0;
-            n.m_cnt = 18;
+            n.m_cnt = 2;
         } else if r.m_cnt != 0 {
-            if r.m_b & 1 == 1 {
-                let add = if r.m_cnt == 1 { m_neg } else { r.m_a };
-                n.m_acc = (r.m_acc + add) & m(44);
-            }
-            n.m_a = (r.m_a << 1) & m(44);
-            n.m_b = r.m_b >> 1;
             n.m_cnt = r.m_cnt - 1;
         }
-        // ---- The serial divider.
+        n.m_p = (sx(r.m_a, 44).wrapping_mul(sx(r.m_b, 18)) as u64) & m(44);
+        n.m_acc = r.m_p;
+        n.m_v = ((r.m_v << 1) | mul_go as u64) & m(3);
+        // ---- The serial divider: 24 steps, the dividend's top half already in the
+        // remainder (every quotient is below 2^24).
         let rem2 = ((r.dv_rem << 1) | ((r.dv_n >> 47) & 1)) & m(25);
         if div_go {
-            n.dv_n = div_n_in;
+            n.dv_n = (div_n_in << 24) & m(48);
             n.dv_d = r.w_sum;
-            n.dv_rem = 0;
-            n.dv_cnt = 48;
+            n.dv_rem = (div_n_in >> 24) & m(24);
+            n.dv_cnt = 24;
         } else if r.dv_cnt != 0 {
             if rem2 >= r.dv_d {
                 n.dv_rem = (rem2 - r.dv_d) & m(25);
@@ -823,6 +853,7 @@ impl SequencerModel {
             n.run_r = false;
             n.fin_r = false;
             n.m_cnt = 0;
+            n.m_v = 0;
             n.dv_cnt = 0;
         }
 

@@ -205,12 +205,12 @@ impl BoardClient {
 /// An upper bound on the on-board filter's clocks for `particles` and all `iterations` over
 /// `scan_points` and `model_points` on `lanes` lanes: the sequencer's exact count
 /// ([`pficp_fpga::sequencer::run_clocks`]) with every data-dependent part at its largest
-/// (49 temperature passes, a new best every iteration, the resampling pointer advancing
+/// (the temperature's most passes, a new best every iteration, the resampling pointer advancing
 /// through every particle) and each evaluation taking the neighbour pipeline's bound
 /// [`clocks_bound`] (any pose, any model of that size) plus one clock:
 /// `particles x iterations + iterations + 1` poses.
 pub fn run_clocks_bound(particles: u16, iterations: u16, scan_points: usize, model_points: usize, lanes: usize) -> u64 {
-    use pficp_fpga::sequencer::{run_clocks, IterationShape};
+    use pficp_fpga::sequencer::{run_clocks, IterationShape, MAX_TEMPER_PASSES};
     let n = particles as u64;
     let eval = 1 + clocks_bound(scan_points, model_points, lanes.max(1));
     let shape = |last: bool| IterationShape {
@@ -218,7 +218,7 @@ pub fn run_clocks_bound(particles: u16, iterations: u16, scan_points: usize, mod
         // The particles' evaluations overlap the next particle's propagation: at most each
         // evaluation plus four clocks of launch, synchronisation and store.
         eval_clocks: (n + 1) * eval + 4 * n,
-        temper_passes: 49,
+        temper_passes: MAX_TEMPER_PASSES,
         best_copied: true,
         resample_advances: (!last).then_some(n.saturating_sub(1)),
     };

@@ -8,7 +8,7 @@ impl Logic for PfSequencer {
         dff_setup!(self, clock, n_part, n_iter, tq, seed, thr_cost, thr_max, state, ret, ret2, rng, k, iter_done);
         dff_setup!(self, clock, run_r, fin_r, first, half, i, j, pd, spread, pa, cra, wra, x_r, off, start_r, pose_r);
         dff_setup!(self, clock, maxd, costr, cmin, imin, best_cost_r, best_max_r, p, mask, cnt, w_sum, acc);
-        dff_setup!(self, clock, cj, ie, inflight, havep);
+        dff_setup!(self, clock, cj, ie, inflight, havep, w_r, sq, lo, hi);
         self.pram.read_clock.next = self.clock.val();
         self.pram.write_clock.next = self.clock.val();
         self.cram.read_clock.next = self.clock.val();
@@ -71,6 +71,9 @@ impl Logic for PfSequencer {
         self.propagate.scale.next = self.pd.q.val() == 3;
         self.ex_now.next = self.cram.read_data.val().get_bits::<48>(0) - self.cmin.q.val();
         self.ex_masked.next = self.ex_now.val() & !self.mask.q.val();
+        // `(lo + hi) / 2` in 6 bits.
+        self.t_mid.next =
+            (self.lo.q.val() >> 1) + (self.hi.q.val() >> 1) + (self.lo.q.val() & self.hi.q.val() & bits::<6>(1));
 
         // CORDIC.
         self.cordic.angle.next = self.bank.angle.val();
@@ -337,8 +340,11 @@ impl Logic for PfSequencer {
                     if self.havep.q.val() {
                         self.state.d.next = SeqState::PartStore;
                     } else if self.i.q.val() == self.n_part.q.val() {
-                        self.p.d.next = 0.into();
-                        self.mask.d.next = 0.into();
+                        // The temperature's binary search over p in 0..=48, from the middle.
+                        self.lo.d.next = 0.into();
+                        self.hi.d.next = bits::<6>(48);
+                        self.p.d.next = bits::<6>(24);
+                        self.mask.d.next = bits::<48>(0xff_ffff);
                         self.state.d.next = SeqState::TPass;
                     } else {
                         self.state.d.next = SeqState::EvLaunch;
@@ -374,61 +380,72 @@ impl Logic for PfSequencer {
             SeqState::TPass => {
                 self.i.d.next = 0.into();
                 self.cnt.d.next = 0.into();
-                self.state.d.next = SeqState::TAddr;
+                self.sq.d.next = 0.into();
+                self.state.d.next = SeqState::TRun;
             }
-            SeqState::TAddr => {
-                self.cra.d.next = self.i.q.val().get_bits::<8>(0);
-                self.state.d.next = SeqState::TWait;
-            }
-            SeqState::TWait => {
-                self.state.d.next = SeqState::TData;
-            }
-            SeqState::TData => {
-                if !self.ex_masked.val().any() {
-                    self.cnt.d.next = self.cnt.q.val() + 1;
-                }
-                self.i.d.next = self.i.q.val() + 1;
-                if (self.i.q.val() + 1) == self.n_part.q.val() {
+            SeqState::TRun => {
+                // Streamed: address cost `i` while there is one; count the cost addressed two
+                // clocks ago (`sq` bit 1); done when the last is counted.
+                self.sq.d.next = (self.sq.q.val() << 1) & bits::<3>(2);
+                if self.i.q.val() != self.n_part.q.val() {
+                    self.cra.d.next = self.i.q.val().get_bits::<8>(0);
+                    self.i.d.next = self.i.q.val() + 1;
+                    self.sq.d.next = ((self.sq.q.val() << 1) & bits::<3>(2)) | bits::<3>(1);
+                } else if !self.sq.q.val().get_bit(0) {
                     self.state.d.next = SeqState::TCheck;
-                } else {
-                    self.state.d.next = SeqState::TAddr;
+                }
+                if self.sq.q.val().get_bit(1) && !self.ex_masked.val().any() {
+                    self.cnt.d.next = self.cnt.q.val() + 1;
                 }
             }
             SeqState::TCheck => {
+                // More than half the excesses below 2^p: the bit length is at most p (the
+                // count grows with p, so a binary search finds the linear search's p).
                 if self.cnt.q.val() > (self.n_part.q.val() >> 1) {
+                    self.hi.d.next = self.p.q.val();
+                } else {
+                    self.lo.d.next = self.p.q.val() + 1;
+                }
+                self.state.d.next = SeqState::TMid;
+            }
+            SeqState::TMid => {
+                if self.lo.q.val() == self.hi.q.val() {
+                    self.p.d.next = self.lo.q.val();
                     self.state.d.next = SeqState::TSet;
                 } else {
-                    self.p.d.next = self.p.q.val() + 1;
-                    self.mask.d.next = (self.mask.q.val() << 1) | bits::<48>(1);
+                    self.p.d.next = self.t_mid.val();
+                    self.mask.d.next = !(self.all48.val() << self.t_mid.val());
                     self.state.d.next = SeqState::TPass;
                 }
             }
             SeqState::TSet => {
                 self.weight.temper.next = true;
                 self.i.d.next = 0.into();
+                self.cnt.d.next = 0.into();
+                self.sq.d.next = 0.into();
                 self.w_sum.d.next = 0.into();
-                self.state.d.next = SeqState::WAddr;
+                self.state.d.next = SeqState::WRun;
             }
-            // ---- Weights.
-            SeqState::WAddr => {
-                self.cra.d.next = self.i.q.val().get_bits::<8>(0);
-                self.state.d.next = SeqState::WWait;
-            }
-            SeqState::WWait => {
-                self.state.d.next = SeqState::WData;
-            }
-            SeqState::WData => {
-                self.weight.latch.next = true;
-                self.state.d.next = SeqState::WIdx;
-            }
-            SeqState::WIdx => {
-                self.wram.write_enable.next = true;
-                self.w_sum.d.next = self.w_sum.q.val() + bit_cast::<24, 16>(self.weight.value.val());
-                self.i.d.next = self.i.q.val() + 1;
-                if (self.i.q.val() + 1) == self.n_part.q.val() {
+            // ---- Weights, streamed: address cost `i` while there is one; shift the excess
+            // addressed two clocks ago (`sq` bit 1); store and sum the weight of the one before
+            // (bit 2) at `cnt`; done when the last is stored.
+            SeqState::WRun => {
+                self.sq.d.next = self.sq.q.val() << 1;
+                if self.i.q.val() != self.n_part.q.val() {
+                    self.cra.d.next = self.i.q.val().get_bits::<8>(0);
+                    self.i.d.next = self.i.q.val() + 1;
+                    self.sq.d.next = (self.sq.q.val() << 1) | bits::<3>(1);
+                } else if !self.sq.q.val().get_bit(0) && !self.sq.q.val().get_bit(1) {
                     self.state.d.next = SeqState::BestCheck;
-                } else {
-                    self.state.d.next = SeqState::WAddr;
+                }
+                if self.sq.q.val().get_bit(1) {
+                    self.weight.latch.next = true;
+                }
+                if self.sq.q.val().get_bit(2) {
+                    self.wram.write_enable.next = true;
+                    self.wram.write_address.next = self.cnt.q.val().get_bits::<8>(0);
+                    self.w_sum.d.next = self.w_sum.q.val() + bit_cast::<24, 16>(self.weight.value.val());
+                    self.cnt.d.next = self.cnt.q.val() + 1;
                 }
             }
             // ---- The best particle.
@@ -451,9 +468,8 @@ impl Logic for PfSequencer {
             SeqState::BestAddr => {
                 self.best_cost_r.d.next = self.cram.read_data.val().get_bits::<48>(0);
                 self.best_max_r.d.next = self.cram.read_data.val().get_bits::<34>(48);
-                self.state.d.next = SeqState::BestWait;
-            }
-            SeqState::BestWait => {
+                // Parameter 0 is being read; address the next (one parameter a clock).
+                self.pa.d.next = self.pa.q.val() + 1;
                 self.state.d.next = SeqState::BestData;
             }
             SeqState::BestData => {
@@ -465,51 +481,46 @@ impl Logic for PfSequencer {
                     self.pd.d.next = 0.into();
                     self.spread.d.next = false;
                     self.state.d.next = SeqState::SumBegin;
-                } else {
-                    self.state.d.next = SeqState::BestWait;
                 }
             }
             // ---- Estimate (spread = 0) and spread (spread = 1), parameter d.
             SeqState::SumBegin => {
                 self.acc.d.next = 0.into();
                 self.i.d.next = 0.into();
-                self.state.d.next = SeqState::SumAddr;
+                self.sq.d.next = 0.into();
+                self.state.d.next = SeqState::SumRun;
             }
-            SeqState::SumAddr => {
-                self.pa.d.next = (bit_cast::<12, 1>(self.half.q.val()) << 11)
-                    | (bit_cast::<12, 8>(self.i.q.val().get_bits::<8>(0)) << 3)
-                    | bit_cast::<12, 3>(self.pd.q.val());
-                self.wra.d.next = self.i.q.val().get_bits::<8>(0);
-                self.state.d.next = SeqState::SumWait;
-            }
-            SeqState::SumWait => {
-                self.state.d.next = SeqState::SumData;
-            }
-            SeqState::SumData => {
-                self.x_r.d.next = self.pram.read_data.val();
-                self.state.d.next = SeqState::SumMul;
-            }
-            SeqState::SumMul => {
-                // First clock here: start the multiply (x_r is the particle's parameter).
-                self.state.d.next = SeqState::SumDiv;
-                self.mul_go.next = true;
-                self.mul_b_in.next = bit_cast::<18, 16>(self.wram.read_data.val());
-                if self.spread.q.val() {
-                    self.mul_a_in.next = self.propagate.abs_diff.val();
-                } else {
-                    self.mul_a_in.next = self.propagate.diff.val();
+            SeqState::SumRun => {
+                // Streamed, a particle a clock: address particle `i` while there is one (`sq`
+                // bit 0); its parameter and weight are on the RAMs' outputs a clock later (bit
+                // 1) and taken into `x_r` and `w_r`; a clock later (bit 2) their product is
+                // started; the multiplier's `valid` marks each product to add. Done when the
+                // last is added.
+                self.sq.d.next = self.sq.q.val() << 1;
+                if self.i.q.val() != self.n_part.q.val() {
+                    self.pa.d.next = (bit_cast::<12, 1>(self.half.q.val()) << 11)
+                        | (bit_cast::<12, 8>(self.i.q.val().get_bits::<8>(0)) << 3)
+                        | bit_cast::<12, 3>(self.pd.q.val());
+                    self.wra.d.next = self.i.q.val().get_bits::<8>(0);
+                    self.i.d.next = self.i.q.val() + 1;
+                    self.sq.d.next = (self.sq.q.val() << 1) | bits::<3>(1);
+                } else if !self.sq.q.val().any() && !self.mul.busy.val() {
+                    self.state.d.next = SeqState::SumDivGo;
                 }
-            }
-            SeqState::SumDiv => {
-                if !self.mul.busy.val() {
+                self.x_r.d.next = self.pram.read_data.val();
+                self.w_r.d.next = self.wram.read_data.val();
+                if self.sq.q.val().get_bit(2) {
+                    self.mul_go.next = true;
+                    self.mul_b_in.next = bit_cast::<18, 16>(self.w_r.q.val());
+                    if self.spread.q.val() {
+                        self.mul_a_in.next = self.propagate.abs_diff.val();
+                    } else {
+                        self.mul_a_in.next = self.propagate.diff.val();
+                    }
+                }
+                if self.mul.valid.val() {
                     self.acc.d.next = self.acc.q.val()
                         + (bit_cast::<48, 44>(self.mul.product.val() ^ self.sign44.val()) - self.sign48_44.val());
-                    self.i.d.next = self.i.q.val() + 1;
-                    if (self.i.q.val() + 1) == self.n_part.q.val() {
-                        self.state.d.next = SeqState::SumDivGo;
-                    } else {
-                        self.state.d.next = SeqState::SumAddr;
-                    }
                 }
             }
             SeqState::SumDivGo => {
@@ -616,6 +627,8 @@ impl Logic for PfSequencer {
                 }
             }
             SeqState::CpWait => {
+                // Parameter 0 is being read; address the next (one parameter a clock).
+                self.pa.d.next = self.pa.q.val() + 1;
                 self.state.d.next = SeqState::CpData;
             }
             SeqState::CpData => {
@@ -629,7 +642,7 @@ impl Logic for PfSequencer {
                 if self.pd.q.val() == 6 {
                     self.state.d.next = SeqState::CpNext;
                 } else {
-                    self.state.d.next = SeqState::CpWait;
+                    self.state.d.next = SeqState::CpData;
                 }
             }
             SeqState::CpNext => {

@@ -6,8 +6,9 @@
 //! (tests: `fpga/tests/sequencer_blocks.rs`):
 //! - [`param_bank`]: `ParamBank`, the centre, cap, floor, spread, estimate, best and current
 //!   particle vectors;
-//! - [`serial_mul`]: `SerialMul`, 26 x 18 bits in 18 clocks;
-//! - [`serial_div`]: `SerialDiv`, 48 / 24 bits in 48 clocks ([`crate::pf::div_signed`]);
+//! - [`pipe_mul`]: `PipeMul`, 26 x 18 bits in LUTs, two clocks, one pair a clock;
+//! - [`serial_div`]: `SerialDiv`, 48 / 24 bits (quotient below 2^24) in 24 clocks
+//!   ([`crate::pf::div_signed`]);
 //! - [`xorshift`]: `Xorshift32`, the PRNG's step ([`crate::pf::Xorshift32`]);
 //! - [`cordic`]: `Cordic`, cosine and sine in 18 steps ([`crate::pf::cordic`]);
 //! - [`pose_program`]: `PoseProgram`, [`crate::pf::POSE_PROGRAM`] in ROM over a 32 x 26
@@ -32,11 +33,11 @@ pub mod cordic;
 pub mod estimate;
 mod kernel;
 pub mod param_bank;
+pub mod pipe_mul;
 pub mod pose_program;
 pub mod propagate;
 pub mod resample;
 pub mod serial_div;
-pub mod serial_mul;
 pub mod translation;
 pub mod weight;
 pub mod xorshift;
@@ -44,11 +45,11 @@ pub mod xorshift;
 pub use cordic::Cordic;
 pub use estimate::Estimate;
 pub use param_bank::ParamBank;
+pub use pipe_mul::PipeMul;
 pub use pose_program::PoseProgram;
 pub use propagate::Propagate;
 pub use resample::Resample;
 pub use serial_div::SerialDiv;
-pub use serial_mul::SerialMul;
 pub use translation::Translation;
 pub use weight::Weight;
 pub use xorshift::Xorshift32;
@@ -135,6 +136,11 @@ pub struct PfSequencer {
     cra: DFF<Bits<8>>,
     wra: DFF<Bits<8>>,
     x_r: DFF<Bits<24>>,
+    /// The weight taken with `x_r` in a streamed weighted sum.
+    w_r: DFF<Bits<16>>,
+    /// A streamed pass's pipeline: bit 0 an address issued, bit 1 its RAM data out, bit 2
+    /// (sums and weights) the next stage's operands registered.
+    sq: DFF<Bits<3>>,
     off: DFF<Bits<26>>,
     start_r: DFF<Bit>,
     pose_r: DFF<Bits<216>>,
@@ -145,6 +151,9 @@ pub struct PfSequencer {
     best_cost_r: DFF<Bits<48>>,
     best_max_r: DFF<Bits<34>>,
     p: DFF<Bits<6>>,
+    /// The temperature's binary search interval for `p`, `lo..=hi`.
+    lo: DFF<Bits<6>>,
+    hi: DFF<Bits<6>>,
     mask: DFF<Bits<48>>,
     cnt: DFF<Bits<9>>,
     w_sum: DFF<Bits<24>>,
@@ -159,7 +168,7 @@ pub struct PfSequencer {
     wram: RAM<Bits<16>, 8>,
     // The parameter vectors and the arithmetic, one block each.
     bank: ParamBank,
-    mul: SerialMul,
+    mul: PipeMul,
     div: SerialDiv,
     xorshift: Xorshift32,
     cordic: Cordic,
@@ -179,6 +188,7 @@ pub struct PfSequencer {
     u_hi: Signal<Local, Bits<16>>,
     ex_now: Signal<Local, Bits<48>>,
     ex_masked: Signal<Local, Bits<48>>,
+    t_mid: Signal<Local, Bits<6>>,
     // Sign extensions, as a mux on the sign bit (no carry chain).
     u_hi_s18: Signal<Local, Bits<18>>,
     scale_s26: Signal<Local, Bits<26>>,
@@ -244,6 +254,8 @@ impl PfSequencer {
             cra: Default::default(),
             wra: Default::default(),
             x_r: Default::default(),
+            w_r: Default::default(),
+            sq: Default::default(),
             off: Default::default(),
             start_r: Default::default(),
             pose_r: Default::default(),
@@ -254,6 +266,8 @@ impl PfSequencer {
             best_cost_r: Default::default(),
             best_max_r: Default::default(),
             p: Default::default(),
+            lo: Default::default(),
+            hi: Default::default(),
             mask: Default::default(),
             cnt: Default::default(),
             w_sum: Default::default(),
@@ -266,7 +280,7 @@ impl PfSequencer {
             cram: Default::default(),
             wram: Default::default(),
             bank: ParamBank::new(),
-            mul: SerialMul::new(),
+            mul: PipeMul::new(),
             div: SerialDiv::new(),
             xorshift: Xorshift32::new(),
             cordic: Cordic::new(),
@@ -285,6 +299,7 @@ impl PfSequencer {
             u_hi: Default::default(),
             ex_now: Default::default(),
             ex_masked: Default::default(),
+            t_mid: Default::default(),
             u_hi_s18: Default::default(),
             scale_s26: Default::default(),
             maxd_next: Default::default(),

@@ -1,7 +1,7 @@
 //! `PoseProgram`: the datapath that runs [`crate::pf::POSE_PROGRAM`] (in ROM) over a
 //! 32 x 26-bit register file, the RTL twin of [`crate::pf::run_program`] (test:
 //! `fpga/tests/sequencer_blocks.rs`). The sequencer's states drive it a step at a time
-//! (`fetch`, `latch`, `exec`, `retire`) and lend it the serial multiplier; the CORDIC's
+//! (`fetch`, `latch`, `exec`, `retire`) and lend it the pipelined multiplier; the CORDIC's
 //! cosines and sines and the scale come in through `load`. The nine `MulM` results (the
 //! pose matrix, Q3.15) leave through `entry` instead of the register file.
 

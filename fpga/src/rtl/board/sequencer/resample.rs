@@ -2,7 +2,7 @@
 //! [`crate::pf::resample`] (test: `fpga/tests/sequencer_blocks.rs`). The pointer starts at
 //! `u0 W` and moves by `W 2^16` a pick; the cumulative sum adds `n w_i 2^16` a particle;
 //! the sequencer advances `i` while the pointer is `beyond` it. The products come from the
-//! sequencer's serial multiplier.
+//! sequencer's pipelined multiplier (`PipeMul`).
 
 use rust_hdl::prelude::*;
 

@@ -1,6 +1,12 @@
-//! `SerialDiv`: the sequencer's restoring divider, `quotient = n / d` in 48 clocks (`n` 48
-//! bits, `d` 24 bits, unsigned; the quotient's low 26 bits out), the magnitude step of [`crate::pf::div_signed`]; the test
-//! is `fpga/tests/sequencer_blocks.rs`.
+//! `SerialDiv`: the sequencer's restoring divider, `quotient = n / d` in 24 clocks (`n` 48
+//! bits, `d` 24 bits, unsigned, `n < d 2^24`; the quotient's low 26 bits out), the magnitude
+//! step of [`crate::pf::div_signed`]; the test is `fpga/tests/sequencer_blocks.rs`.
+//!
+//! The filter's quotients are a mean offset or a mean absolute deviation of 24-bit
+//! parameters: `|sum w x| <= 2^23 W`, so the quotient is at most `2^23` and its top 24 bits
+//! are zero. A restoring divider finds no subtraction in those 24 steps and only shifts the
+//! dividend's top half into the remainder: that half is loaded into the remainder at once and
+//! the 24 steps left produce the quotient, bit-exact where `n < d 2^24`.
 
 use rust_hdl::prelude::*;
 
@@ -20,7 +26,7 @@ pub struct SerialDiv {
     /// The quotient's low 26 bits, valid from the clock `busy` falls (the filter's
     /// quotients, a mean offset or spread of 24-bit parameters, are below 2^25).
     pub quotient: Signal<Out, Bits<26>>,
-    /// A quotient is in progress (48 clocks from the clock after `go`).
+    /// A quotient is in progress (24 clocks from the clock after `go`).
     pub busy: Signal<Out, Bit>,
     dv_n: DFF<Bits<48>>,
     dv_d: DFF<Bits<24>>,
@@ -44,10 +50,10 @@ impl Logic for SerialDiv {
         self.busy.next = self.dv_cnt.q.val().any();
         self.rem2.next = (self.dv_rem.q.val() << 1) | bit_cast::<25, 1>(self.dv_n.q.val().get_bits::<1>(47));
         if self.go.val() {
-            self.dv_n.d.next = self.n.val();
+            self.dv_n.d.next = self.n.val() << 24;
             self.dv_d.d.next = self.d.val();
-            self.dv_rem.d.next = 0.into();
-            self.dv_cnt.d.next = bits::<6>(48);
+            self.dv_rem.d.next = bit_cast::<25, 24>(self.n.val().get_bits::<24>(24));
+            self.dv_cnt.d.next = bits::<6>(24);
         } else if self.dv_cnt.q.val().any() {
             if self.rem2.val() >= bit_cast::<25, 24>(self.dv_d.q.val()) {
                 self.dv_rem.d.next = self.rem2.val() - bit_cast::<25, 24>(self.dv_d.q.val());
