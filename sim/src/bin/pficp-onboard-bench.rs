@@ -15,7 +15,8 @@
 //! the one the upload leaves, as the host's `ensure_grid` checks) and sends only the scan
 //! sample. Each one's board time is every clock from the first byte of Identify to the last
 //! byte of the Result reply: Identify, the loads, SetSizes, Run, the filter, a Status poll
-//! every 50 ms of board time (as the host client polls), Status and Result.
+//! every `pficp::board::DEFAULT_POLL` of board time (5 ms, as the host client polls), Status
+//! and Result.
 //! The board's bytes are compared with the byte-level reference on the way (Status replies
 //! of a running filter excepted). The prior and the polish run on the host (not timed here:
 //! the host's stages are the software mode's).
@@ -98,7 +99,7 @@ struct Registration {
 
 /// One registration as the host's on-board mode makes it: Identify, the model and its
 /// cell table unless the board's digest says it holds them, the scan sample, SetSizes,
-/// Run, a Status poll every 50 ms of board time, Result.
+/// Run, a Status poll every `DEFAULT_POLL` of board time, Result.
 fn registration(b: &mut SerialBoard, plan: &on_board::OnBoardPlan, config: BoardConfig) -> Result<Registration> {
     let t0 = b.clocks();
     let bytes0 = b.byte_counts();
@@ -127,7 +128,7 @@ fn registration(b: &mut SerialBoard, plan: &on_board::OnBoardPlan, config: Board
     if r.code != Command::Run as u8 | 0x80 {
         bail!("Run refused: {r:?}");
     }
-    let poll = config.clock_hz as u64 / 20;
+    let poll = (config.clock_hz as f64 * pficp::board::DEFAULT_POLL.as_secs_f64()).round() as u64;
     let (mut polls, mut poll_bytes) = (0, 0);
     loop {
         b.run(poll);
