@@ -33,7 +33,7 @@
 //!
 //! [`clocks_per_iteration`] adds these up exactly. Without the pipeline's time an iteration
 //! is `n (49 + 220 + 1) + 14 (n + 33) + passes (n + 5) + 11n + 7a + 248` clocks (with the best
-//! copied): for 50 particles, 2,400 to 2,650 clocks besides the particles' propagation and
+//! copied): for 50 particles, 2,230 to 2,630 clocks besides the particles' propagation and
 //! poses (13,500, hidden behind their evaluations when these take at least 269 clocks each),
 //! against ~23,400 with the serial multiplier (18 clocks), the 48-step divider and the
 //! unstreamed passes. `tests/sequencer_model.rs` (`fifty_particles_...`) measures it.
