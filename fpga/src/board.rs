@@ -117,13 +117,13 @@ impl std::fmt::Display for BitPeriod {
 }
 
 use crate::format::{unpack_point, FxPoint, WeightScale, MAX_POINTS};
-use crate::grid_pipeline::evaluate_stored;
 use crate::messages::{
     pose_from_bytes, two_u16, EvaluateReply, Identity, NearestReply, ResultReply, RunState, StatusReply, WeightSummary,
     EVALUATE_HEADER_BYTES, FLAG_FIRST, FLAG_LAST, LOAD_HEADER_BYTES, MAX_LOAD_ENTRIES, MAX_LOAD_POINTS, MAX_NEAREST,
     MAX_POSES, NEAREST_REQUEST_BYTES, POINT_BYTES, POSE_BYTES, RUN_REPLY_BYTES, TABLE_ENTRIES, TABLE_ENTRY_BYTES,
     TABLE_ENTRY_MASK, TWO_U16_BYTES, W_SUM_MASK,
 };
+use crate::neighbour_pipeline::evaluate_stored;
 use crate::pf::{PfConfig, PfOutcome};
 use crate::protocol::{digest_update, Command, Deframer, ErrorCode, Frame, DIGEST_INIT, DIGEST_NONE};
 use crate::weights::{weights, COST_MAX, MAX_PARTICLES};
@@ -259,7 +259,7 @@ impl BoardModel {
     /// The grid search over the stores as they are (docs/pipeline.md, "The grid pipeline"):
     /// what the RTL computes for `scan` at `pose`, whatever the table holds.
     fn search(&self, scan: &[FxPoint], pose: &crate::format::FxPose) -> crate::pipeline::Evaluation {
-        evaluate_stored(&self.model, &self.table, self.config.lanes, scan, pose)
+        evaluate_stored(&self.model, &self.table, scan, pose)
     }
 
     /// The command engine: checks in the order of docs/protocol.md (code, lengths,

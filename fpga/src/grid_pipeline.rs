@@ -26,7 +26,9 @@
 
 use crate::format::{pack_point, transform, unpack_point, FxPoint, FxPose, MAX_POINTS};
 use crate::grid::{nearest_capped, Grid, CAP_D2, CELLS, CELL_SHIFT, NONE};
-use crate::pipeline::{transform_products, transform_result, transform_sums, Evaluation, Outputs, COST_MASK};
+use crate::pipeline::{
+    stream_particle, transform_products, transform_result, transform_sums, Evaluation, Outputs, StreamModel, COST_MASK,
+};
 
 /// Input ports (before an edge).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -511,32 +513,25 @@ pub fn run_particle(
     pipe: &mut GridPipelineModel,
     scan: &[FxPoint],
     pose: &FxPose,
-    mut gap: impl FnMut(u64) -> bool,
+    gap: impl FnMut(u64) -> bool,
 ) -> GridRun {
     assert!(!scan.is_empty());
     let (issued0, distances0) = (pipe.issued, pipe.distances);
     pipe.step(&GridInputs::start(pose));
-    let mut next = 0;
-    let mut nearest = Vec::with_capacity(scan.len());
-    let mut clocks = 1u64;
-    loop {
-        let offer = next < scan.len() && !gap(clocks);
-        let inputs = GridInputs::offer(scan, next, offer);
-        let took = offer && pipe.outputs().scan_ready;
-        pipe.step(&inputs);
-        clocks += 1;
-        if took {
-            next += 1;
-        }
-        let o = pipe.outputs();
-        if o.nn_valid {
-            nearest.push((o.nn_index, o.nn_dist));
-        }
-        if o.cost_valid {
-            let (swept, distances) = (pipe.issued - issued0, pipe.distances - distances0);
-            return GridRun { evaluation: Evaluation { cost: o.cost, nearest }, clocks, swept, distances };
-        }
-        assert!(clocks < 1 << 40, "pipeline never finished");
+    let (evaluation, clocks) = stream_particle(pipe, scan, gap);
+    GridRun { evaluation, clocks, swept: pipe.issued - issued0, distances: pipe.distances - distances0 }
+}
+
+impl StreamModel for GridPipelineModel {
+    type Inputs = GridInputs;
+    fn step(&mut self, inputs: &GridInputs) {
+        GridPipelineModel::step(self, inputs)
+    }
+    fn outputs(&self) -> Outputs {
+        GridPipelineModel::outputs(self)
+    }
+    fn offer(scan: &[FxPoint], next: usize, offer: bool) -> GridInputs {
+        GridInputs::offer(scan, next, offer)
     }
 }
 

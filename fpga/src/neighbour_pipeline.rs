@@ -615,25 +615,27 @@ pub fn lookups_of(q: FxPoint) -> usize {
     (0..SLOTS.len() - 1).filter(|&s| NeighbourPipelineModel::slot_rows(k, s).iter().any(|r| r.0)).count() + 1
 }
 
-/// Clocks of fill and drain [`clocks_bound`] allows on top of its per-point count: the
-/// start edge, the transform, the lookup, the read, the queue, [`CHUNK_LATENCY`], the result
-/// and the cost's edges, with margin.
-pub const FILL_CLOCKS: u64 = 32;
+/// Clocks a scan point may take beyond its chunks in [`clocks_bound`]: its five lookups,
+/// the lookup's read and queue registers, and its marker chunk.
+pub const BOUND_POINT_EXTRA: u64 = SLOTS.len() as u64 + 4 + 1;
+
+/// Clocks of fill and drain in [`clocks_bound`]: the transform, the lookup, the chunk's
+/// [`CHUNK_LATENCY`] and the cost, with room to spare.
+pub const BOUND_FILL: u64 = 64;
 
 /// An upper bound of [`clocks_per_particle`]'s count (start edge to `cost_valid` edge, no
 /// gaps in the scan stream) for `scan_points` scan points under any pose, over any model of
-/// `model_points` points uploaded as [`Grid::build`] stores it (rows disjoint, inside the
-/// model), on `lanes` lanes a side; for deadlines, where the data-dependent count is not
-/// worth running the cycle model.
+/// `model_points` points uploaded as [`Grid::build`] stores it, on `lanes` lanes; for the
+/// host's deadlines, where the data-dependent count is not worth running the cycle model.
 ///
-/// Every clock after the fill the issue sends a chunk pair, or it waits while the lookup
-/// reads a slot (the lookup stalls only when the range queue is full, and then the issue
-/// is busy). A point takes at most five lookups and at most
-/// `max(1, floor((model_points + 5 (P - 1)) / P))` issue clocks: its five slots cost
-/// `ceil(m_s / P)` each, `m_s` the longer of the slot's rows, and the `m_s` are disjoint
-/// rows of the model. So the bound is `FILL_CLOCKS + S (5 + that)`.
+/// A point's nine row ranges are disjoint ranges of the stored model, so its chunk pairs
+/// (a slot costs its longer row, [`chunks_of`]) are at most its rows' chunks,
+/// `sum over rows of ceil(len / P) <= ceil(model_points / P) + 9`; on top come its
+/// lookups and their registers and a marker ([`BOUND_POINT_EXTRA`]), as if nothing of one
+/// point overlapped the next, and [`BOUND_FILL`] once. `fpga/tests/neighbour_pipeline.rs`
+/// checks it against the cycle model on dense, sparse and empty neighbourhoods.
 pub fn clocks_bound(scan_points: usize, model_points: usize, lanes: usize) -> u64 {
-    let p = lanes.max(1) as u64;
-    let issue = ((model_points as u64 + (SLOTS.len() as u64) * (p - 1)) / p).max(1);
-    FILL_CLOCKS + scan_points as u64 * (SLOTS.len() as u64 + issue)
+    let lanes = lanes.max(1) as u64;
+    let per_point = (model_points as u64).div_ceil(lanes) + 9 + BOUND_POINT_EXTRA;
+    1 + scan_points as u64 * per_point + BOUND_FILL
 }

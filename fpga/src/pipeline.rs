@@ -361,25 +361,62 @@ pub fn run_particle(
     model: &[FxPoint],
     scan: &[FxPoint],
     pose: &FxPose,
-    mut gap: impl FnMut(u64) -> bool,
+    gap: impl FnMut(u64) -> bool,
 ) -> (Evaluation, u64) {
     assert!(!scan.is_empty() && !model.is_empty() && model.len() <= MAX_POINTS);
     for (a, &p) in model.iter().enumerate() {
         pipe.step(&Inputs::write_model(a, p));
     }
     pipe.step(&Inputs::start(pose, model.len()));
+    stream_particle(pipe, scan, gap)
+}
+
+/// A cycle model with the pipelines' scan stream and result ports (`NnPipeline`'s and, with
+/// [`crate::grid_pipeline::GridInputs`], the grid and neighbour pipelines'): one rising
+/// edge a [`step`](StreamModel::step), the output ports after it.
+pub trait StreamModel {
+    /// The input ports.
+    type Inputs;
+    /// One rising edge with these inputs.
+    fn step(&mut self, inputs: &Self::Inputs);
+    /// The output ports after the last edge.
+    fn outputs(&self) -> Outputs;
+    /// The inputs offering scan point `next` (or nothing, with `offer` false).
+    fn offer(scan: &[FxPoint], next: usize, offer: bool) -> Self::Inputs;
+}
+
+impl StreamModel for PipelineModel {
+    type Inputs = Inputs;
+    fn step(&mut self, inputs: &Inputs) {
+        PipelineModel::step(self, inputs)
+    }
+    fn outputs(&self) -> Outputs {
+        PipelineModel::outputs(self)
+    }
+    fn offer(scan: &[FxPoint], next: usize, offer: bool) -> Inputs {
+        Inputs::offer(scan, next, offer)
+    }
+}
+
+/// The one driver of a particle's scan stream, for every [`StreamModel`]: from the edge after
+/// `start` (the caller's, counted as the first clock), offer scan point after scan point on
+/// clocks where `gap(clock)` is false, collect the results, and return them and the clocks
+/// from the `start` edge to the `cost_valid` edge.
+pub fn stream_particle<M: StreamModel>(
+    pipe: &mut M,
+    scan: &[FxPoint],
+    mut gap: impl FnMut(u64) -> bool,
+) -> (Evaluation, u64) {
     let mut next = 0;
     let mut nearest = Vec::with_capacity(scan.len());
     let mut clocks = 1u64;
     loop {
         let offer = next < scan.len() && !gap(clocks);
-        let inputs = Inputs::offer(scan, next, offer);
+        let inputs = M::offer(scan, next, offer);
         let took = offer && pipe.outputs().scan_ready;
         pipe.step(&inputs);
         clocks += 1;
-        if took {
-            next += 1;
-        }
+        next += took as usize;
         let o = pipe.outputs();
         if o.nn_valid {
             nearest.push((o.nn_index, o.nn_dist));

@@ -7,11 +7,11 @@
 
 use pficp_fpga::board::{BoardConfig, BoardModel};
 use pficp_fpga::format::{unpack_point, FxPoint, WeightScale};
-use pficp_fpga::grid_pipeline::evaluate_stored;
 use pficp_fpga::messages::{
     parse_two_u16, pose_from_bytes, EvaluateReply, Identity, NearestReply, NearestRequest, ResultReply, RunState,
     StatusReply, FLAG_FIRST, FLAG_LAST,
 };
+use pficp_fpga::neighbour_pipeline::evaluate_stored;
 use pficp_fpga::pf::{self, PfConfig, PfOutcome, RUN_BYTES};
 use pficp_fpga::pipeline::Evaluation;
 use pficp_fpga::protocol::{digest_update, Deframer, ErrorCode, Frame, DIGEST_INIT, MAX_FRAME};
@@ -88,9 +88,9 @@ impl Snapshot {
             && self.digest == b.model_digest()
     }
 
-    /// The grid search over the stores before the command (the lanes of the default board).
+    /// The neighbour pipeline's search over the stores before the command (any lane count).
     fn search(&self, scan: &[FxPoint], pose: &pficp_fpga::format::FxPose) -> Evaluation {
-        evaluate_stored(&self.model, &self.table, BoardConfig::default().lanes, scan, pose)
+        evaluate_stored(&self.model, &self.table, scan, pose)
     }
 }
 

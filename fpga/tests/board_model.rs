@@ -7,7 +7,8 @@ mod support;
 
 use support::*;
 
-use pficp_fpga::grid_pipeline::{run_particle as grid_run, upload, GridPipelineModel};
+use pficp_fpga::grid_pipeline::upload;
+use pficp_fpga::neighbour_pipeline::{run_particle as grid_run, NeighbourPipelineModel};
 
 #[test]
 fn wire_bytes_are_exact() {
@@ -126,7 +127,7 @@ fn evaluate_and_nearest_match_the_cycle_accurate_pipeline() {
     let g = load_grid(&mut b, &model);
     ok(&mut b, req(LOAD_SCAN, 0, load_data(0, 40, &scan)));
     ok(&mut b, req(SET_SIZES, 0, u16s(1500, 40)));
-    let mut pipe = GridPipelineModel::new(b.config().lanes);
+    let mut pipe = NeighbourPipelineModel::new(b.config().lanes);
     for w in upload(&g) {
         pipe.step(&w);
     }

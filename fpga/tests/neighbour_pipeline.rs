@@ -9,7 +9,7 @@ use pficp_fpga::grid::{Grid, CAP_D2, CELLS, CELL_LSBS, NONE};
 use pficp_fpga::grid_pipeline::{evaluate_grid, upload, GridInputs};
 use pficp_fpga::neighbour_pipeline::{
     chunks_of, clocks_bound, clocks_per_particle, evaluate_stored, lookups_of, run_particle, NeighbourPipelineModel,
-    FILL_CLOCKS,
+    BOUND_FILL, BOUND_POINT_EXTRA,
 };
 use proptest::prelude::*;
 
@@ -149,8 +149,8 @@ proptest! {
     }
 }
 
-/// The bound's worst cases: every point's five slots each holding one long row (the model in
-/// the five A rows around one cell, lengths `1 mod P`), and a model in one cell.
+/// Every point's five slots each holding one long row (the model in the five A rows around
+/// one cell): five times a row's chunks a point, within the bound.
 #[test]
 fn the_clock_bound_holds_on_long_rows() {
     let id = FxPose::from_f64(&[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0], &[0.0; 3]);
@@ -172,8 +172,6 @@ fn the_clock_bound_holds_on_long_rows() {
             assert_eq!(chunks_of(&g, scan[0], lanes), 5 * per.div_ceil(lanes));
         }
     }
-    assert_eq!(clocks_bound(300, 2000, 16), FILL_CLOCKS + 300 * (5 + (2000 + 75) / 16));
-    assert_eq!(clocks_bound(0, 2000, 16), FILL_CLOCKS);
 }
 
 /// Ties: two stored points at the same distance in one chunk (lane order is not index
@@ -227,4 +225,48 @@ fn start_while_busy_is_ignored_and_an_empty_model_caps_everything() {
     assert!(pipe.outputs().busy && pipe.outputs().scan_ready);
     pipe.step(&GridInputs { start: true, ..Default::default() });
     assert!(pipe.outputs().scan_ready);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 150, failure_persistence: None, ..ProptestConfig::default() })]
+
+    /// `clocks_bound` (the host's deadlines) is never below the cycle model's count: dense
+    /// and sparse models, scans inside, on and outside the grid, any lane count.
+    #[test]
+    fn the_clock_bound_holds(
+        lanes in prop::sample::select(vec![2usize, 4, 8, 16]),
+        m in model(),
+        scan in prop::collection::vec([inside_coord(), inside_coord(), inside_coord()], 1..80),
+        p in pose(),
+    ) {
+        let g = Grid::build(&m).unwrap();
+        let r = clocks_per_particle(&g, &scan, &p, lanes);
+        let bound = clocks_bound(scan.len(), m.len(), lanes);
+        prop_assert!(r.clocks <= bound, "{} clocks above the bound {bound}", r.clocks);
+    }
+}
+
+/// The bound's worst case: every model point in one cell, every scan point beside them (one
+/// long row a point, the others empty); the bound is above the count by at most the per-point
+/// extra and the rows' rounding, and the fill. An empty neighbourhood (markers only) too.
+#[test]
+fn the_clock_bound_is_tight_on_one_dense_cell() {
+    let id = FxPose::from_f64(&[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0], &[0.0; 3]);
+    let dense: Vec<FxPoint> = (0..2000).map(|i| [10 + (i % 40) as i16, 10 + (i / 40) as i16, 300]).collect();
+    let g = Grid::build(&dense).unwrap();
+    let near: Vec<FxPoint> = (0..50).map(|i| [20 + i as i16, 30, 200]).collect();
+    let far: Vec<FxPoint> = (0..50).map(|i| [-8000 + i as i16, 8000, -8000]).collect();
+    for lanes in [2, 16] {
+        for (name, scan) in [("dense", &near), ("empty", &far)] {
+            let r = clocks_per_particle(&g, scan, &id, lanes);
+            let bound = clocks_bound(scan.len(), dense.len(), lanes);
+            eprintln!("{name}, {lanes} lanes: {} clocks, bound {bound}", r.clocks);
+            assert!(r.clocks <= bound, "{name}: {} clocks above the bound {bound}", r.clocks);
+            if name == "dense" {
+                let slack = scan.len() as u64 * (BOUND_POINT_EXTRA + 9) + BOUND_FILL + 1;
+                assert!(bound - r.clocks <= slack, "{name}: {} clocks, bound {bound}", r.clocks);
+            }
+        }
+    }
+    assert_eq!(clocks_bound(0, 2000, 16), 1 + BOUND_FILL);
 }

@@ -108,11 +108,11 @@ enum Design {
     ParticleWeights,
     /// `NnPipeline` alone.
     Nn,
-    /// `GridPipeline`: the nearest-neighbour pipeline with the grid search (not yet on the
-    /// board).
+    /// `GridPipeline`: the grid search with one scan point a lane (on the board in protocol
+    /// 3's first version; replaced there by the neighbour pipeline).
     GridPipeline,
-    /// `NeighbourPipeline`: lanes over one scan point's candidates in its 27 cells (not yet
-    /// on the board; the grid pipeline's ports).
+    /// `NeighbourPipeline`: lanes over one scan point's candidates in its 27 cells (the
+    /// board's search; the grid pipeline's ports).
     NeighbourPipeline,
     /// `WeightStage` alone.
     Weights,
@@ -128,12 +128,15 @@ fn design_name(design: Design) -> String {
 fn generated_verilog(design: Design, lanes: usize, board: &BoardConfig) -> Result<(String, String)> {
     use pficp_fpga::rtl::{
         board_verilog, grid_pipeline_verilog, neighbour_pipeline_verilog, particle_weights_verilog, pipeline_verilog,
-        weight_stage_verilog, SUPPORTED_LANES,
+        weight_stage_verilog, BOARD_LANES, SUPPORTED_LANES,
     };
     if design != Design::Weights && !SUPPORTED_LANES.contains(&lanes) {
         bail!("--lanes {lanes} is not supported by the RTL; use one of {SUPPORTED_LANES:?}");
     }
     Ok(match design {
+        Design::Board | Design::NeighbourPipeline if !BOARD_LANES.contains(&lanes) => {
+            bail!("--lanes {lanes}: the neighbour pipeline (and so the board) takes one of {BOARD_LANES:?}")
+        }
         Design::Board => (
             board_verilog(board),
             format!(
@@ -148,7 +151,6 @@ fn generated_verilog(design: Design, lanes: usize, board: &BoardConfig) -> Resul
         Design::GridPipeline => {
             (grid_pipeline_verilog(lanes), format!("pficp_fpga::rtl::grid_pipeline_verilog({lanes})"))
         }
-        Design::NeighbourPipeline if lanes < 2 => bail!("--design neighbour-pipeline needs at least 2 lanes"),
         Design::NeighbourPipeline => {
             (neighbour_pipeline_verilog(lanes), format!("pficp_fpga::rtl::neighbour_pipeline_verilog({lanes})"))
         }

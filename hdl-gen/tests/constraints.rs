@@ -23,9 +23,9 @@ fn hdl_gen(args: &[&str]) -> (bool, String, String) {
     (out.status.success(), String::from_utf8_lossy(&out.stdout).into(), String::from_utf8_lossy(&out.stderr).into())
 }
 
-/// `hdl-gen --out DIR --lanes 1 --no-lint --no-synth ARGS..`: the board design by default.
+/// `hdl-gen --out DIR --lanes 2 --no-lint --no-synth ARGS..`: the board design by default.
 fn generate(dir: &Path, args: &[&str]) -> (bool, String, String) {
-    let mut all = vec!["--out", dir.to_str().unwrap(), "--lanes", "1", "--no-lint", "--no-synth"];
+    let mut all = vec!["--out", dir.to_str().unwrap(), "--lanes", "2", "--no-lint", "--no-synth"];
     all.extend_from_slice(args);
     hdl_gen(&all)
 }
@@ -80,7 +80,7 @@ fn ucf_pins_every_port_of_the_board_top() {
     let dir = fresh_dir("constraints-every-port");
     let (ok, stdout, stderr) = generate(&dir, &[]);
     assert!(ok, "{stdout}\n{stderr}");
-    assert!(stdout.contains("board_verilog(BoardConfig { lanes: 1, clock_hz: 50000000, baud: 3000000 })"), "{stdout}");
+    assert!(stdout.contains("board_verilog(BoardConfig { lanes: 2, clock_hz: 50000000, baud: 3000000 })"), "{stdout}");
     assert!(
         stdout.contains("UART: 3000000 baud at 50000000 Hz: 16 2/3 clocks per bit (50/3), exact on average"),
         "{stdout}"

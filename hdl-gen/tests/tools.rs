@@ -151,6 +151,10 @@ fn cli_rejects_unsupported_lanes() {
     let (okay, _, stderr) = hdl_gen(&["--out", dir.to_str().unwrap(), "--lanes", "3"]);
     assert!(!okay);
     assert!(stderr.contains("--lanes 3 is not supported"), "{stderr}");
+    // One lane is a supported count for the brute-force pipelines, not for the board.
+    let (okay, _, stderr) = hdl_gen(&["--out", dir.to_str().unwrap(), "--lanes", "1", "--no-synth"]);
+    assert!(!okay);
+    assert!(stderr.contains("--lanes 1: the neighbour pipeline (and so the board) takes one of"), "{stderr}");
 }
 
 /// The generated particle-weight pipeline lints clean with the waivers and fits the limits

@@ -70,7 +70,7 @@ fn run_status_and_result_equal_the_functional_reference() {
     assert_eq!(clocks, pficp::board::run_clocks_bound(20, 8, 80, 300, 16));
     assert_eq!(client.modelled_run_time(&cfg), Duration::from_secs_f64(clocks as f64 / 50e6));
     let poses = (20 * want.iterations as u64 + want.iterations as u64 + 1) as u64;
-    let per_pose = pficp_fpga::grid_pipeline::clocks_bound(80, 300, 16);
+    let per_pose = pficp_fpga::neighbour_pipeline::clocks_bound(80, 300, 16);
     assert!(per_pose >= pficp_fpga::pipeline::clocks_per_particle(80, 300, 16));
     assert!(clocks > poses * per_pose);
     assert!(clocks < 2 * poses * per_pose);

@@ -46,6 +46,10 @@ use rust_hdl::prelude::*;
 /// XC6SLX45's 58 DSP48A1).
 pub const SUPPORTED_LANES: [usize; 5] = [1, 2, 4, 8, 16];
 
+/// Lane counts the neighbour pipeline, and so the board, accepts: [`SUPPORTED_LANES`]
+/// without 1 (its model RAM is banked `P` ways, its tree pads to 16 leaves).
+pub const BOARD_LANES: [usize; 4] = [2, 4, 8, 16];
+
 /// Sign extension that is correct for every value (rust_hdl 0.46's `signed_bit_cast`
 /// recurses forever on the most negative value). `#[hdl_gen]` recognises calls by name
 /// prefix, so this emits the same `$signed(x)`, sign-extended by the assignment context.
@@ -172,14 +176,14 @@ fn neighbour_of<const P: usize>() -> String {
 /// docs/pipeline.md "The neighbour pipeline"), top module `top`; the ports are the grid
 /// pipeline's.
 ///
-/// Panics unless `lanes` is one of [`SUPPORTED_LANES`] other than 1.
+/// Panics unless `lanes` is one of [`BOARD_LANES`].
 pub fn neighbour_pipeline_verilog(lanes: usize) -> String {
     match lanes {
         2 => neighbour_of::<2>(),
         4 => neighbour_of::<4>(),
         8 => neighbour_of::<8>(),
         16 => neighbour_of::<16>(),
-        _ => panic!("neighbour_pipeline_verilog: {lanes} lanes is not supported; use 2, 4, 8 or 16"),
+        _ => panic!("neighbour_pipeline_verilog: {lanes} lanes is not supported; use one of {BOARD_LANES:?}"),
     }
 }
 
@@ -213,16 +217,15 @@ pub fn waive_probe_ports(v: &str) -> String {
 /// The Verilog of the whole board (`BoardTop<lanes>`, top module `top`, pins `clock`,
 /// `reset_n`, `uart_rx`, `uart_tx`, `leds[3:0]`) as `config` says.
 ///
-/// Panics unless `config.lanes` is one of [`SUPPORTED_LANES`] and the UART has at least 4
+/// Panics unless `config.lanes` is one of [`BOARD_LANES`] and the UART has at least 4
 /// clocks per bit.
 pub fn board_verilog(config: &crate::board::BoardConfig) -> String {
     match config.lanes {
-        1 => board_of::<1>(config),
         2 => board_of::<2>(config),
         4 => board_of::<4>(config),
         8 => board_of::<8>(config),
         16 => board_of::<16>(config),
-        n => panic!("board_verilog: {n} lanes is not supported; use one of {SUPPORTED_LANES:?}"),
+        n => panic!("board_verilog: {n} lanes is not supported; use one of {BOARD_LANES:?}"),
     }
 }
 

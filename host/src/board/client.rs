@@ -13,8 +13,8 @@
 //! - **Every read is bounded**: each reply must arrive within the timeout (default 2 s, at
 //!   most [`MAX_TIMEOUT`]) plus the time the board needs for it, modelled from the bytes at
 //!   the baud rate ([`MIN_BAUD`] to [`MAX_BAUD`]) and, for Evaluate and Nearest, the
-//!   grid pipeline's clocks bounded ([`pficp_fpga::grid_pipeline::clocks_bound`]: any pose,
-//!   any model of that size; at least the brute-force pipeline's) on the board's
+//!   neighbour pipeline's clocks bounded ([`pficp_fpga::neighbour_pipeline::clocks_bound`]:
+//!   any pose, any model of that size; within 20% of the brute-force pipeline's) on the board's
 //!   lanes at its clock, never taken as slower than [`MIN_CLOCK_HZ`] whatever Identify says.
 //!   A silent board is a [`BoardError::Timeout`] (saying how many bytes came that were no
 //!   reply: a babbling line or a wrong baud rate), a port that goes away a
@@ -52,12 +52,12 @@
 use super::BoardError;
 use pficp_fpga::format::{FxPoint, FxPose, WeightScale};
 use pficp_fpga::grid::{Grid, CAP_D2};
-use pficp_fpga::grid_pipeline::clocks_bound;
 use pficp_fpga::messages::{
     load_request, parse_two_u16, table_request, two_u16, EvaluateReply, EvaluateRequest, Identity, MessageError,
     NearestReply, NearestRequest, WeightSummary, IDENTITY_BYTES, MAX_LOAD_ENTRIES, MAX_LOAD_POINTS, MAX_NEAREST,
     MAX_POSES, POINT_BYTES, TABLE_ENTRIES, TABLE_ENTRY_BYTES, TABLE_ENTRY_MASK,
 };
+use pficp_fpga::neighbour_pipeline::clocks_bound;
 use pficp_fpga::pipeline::COST_MASK;
 use pficp_fpga::protocol::{Command, Deframer, VERSION};
 use serialport::SerialPort;

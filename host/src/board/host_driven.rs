@@ -12,7 +12,7 @@
 //!    cap each distance at `h^2`), on a version 1 or 2 board as it is (brute force). The
 //!    weight sample (the scan points the software filter takes its costs over) goes to the
 //!    scan store in Morton order ([`super::morton_sorted`]; the costs are sums, so the
-//!    order only saves the grid pipeline's clocks).
+//!    order changes no cost).
 //! 2. Each iteration the particles' poses are normalised and quantised
 //!    ([`normalised_pose`], [`quantise_pose`]) and sent in Evaluate frames without LAST; the
 //!    board returns each cost (a sum of squared distances in Q8.26 units, normalised frame).

@@ -7,7 +7,9 @@
 //! which gives the exact bytes each way and the number of particle evaluations. The board
 //! time is then modelled at the generated clock: UART = bytes x 10 bits / the baud
 //! rate (the board's UART keeps the nominal rate exactly on average); compute = per evaluated particle the pipeline's
-//! clocks (`pipeline::clocks_per_particle`, equal to Verilator's count) plus the command
+//! clocks as the brute-force pipeline counts them (`pipeline::clocks_per_particle`; since
+//! protocol 3 the board searches the grid and takes several times fewer, so the compute
+//! figure is an upper bound: `pficp-onboard-bench` counts the board's real clocks) plus the command
 //! engine's per-pose work (fetching 27 bytes at 2 clocks each, emitting 6 cost bytes at 9
 //! clocks each: 108 clocks). Request, compute and answer do not overlap (the board answers
 //! each frame before the host sends the next).

@@ -2,10 +2,10 @@
 //! take: the modelled board time from the sequencer's clock count, the allowance, the wait.
 
 use super::{BoardClient, BoardError, MAX_RETRIES, MIN_CLOCK_HZ, RUN_SAFETY};
-use pficp_fpga::grid_pipeline::clocks_bound;
 use pficp_fpga::messages::{
     parse_two_u16, MessageError, ResultReply, RunState, StatusReply, RESULT_BYTES, RUN_REPLY_BYTES, STATUS_BYTES,
 };
+use pficp_fpga::neighbour_pipeline::clocks_bound;
 use pficp_fpga::pf::PfConfig;
 use pficp_fpga::protocol::Command;
 use std::time::{Duration, Instant};
@@ -206,7 +206,7 @@ impl BoardClient {
 /// `scan_points` and `model_points` on `lanes` lanes: the sequencer's exact count
 /// ([`pficp_fpga::sequencer::run_clocks`]) with every data-dependent part at its largest
 /// (49 temperature passes, a new best every iteration, the resampling pointer advancing
-/// through every particle) and each evaluation taking the grid pipeline's bound
+/// through every particle) and each evaluation taking the neighbour pipeline's bound
 /// [`clocks_bound`] (any pose, any model of that size) plus one clock:
 /// `particles x iterations + iterations + 1` poses.
 pub fn run_clocks_bound(particles: u16, iterations: u16, scan_points: usize, model_points: usize, lanes: usize) -> u64 {

@@ -23,7 +23,7 @@ use crate::messages::{
 use crate::pf::{RUN_HEADER_BYTES, RUN_WORD_BYTES};
 use crate::protocol::Command;
 use crate::protocol::{ErrorCode, CRC_BYTES, ERROR_DATA_BYTES, HEADER_BYTES};
-use crate::rtl::grid_pipeline::GridPipeline;
+use crate::rtl::neighbour_pipeline::NeighbourPipeline;
 use crate::rtl::weights::WeightStage;
 use rust_hdl::prelude::*;
 
@@ -128,7 +128,7 @@ pub struct CommandEngine<const P: usize> {
     scan_store: RAM<Bits<48>, 12>,
     /// Nearest results (index | distance << 12) or weights, by particle / point.
     aux: RAM<Bits<46>, 8>,
-    nn: GridPipeline<P>,
+    nn: NeighbourPipeline<P>,
     ws: WeightStage,
     filter: PfSequencer,
     sender: ReplySender,
@@ -229,7 +229,7 @@ impl<const P: usize> CommandEngine<P> {
             frame_buf: Default::default(),
             scan_store: Default::default(),
             aux: Default::default(),
-            nn: GridPipeline::new(),
+            nn: NeighbourPipeline::new(),
             ws: WeightStage::new(),
             filter: PfSequencer::new(),
             sender: ReplySender::new(config.bit_period()),
