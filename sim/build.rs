@@ -555,6 +555,10 @@ fn build_model(job: &Job, out: &Path, compiler: &cc::Tool) -> Built {
     Built { mdir, objects, decls, entry, report, seconds: t0.elapsed().as_secs_f64() }
 }
 
+/// Stack of a build thread (the Verilog generation of the larger designs needs more than the
+/// default 2 MiB in an unoptimised build script).
+const BUILD_THREAD_STACK: usize = 256 << 20;
+
 /// Build every job on `threads` threads, largest first; results in job order.
 fn build_all(jobs: &[Job], threads: usize, out: &Path, compiler: &cc::Tool) -> Vec<Built> {
     // The 16-lane designs take several times as long as the rest: start them first.
@@ -564,12 +568,18 @@ fn build_all(jobs: &[Job], threads: usize, out: &Path, compiler: &cc::Tool) -> V
     let results: Vec<std::sync::Mutex<Option<Built>>> = jobs.iter().map(|_| Default::default()).collect();
     std::thread::scope(|s| {
         for _ in 0..threads.clamp(1, jobs.len()) {
-            s.spawn(|| {
-                while let Some(&k) = order.get(next.fetch_add(1, Ordering::Relaxed)) {
-                    let built = build_model(&jobs[k], out, compiler);
-                    *results[k].lock().unwrap() = Some(built);
-                }
-            });
+            // rust_hdl builds and walks a design on the stack, and the build script runs
+            // unoptimised: the board with the neighbour pipeline's B lanes overflows the
+            // default 2 MiB of a spawned thread. The stack is reserved, not committed.
+            std::thread::Builder::new()
+                .stack_size(BUILD_THREAD_STACK)
+                .spawn_scoped(s, || {
+                    while let Some(&k) = order.get(next.fetch_add(1, Ordering::Relaxed)) {
+                        let built = build_model(&jobs[k], out, compiler);
+                        *results[k].lock().unwrap() = Some(built);
+                    }
+                })
+                .expect("spawn a build thread");
         }
     });
     results.into_iter().map(|r| r.into_inner().unwrap().expect("a build thread failed")).collect()

@@ -4,11 +4,16 @@
 //!
 //! Where the grid pipeline puts one scan point in each lane and broadcasts the model, this
 //! one puts **the candidates of one scan point in the lanes**: scan points go through one at
-//! a time, each looks up the nine rows of its own 27-cell neighbourhood (two rows a clock,
-//! from two copies of the cell table) and sends each row's stored range through the `P`
-//! lanes `P` consecutive addresses a clock (one *chunk*), the model RAM banked `P` ways by
-//! address so that any `P` consecutive addresses are one read of each bank. A pipelined
-//! min-tree reduces a chunk to one `(d2, index)`, an accumulator the chunks of a point.
+//! a time, each looks up the nine rows of its own 27-cell neighbourhood (a *slot* of two
+//! rows, A and B, a clock, from two copies of the cell table) and sends the slot's two
+//! stored ranges through two sets of `P` lanes **in the same clocks**, `P` consecutive
+//! addresses of range A through the A lanes and of range B through the B lanes a clock (a
+//! *chunk* each), the model RAM held twice (one copy a set) and banked `P` ways by address
+//! so that any `P` consecutive addresses are one read of each bank. A slot costs
+//! `max(ceil(len_a / P), ceil(len_b / P))` clocks. The B lanes use no DSP48A1: a difference
+//! of `2^10` or more along an axis gives a capped key anyway, so they square 10-bit
+//! magnitudes from block-RAM tables ([`B_SQUARE_LIMIT`]). A pipelined min-tree reduces a
+//! chunk pair to one `(d2, index)`, an accumulator the chunks of a point.
 //!
 //! **Rule** ([`evaluate_stored`]). For a transformed scan point `q`: the candidates are the
 //! addresses of the nine row ranges of [`crate::grid::Grid::ranges`], read from the stored
@@ -42,14 +47,22 @@ pub const RANGE_QUEUE: usize = 4;
 /// table's two copies); the centre row, the one most likely to hold points, comes last so
 /// that a point's last slot seldom finds nothing (which costs a marker chunk).
 pub const SLOTS: [(usize, Option<usize>); 5] = [(0, Some(1)), (2, Some(3)), (5, Some(6)), (7, Some(8)), (4, None)];
-/// Levels of the min-tree (registered each), whatever `P`: the lanes are padded to
-/// [`TREE_LEAVES`] with the neutral key.
-pub const TREE_LEVELS: usize = 4;
-/// Leaves of the min-tree.
+/// The most lanes a side (A or B) has.
+pub const MAX_LANES: usize = 16;
+/// Levels of the min-tree (registered each), whatever `P`: each side's lanes are padded to
+/// [`MAX_LANES`] with the neutral key, four levels reduce each side, the fifth takes the
+/// smaller of the two sides.
+pub const TREE_LEVELS: usize = 5;
+/// Leaves of the min-tree: the A lanes' [`MAX_LANES`], then the B lanes'.
 pub const TREE_LEAVES: usize = 1 << TREE_LEVELS;
-/// Edges from a chunk's issue to its result leaving the accumulator: bank read, difference,
-/// square, two sums, clamp, the tree's levels, accumulate.
+/// Edges from a chunk pair's issue to its result leaving the accumulator: bank read,
+/// difference, square, two sums, clamp, the tree's levels, accumulate.
 pub const CHUNK_LATENCY: usize = 7 + TREE_LEVELS;
+/// A B lane's squares are exact only below this magnitude (`h`, the cell width): a
+/// difference of `2^10` or more along any axis gives a distance of at least
+/// `CAP_D2 = 2^20`, the capped key whatever the other axes, so the B lanes square 10-bit
+/// magnitudes only (a block-RAM table of `x^2 >> 2`, no DSP).
+pub const B_SQUARE_LIMIT: i64 = 1 << 10;
 
 /// A `(d2, index)` pair as one lexicographic key: `d2 << 12 | index` (`d2 <= CAP_D2`).
 fn key(d2: u64, index: u16) -> u64 {
@@ -129,25 +142,25 @@ struct Read {
     q: FxPoint,
 }
 
-/// A queued slot: range `a` (empty only for a marker), optionally range `b`.
+/// A queued slot: its row A's range and its row B's, each if non-empty (neither: a marker).
 #[derive(Clone, Copy, Debug, Default)]
 struct Entry {
-    a: (u16, u16),
+    a: Option<(u16, u16)>,
     b: Option<(u16, u16)>,
-    marker: bool,
     last: bool,
     slast: bool,
     q: FxPoint,
 }
 
-/// The chunk issue: the entry being issued (`addr .. end`, then `b`).
+/// The chunk issue: the entry being issued, range A (`a.0 .. a.1`, while `av`) through the A
+/// lanes and range B (while `bv`) through the B lanes, one chunk of each a clock.
 #[derive(Clone, Copy, Debug, Default)]
 struct Issue {
     have: bool,
-    addr: u16,
-    end: u16,
-    b: Option<(u16, u16)>,
-    marker: bool,
+    a: (u16, u16),
+    av: bool,
+    b: (u16, u16),
+    bv: bool,
     last: bool,
     slast: bool,
     q: FxPoint,
@@ -161,15 +174,18 @@ struct Ctl {
     slast: bool,
 }
 
-/// A lane stage's register: control, lane valid bits, bank rows, per-lane values.
+/// A lane stage's register: control, lane valid bits, bank rows, per-lane values (the `P`
+/// A lanes, then the `P` B lanes).
 type Stage<T> = (Ctl, Vec<bool>, Vec<u16>, Vec<T>);
 
-/// The register state of the neighbour pipeline with `P` lanes (`P` a power of two up to
-/// [`TREE_LEAVES`]).
+/// The register state of the neighbour pipeline with `P` lanes a side (`P` a power of two up
+/// to [`MAX_LANES`]): `P` A lanes and `P` B lanes.
 #[derive(Clone, Debug)]
 pub struct NeighbourPipelineModel {
     lanes: usize,
     log2: u32,
+    /// The model RAM; the RTL holds it twice (the A lanes' banks and the B lanes'), both
+    /// written by every write, so the copies are always equal.
     ram: Vec<u64>,
     lo_ram: Vec<u16>,
     hi_ram: Vec<u16>,
@@ -185,8 +201,8 @@ pub struct NeighbourPipelineModel {
     tq: [(u16, u16); 2],
     queue: VecDeque<Entry>,
     is: Issue,
-    /// Chunk register (c0): control, query, lane valid bits, bank rows; and the banks' read
-    /// registers.
+    /// Chunk register (c0): control, query, lane valid bits, bank rows (A lanes, then B);
+    /// and the banks' read registers.
     c0: (Ctl, FxPoint, Vec<bool>, Vec<u16>),
     bank_q: Vec<u64>,
     s1: Stage<[i32; 3]>,
@@ -205,12 +221,13 @@ pub struct NeighbourPipelineModel {
 }
 
 impl NeighbourPipelineModel {
-    /// A pipeline with `lanes` lanes (a power of two, 1 to 16), after reset: idle, model RAM
-    /// and table all zero.
+    /// A pipeline with `lanes` lanes a side (a power of two, 1 to 16), after reset: idle,
+    /// model RAM and table all zero.
     pub fn new(lanes: usize) -> Self {
-        assert!(lanes.is_power_of_two() && lanes <= 16, "1, 2, 4, 8 or 16 lanes");
+        assert!(lanes.is_power_of_two() && lanes <= MAX_LANES, "1, 2, 4, 8 or 16 lanes");
         let log2 = lanes.trailing_zeros();
         let z = |_| Ctl::default();
+        let (lanes2, lanes) = (2 * lanes, lanes);
         NeighbourPipelineModel {
             lanes,
             log2,
@@ -228,13 +245,13 @@ impl NeighbourPipelineModel {
             tq: [(0, 0); 2],
             queue: VecDeque::new(),
             is: Issue::default(),
-            c0: (z(0), [0; 3], vec![false; lanes], vec![0; lanes]),
-            bank_q: vec![0; lanes],
-            s1: (z(0), vec![false; lanes], vec![0; lanes], vec![[0; 3]; lanes]),
-            s2: (z(0), vec![false; lanes], vec![0; lanes], vec![[0; 3]; lanes]),
-            s3: (z(0), vec![false; lanes], vec![0; lanes], vec![(0, 0); lanes]),
-            s4: (z(0), vec![false; lanes], vec![0; lanes], vec![0; lanes]),
-            tree: (0..=TREE_LEVELS).map(|l| (z(0), vec![0; if l == 0 { lanes } else { TREE_LEAVES >> l }])).collect(),
+            c0: (z(0), [0; 3], vec![false; lanes2], vec![0; lanes2]),
+            bank_q: vec![0; lanes2],
+            s1: (z(0), vec![false; lanes2], vec![0; lanes2], vec![[0; 3]; lanes2]),
+            s2: (z(0), vec![false; lanes2], vec![0; lanes2], vec![[0; 3]; lanes2]),
+            s3: (z(0), vec![false; lanes2], vec![0; lanes2], vec![(0, 0); lanes2]),
+            s4: (z(0), vec![false; lanes2], vec![0; lanes2], vec![0; lanes2]),
+            tree: (0..=TREE_LEVELS).map(|l| (z(0), vec![0; if l == 0 { lanes2 } else { TREE_LEAVES >> l }])).collect(),
             acc_used: false,
             acc: 0,
             fin: false,
@@ -245,17 +262,18 @@ impl NeighbourPipelineModel {
         }
     }
 
-    /// Number of lanes.
+    /// Number of lanes a side (A and B: twice as many distances a clock).
     pub fn lanes(&self) -> usize {
         self.lanes
     }
 
-    /// Chunks issued since reset (marker chunks included).
+    /// Issue clocks since reset: chunk pairs (a chunk of range A and one of range B, either
+    /// possibly empty), marker chunks included.
     pub fn chunks(&self) -> u64 {
         self.chunks
     }
 
-    /// Distances computed since reset in lanes holding a candidate.
+    /// Distances computed since reset in lanes (A and B) holding a candidate.
     pub fn distances(&self) -> u64 {
         self.distances
     }
@@ -334,67 +352,69 @@ impl NeighbourPipelineModel {
                 next.lk = Lookup { have: true, q, last, k, slot: Self::next_slot(k, 0) };
             }
         }
-        // The read slot joins the range queue (rows outside the grid or empty are dropped;
-        // a point's last slot is queued as a marker if it has no range).
+        // The read slot joins the range queue as one entry, its rows A and B in place (rows
+        // outside the grid or empty left out); a slot without any is dropped, except a
+        // point's last slot, which is queued as a marker.
         if self.rd.valid {
             let ra = (self.rd.in_a && self.tq[0].0 < self.tq[0].1).then_some(self.tq[0]);
             let rb = (self.rd.in_b && self.tq[1].0 < self.tq[1].1).then_some(self.tq[1]);
             if ra.is_some() || rb.is_some() || self.rd.last {
-                let (a, b) = match (ra, rb) {
-                    (Some(a), b) => (a, b),
-                    (None, Some(b)) => (b, None),
-                    (None, None) => ((0, 0), None),
-                };
-                let marker = ra.is_none() && rb.is_none();
-                next.queue.push_back(Entry { a, b, marker, last: self.rd.last, slast: self.rd.slast, q: self.rd.q });
+                next.queue.push_back(Entry { a: ra, b: rb, last: self.rd.last, slast: self.rd.slast, q: self.rd.q });
             }
         }
-        // Issue: one chunk a clock, `addr .. min(addr + P, end)`; lane `b` takes bank `b`,
-        // row `(addr >> log2 P) + (b < addr mod P)`, valid if its address is below `end`.
+        // Issue: one chunk of each range a clock, range A through the A lanes and range B
+        // through the B lanes, `addr .. min(addr + P, end)` each; lane `b` of a side takes its
+        // side's bank `b`, row `(addr >> log2 P) + (b < addr mod P)`, valid if the side's
+        // range is still running and its address is below `end`. A side whose chunk reaches
+        // its end stops; the entry is done when both have (a marker: at once, one clock with
+        // no valid lane).
         let is = self.is;
-        let (base, off) = ((is.addr >> self.log2) as usize, is.addr as usize & (p - 1));
-        let bank_row: Vec<u16> = (0..p).map(|b| ((base + (b < off) as usize) % (MAX_POINTS / p)) as u16).collect();
-        next.bank_q = (0..p).map(|b| ram[((bank_row[b] as usize) << self.log2) | b]).collect();
-        let span = is.end as usize - (is.addr as usize).min(is.end as usize);
-        let lane_valid: Vec<bool> = (0..p).map(|b| is.have && !is.marker && (b + p - off) % p < span.min(p)).collect();
-        let mut done = false;
-        let mut chunk_last = false;
+        let mut bank_row = Vec::with_capacity(2 * p);
+        let mut lane_valid = Vec::with_capacity(2 * p);
+        let mut fin = [false; 2];
+        for (side, ((addr, end), v)) in [(is.a, is.av), (is.b, is.bv)].into_iter().enumerate() {
+            let (base, off) = ((addr >> self.log2) as usize, addr as usize & (p - 1));
+            bank_row.extend((0..p).map(|b| ((base + (b < off) as usize) % (MAX_POINTS / p)) as u16));
+            let span = end as usize - (addr as usize).min(end as usize);
+            lane_valid.extend((0..p).map(|b| is.have && v && (b + p - off) % p < span.min(p)));
+            fin[side] = addr as usize + p >= end as usize;
+        }
+        next.bank_q = (0..2 * p).map(|j| ram[((bank_row[j] as usize) << self.log2) | (j % p)]).collect();
+        let done = is.have && (!is.av || fin[0]) && (!is.bv || fin[1]);
         if is.have {
             next.chunks += 1;
             next.distances += lane_valid.iter().filter(|&&v| v).count() as u64;
-            if is.marker || is.addr as usize + p >= is.end as usize {
-                if let (false, Some((lo, hi))) = (is.marker, is.b) {
-                    next.is.addr = lo;
-                    next.is.end = hi;
-                    next.is.b = None;
-                } else {
-                    done = true;
-                    chunk_last = is.last;
-                }
-            } else {
-                next.is.addr = is.addr + p as u16;
+            next.is.av = is.av && !fin[0];
+            next.is.bv = is.bv && !fin[1];
+            if is.av && !fin[0] {
+                next.is.a.0 = is.a.0 + p as u16;
+            }
+            if is.bv && !fin[1] {
+                next.is.b.0 = is.b.0 + p as u16;
             }
         }
-        next.c0 = (Ctl { valid: is.have, last: chunk_last, slast: is.slast }, is.q, lane_valid, bank_row);
+        next.c0 = (Ctl { valid: is.have, last: done && is.last, slast: is.slast }, is.q, lane_valid, bank_row);
         if !is.have || done {
             next.is.have = !self.queue.is_empty();
             if let Some(e) = self.queue.front() {
                 next.queue.pop_front();
                 next.is = Issue {
                     have: true,
-                    addr: e.a.0,
-                    end: e.a.1,
-                    b: e.b,
-                    marker: e.marker,
+                    a: e.a.unwrap_or((0, 0)),
+                    av: e.a.is_some(),
+                    b: e.b.unwrap_or((0, 0)),
+                    bv: e.b.is_some(),
                     last: e.last,
                     slast: e.slast,
                     q: e.q,
                 };
             }
         }
-        // Lanes: difference, square, two sums (the brute-force pipeline's stages).
+        // Lanes: difference, square, two sums (the brute-force pipeline's stages). The B
+        // lanes (`p..2p`) square magnitudes below `B_SQUARE_LIMIT` only; a larger one gives
+        // a capped key anyway, which `CAP_D2` in its square's place keeps.
         let (c0, q, v0, r0) = &self.c0;
-        let d1 = (0..p)
+        let d1 = (0..2 * p)
             .map(|b| {
                 let m = unpack_point(self.bank_q[b]);
                 [0, 1, 2].map(|k| q[k] as i32 - m[k] as i32)
@@ -402,7 +422,15 @@ impl NeighbourPipelineModel {
             .collect();
         next.s1 = (*c0, v0.clone(), r0.clone(), d1);
         let (c1, v1, r1, d) = &self.s1;
-        next.s2 = (*c1, v1.clone(), r1.clone(), d.iter().map(|d| d.map(|v| (v as i64 * v as i64) as u64)).collect());
+        let square = |j: usize, v: i32| {
+            let v = v as i64;
+            if j >= p && v.abs() >= B_SQUARE_LIMIT {
+                CAP_D2
+            } else {
+                (v * v) as u64
+            }
+        };
+        next.s2 = (*c1, v1.clone(), r1.clone(), d.iter().enumerate().map(|(j, d)| d.map(|v| square(j, v))).collect());
         let (c2, v2, r2, sq) = &self.s2;
         next.s3 = (*c2, v2.clone(), r2.clone(), sq.iter().map(|s| (s[0] + s[1], s[2])).collect());
         let (c3, v3, r3, s) = &self.s3;
@@ -410,21 +438,35 @@ impl NeighbourPipelineModel {
         // Clamp: a lane without a candidate, or at a distance of at least CAP_D2, is the
         // neutral (CAP_D2, 0); the index is the bank row and the lane number.
         let (c4, v4, r4, s4) = &self.s4;
-        let keys =
-            (0..p)
-                .map(|b| {
-                    if v4[b] && s4[b] < CAP_D2 {
-                        key(s4[b], ((r4[b] as usize) << self.log2 | b) as u16)
-                    } else {
-                        CAP_KEY
-                    }
-                })
-                .collect();
+        let keys = (0..2 * p)
+            .map(|j| {
+                if v4[j] && s4[j] < CAP_D2 {
+                    key(s4[j], ((r4[j] as usize) << self.log2 | (j % p)) as u16)
+                } else {
+                    CAP_KEY
+                }
+            })
+            .collect();
         next.tree[0] = (*c4, keys);
-        // The tree has four levels whatever `P` (the lanes padded to 16 with the neutral key).
+        // The tree has five levels whatever `P`: each side padded to 16 leaves with the
+        // neutral key (A lanes in leaves 0..16, B lanes in 16..32), four levels a side, then
+        // the smaller side.
         for l in 1..self.tree.len() {
             let (c, k) = &self.tree[l - 1];
-            let padded: Vec<u64> = (0..TREE_LEAVES >> (l - 1)).map(|j| k.get(j).copied().unwrap_or(CAP_KEY)).collect();
+            let padded: Vec<u64> = if l == 1 {
+                (0..TREE_LEAVES)
+                    .map(|j| {
+                        let (side, b) = (j / MAX_LANES, j % MAX_LANES);
+                        if b < p {
+                            k[side * p + b]
+                        } else {
+                            CAP_KEY
+                        }
+                    })
+                    .collect()
+            } else {
+                k.clone()
+            };
             next.tree[l] = (*c, padded.chunks(2).map(|pair| pair[0].min(pair[1])).collect());
         }
         // Accumulate a point's chunks; its last chunk presents the result.
@@ -547,11 +589,30 @@ pub fn clocks_per_particle(grid: &Grid, scan: &[FxPoint], pose: &FxPose, lanes: 
     run_particle(&mut pipe, scan, pose, |_| false)
 }
 
-/// The chunks a point's rows take, `sum over its non-empty rows of ceil(len / P)`, at least
-/// one (a point whose last slot finds no range takes a marker chunk): a lower bound of the
-/// issue clocks it needs.
+/// The issue clocks a point's rows take (a lower bound of what it needs): over its slots
+/// ([`SLOTS`]), `max(ceil(len_a / P), ceil(len_b / P))` (the slot's rows A and B go through
+/// the A and B lanes in the same clocks; a row outside the grid or empty counts 0), summed;
+/// at least one (a point whose last slot finds no range takes a marker chunk).
 pub fn chunks_of(grid: &Grid, q: FxPoint, lanes: usize) -> usize {
-    grid.ranges(q).iter().map(|r| r.len().div_ceil(lanes)).sum::<usize>().max(1)
+    let k = q.map(axis_cell);
+    let len = |(inside, lo, hi): (bool, usize, usize)| {
+        if inside {
+            (grid.first[hi + 1] as usize).saturating_sub(grid.first[lo] as usize)
+        } else {
+            0
+        }
+    };
+    (0..SLOTS.len())
+        .map(|s| NeighbourPipelineModel::slot_rows(k, s).map(|r| len(r).div_ceil(lanes)).into_iter().max().unwrap_or(0))
+        .sum::<usize>()
+        .max(1)
+}
+
+/// Lookup clocks a point takes: its slots with a row inside the grid, and the last slot
+/// (always looked up).
+pub fn lookups_of(q: FxPoint) -> usize {
+    let k = q.map(axis_cell);
+    (0..SLOTS.len() - 1).filter(|&s| NeighbourPipelineModel::slot_rows(k, s).iter().any(|r| r.0)).count() + 1
 }
 
 /// Clocks a scan point may take beyond its chunks in [`clocks_bound`]: its five lookups,
@@ -567,8 +628,9 @@ pub const BOUND_FILL: u64 = 64;
 /// `model_points` points uploaded as [`Grid::build`] stores it, on `lanes` lanes; for the
 /// host's deadlines, where the data-dependent count is not worth running the cycle model.
 ///
-/// A point's nine row ranges are disjoint ranges of the stored model, so its chunks are at
-/// most `sum over rows of ceil(len / P) <= ceil(model_points / P) + 9`; on top come its
+/// A point's nine row ranges are disjoint ranges of the stored model, so its chunk pairs
+/// (a slot costs its longer row, [`chunks_of`]) are at most its rows' chunks,
+/// `sum over rows of ceil(len / P) <= ceil(model_points / P) + 9`; on top come its
 /// lookups and their registers and a marker ([`BOUND_POINT_EXTRA`]), as if nothing of one
 /// point overlapped the next, and [`BOUND_FILL`] once. `fpga/tests/neighbour_pipeline.rs`
 /// checks it against the cycle model on dense, sparse and empty neighbourhoods.

@@ -8,8 +8,8 @@ use pficp_fpga::format::{pack_point, transform, FxPoint, FxPose, MAX_POINTS};
 use pficp_fpga::grid::{Grid, CAP_D2, CELLS, CELL_LSBS, NONE};
 use pficp_fpga::grid_pipeline::{evaluate_grid, upload, GridInputs};
 use pficp_fpga::neighbour_pipeline::{
-    clocks_bound, clocks_per_particle, evaluate_stored, run_particle, NeighbourPipelineModel, BOUND_FILL,
-    BOUND_POINT_EXTRA,
+    chunks_of, clocks_bound, clocks_per_particle, evaluate_stored, lookups_of, run_particle, NeighbourPipelineModel,
+    BOUND_FILL, BOUND_POINT_EXTRA,
 };
 use proptest::prelude::*;
 
@@ -122,6 +122,55 @@ proptest! {
         }
         let got = run_particle(&mut pipe, &scan, &p, |c| c % 5 == 2).evaluation;
         prop_assert_eq!(&evaluate_stored(&ram, &first, &scan, &p), &got);
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 150, failure_persistence: None, ..ProptestConfig::default() })]
+
+    /// The issue takes `chunks_of` clocks a point (both rows of a slot in the same clocks),
+    /// plus a marker where a point's last slot finds no range; and `clocks_bound` (for
+    /// deadlines) is never below the cycle model's count.
+    #[test]
+    fn the_issue_takes_the_longer_row_of_a_slot_and_the_bound_holds(
+        lanes in prop::sample::select(vec![1usize, 2, 4, 8, 16]),
+        m in model(),
+        scan in prop::collection::vec([inside_coord(), inside_coord(), inside_coord()], 1..60),
+        p in pose(),
+    ) {
+        let g = Grid::build(&m).unwrap();
+        let r = clocks_per_particle(&g, &scan, &p, lanes);
+        let chunks: u64 = scan.iter().map(|&s| chunks_of(&g, transform(&p, s), lanes) as u64).sum();
+        prop_assert!(r.chunks >= chunks && r.chunks <= chunks + scan.len() as u64, "{} issue clocks, chunks_of {chunks}", r.chunks);
+        let lookups: u64 = scan.iter().map(|&s| lookups_of(transform(&p, s)) as u64).sum();
+        prop_assert!(r.clocks >= chunks.max(lookups));
+        let bound = clocks_bound(scan.len(), m.len(), lanes);
+        prop_assert!(r.clocks <= bound, "{} clocks above the bound {bound}", r.clocks);
+    }
+}
+
+/// Every point's five slots each holding one long row (the model in the five A rows around
+/// one cell): five times a row's chunks a point, within the bound.
+#[test]
+fn the_clock_bound_holds_on_long_rows() {
+    let id = FxPose::from_f64(&[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0], &[0.0; 3]);
+    // Rows (dz, dy) of slots 0..3's row A and slot 4's: (-1,-1) (-1,1) (0,1) (1,0) (0,0).
+    let rows = [(-1, -1), (-1, 1), (0, 1), (1, 0), (0, 0)];
+    for lanes in [1, 2, 4, 16] {
+        for n in [5, 85, 400, 4000] {
+            let per = n / rows.len();
+            let model: Vec<FxPoint> = rows
+                .iter()
+                .flat_map(|&(dz, dy)| (0..per).map(move |i| [(i % 7) as i16 * 100, dy * 1024 + 500, dz * 1024 + 500]))
+                .collect();
+            let g = Grid::build(&model).unwrap();
+            let scan = vec![[10, 510, 510]; 40];
+            let r = clocks_per_particle(&g, &scan, &id, lanes);
+            let bound = clocks_bound(scan.len(), model.len(), lanes);
+            assert!(r.clocks <= bound, "{lanes} lanes, {n} points: {} clocks, bound {bound}", r.clocks);
+            assert_eq!(r.chunks, 40 * chunks_of(&g, scan[0], lanes) as u64);
+            assert_eq!(chunks_of(&g, scan[0], lanes), 5 * per.div_ceil(lanes));
+        }
     }
 }
 

@@ -7,7 +7,8 @@
 //! to 8,191: reversed, overlapping and wrapping ranges). Each result also equals the
 //! functional reference: `evaluate_grid` with the model's own table, `evaluate_stored` over
 //! the stores as written otherwise. Seed `PFICP_COSIM_SEED` (default 1), cases
-//! `PFICP_NBR_CASES` (default 40).
+//! `PFICP_NBR_CASES` (default 40). And the B lanes' table squares at their limits
+//! (magnitudes around 2^9 and 2^10), directed.
 
 use pficp_fpga::format::{pack_point, FxPoint, FxPose, MAX_POINTS};
 use pficp_fpga::grid::{Grid, CELLS, CELL_LSBS};
@@ -163,4 +164,34 @@ fn random_cases_in_lockstep() {
         compared += ls.clocks_compared();
     }
     eprintln!("neighbour pipeline: {compared} clocks compared in lockstep, seed {seed}");
+}
+
+/// The B lanes square magnitudes `x = 512 t + y < 2^10` from tables of `y^2 >> 2` and call
+/// anything larger capped: one model point, queries at every combination of offsets around
+/// 2^9 and 2^10 (and small ones) along each axis, so that the point falls in every row of
+/// the queries' neighbourhoods (the B rows among them) at those distances; the point sits at
+/// three places in its cell. Every port every clock, and each result the capped search.
+#[test]
+fn b_lane_squares_at_their_limits() {
+    let id = FxPose::from_f64(&[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0], &[0.0; 3]);
+    let offsets: [i16; 13] = [0, 1, -1, 511, -511, 512, -512, 513, -513, 1023, -1023, 1024, -1024];
+    for lanes in verilated_lanes() {
+        let mut ls = NeighbourLockstep::new(lanes);
+        for m in [[5, 1030, -3000], [1020, -4100, 2050], [-2560, 3584, 7]] {
+            // A few other points far away, so that the point is not alone in its bank row.
+            let grid = Grid::build(&[[-7000, -7000, -7000], m, [7000, 7000, 7000]]).unwrap();
+            ls.upload(&grid).unwrap_or_else(|e| panic!("{m:?}, P = {lanes}: {e}"));
+            let mut scan: Vec<FxPoint> = Vec::new();
+            for a in offsets {
+                for b in offsets {
+                    scan.extend(offsets.iter().map(|&c| [m[0] + a, m[1] + b, m[2] + c]));
+                }
+            }
+            let (got, _) =
+                ls.particle(&scan, &id, |_| false, |_, _| {}).unwrap_or_else(|e| panic!("{m:?}, P = {lanes}: {e}"));
+            let want = evaluate_grid(&grid, &scan, &id);
+            assert_eq!(got, want, "{m:?}, P = {lanes}");
+            assert!(want.nearest.iter().filter(|n| n.1 < pficp_fpga::grid::CAP_D2).count() == 783);
+        }
+    }
 }

@@ -2,15 +2,17 @@
 //! pipeline") with `P` lanes over the candidates of one scan point, register for register
 //! the cycle-accurate reference [`crate::neighbour_pipeline::NeighbourPipelineModel`]: the
 //! transform ([`Transform`]) into a point queue; a lookup stage that reads two of the point's
-//! nine rows a clock from two copies of the cell table (four 4096 x 13 block RAMs); a queue
-//! of looked-up row pairs; the chunk issue (`P` consecutive addresses a clock); `P`
-//! [`NeighbourLane`]s, each with its bank of the model RAM; a four-level registered
-//! min-tree over `(d2, index)` keys; the per-point accumulator and the cost.
+//! nine rows (a slot) a clock from two copies of the cell table (four 4096 x 13 block RAMs);
+//! a queue of looked-up slots; the chunk issue (`P` consecutive addresses of each of the
+//! slot's two ranges a clock); `P` [`NeighbourLane`]s (A, range A, squares in DSP48A1s) and
+//! `P` [`NeighbourLaneB`]s (B, range B, squares from block-RAM tables), each with its bank of
+//! the model RAM (two copies, written together); a registered min-tree over `(d2, index)`
+//! keys, four levels a side and one across; the per-point accumulator and the cost.
 
-use super::neighbour_lane::NeighbourLane;
+use super::neighbour_lane::{NeighbourLane, NeighbourLaneB};
 use super::transform::Transform;
 use crate::grid::CAP_D2;
-use crate::neighbour_pipeline::{POINT_QUEUE, RANGE_QUEUE, TREE_LEAVES};
+use crate::neighbour_pipeline::{MAX_LANES, POINT_QUEUE, RANGE_QUEUE};
 use rust_hdl::prelude::*;
 
 // The RTL's queues hold four entries.
@@ -100,8 +102,8 @@ pub struct NeighbourPipeline<const P: usize> {
     rq_ahi: [DFF<Bits<13>>; 4],
     rq_blo: [DFF<Bits<13>>; 4],
     rq_bhi: [DFF<Bits<13>>; 4],
+    rq_av: [DFF<Bit>; 4],
     rq_bv: [DFF<Bit>; 4],
-    rq_mk: [DFF<Bit>; 4],
     rq_last: [DFF<Bit>; 4],
     rq_slast: [DFF<Bit>; 4],
     rq_q: [DFF<Bits<48>>; 4],
@@ -112,26 +114,33 @@ pub struct NeighbourPipeline<const P: usize> {
     is_have: DFF<Bit>,
     is_addr: DFF<Bits<13>>,
     is_end: DFF<Bits<13>>,
+    is_av: DFF<Bit>,
+    is_baddr: DFF<Bits<13>>,
+    is_bend: DFF<Bits<13>>,
     is_bv: DFF<Bit>,
-    is_blo: DFF<Bits<13>>,
-    is_bhi: DFF<Bits<13>>,
-    is_mk: DFF<Bit>,
     is_last: DFF<Bit>,
     is_slast: DFF<Bit>,
     is_q: DFF<Bits<48>>,
-    // Chunk register, then the control delay line: s1..s4, keys, tree levels 1..4.
+    // Chunk register, then the control delay line: s1..s4, keys, tree levels 1..5.
     c0_valid: DFF<Bit>,
     c0_last: DFF<Bit>,
     c0_slast: DFF<Bit>,
     c0_q: DFF<Bits<48>>,
-    ctl_v: [DFF<Bit>; 9],
-    ctl_l: [DFF<Bit>; 9],
-    ctl_s: [DFF<Bit>; 9],
+    ctl_v: [DFF<Bit>; 10],
+    ctl_l: [DFF<Bit>; 10],
+    ctl_s: [DFF<Bit>; 10],
     lanes: [NeighbourLane; P],
+    lanes_b: [NeighbourLaneB; P],
+    // The min-tree: the A lanes' four levels (t), the B lanes' (u), then the smaller (t5).
     t1: [DFF<Bits<33>>; 8],
     t2: [DFF<Bits<33>>; 4],
     t3: [DFF<Bits<33>>; 2],
     t4: DFF<Bits<33>>,
+    u1: [DFF<Bits<33>>; 8],
+    u2: [DFF<Bits<33>>; 4],
+    u3: [DFF<Bits<33>>; 2],
+    u4: DFF<Bits<33>>,
+    t5: DFF<Bits<33>>,
     acc_used: DFF<Bit>,
     acc: DFF<Bits<33>>,
     fin: DFF<Bit>,
@@ -168,6 +177,9 @@ pub struct NeighbourPipeline<const P: usize> {
     push: Signal<Local, Bit>,
     rq_pop: Signal<Local, Bit>,
     span: Signal<Local, Bits<14>>,
+    span_b: Signal<Local, Bits<14>>,
+    fin_a: Signal<Local, Bit>,
+    fin_b: Signal<Local, Bit>,
     done: Signal<Local, Bit>,
     ch_last: Signal<Local, Bit>,
     m: Signal<Local, Bits<33>>,
@@ -178,7 +190,7 @@ pub struct NeighbourPipeline<const P: usize> {
 impl<const P: usize> NeighbourPipeline<P> {
     /// After reset: idle, model RAM and table all zero.
     pub fn new() -> Self {
-        assert!(P.is_power_of_two() && (2..=TREE_LEAVES).contains(&P), "2, 4, 8 or 16 lanes");
+        assert!(P.is_power_of_two() && (2..=MAX_LANES).contains(&P), "2, 4, 8 or 16 lanes");
         NeighbourPipeline {
             clock: Default::default(),
             model_we: Default::default(),
@@ -239,8 +251,8 @@ impl<const P: usize> NeighbourPipeline<P> {
             rq_ahi: Default::default(),
             rq_blo: Default::default(),
             rq_bhi: Default::default(),
+            rq_av: Default::default(),
             rq_bv: Default::default(),
-            rq_mk: Default::default(),
             rq_last: Default::default(),
             rq_slast: Default::default(),
             rq_q: Default::default(),
@@ -250,10 +262,10 @@ impl<const P: usize> NeighbourPipeline<P> {
             is_have: Default::default(),
             is_addr: Default::default(),
             is_end: Default::default(),
+            is_av: Default::default(),
+            is_baddr: Default::default(),
+            is_bend: Default::default(),
             is_bv: Default::default(),
-            is_blo: Default::default(),
-            is_bhi: Default::default(),
-            is_mk: Default::default(),
             is_last: Default::default(),
             is_slast: Default::default(),
             is_q: Default::default(),
@@ -265,10 +277,16 @@ impl<const P: usize> NeighbourPipeline<P> {
             ctl_l: Default::default(),
             ctl_s: Default::default(),
             lanes: std::array::from_fn(|b| NeighbourLane::new(b, P)),
+            lanes_b: std::array::from_fn(|b| NeighbourLaneB::new(b, P)),
             t1: Default::default(),
             t2: Default::default(),
             t3: Default::default(),
             t4: Default::default(),
+            u1: Default::default(),
+            u2: Default::default(),
+            u3: Default::default(),
+            u4: Default::default(),
+            t5: Default::default(),
             acc_used: Default::default(),
             acc: Default::default(),
             fin: Default::default(),
@@ -304,6 +322,9 @@ impl<const P: usize> NeighbourPipeline<P> {
             push: Default::default(),
             rq_pop: Default::default(),
             span: Default::default(),
+            span_b: Default::default(),
+            fin_a: Default::default(),
+            fin_b: Default::default(),
             done: Default::default(),
             ch_last: Default::default(),
             m: Default::default(),
@@ -350,10 +371,10 @@ impl<const P: usize> Logic for NeighbourPipeline<P> {
             is_have,
             is_addr,
             is_end,
+            is_av,
+            is_baddr,
+            is_bend,
             is_bv,
-            is_blo,
-            is_bhi,
-            is_mk,
             is_last,
             is_slast,
             is_q,
@@ -362,6 +383,8 @@ impl<const P: usize> Logic for NeighbourPipeline<P> {
             c0_slast,
             c0_q,
             t4,
+            u4,
+            t5,
             acc_used,
             acc,
             fin,
@@ -385,10 +408,10 @@ impl<const P: usize> Logic for NeighbourPipeline<P> {
             self.rq_blo[j].d.next = self.rq_blo[j].q.val();
             self.rq_bhi[j].clock.next = self.clock.val();
             self.rq_bhi[j].d.next = self.rq_bhi[j].q.val();
+            self.rq_av[j].clock.next = self.clock.val();
+            self.rq_av[j].d.next = self.rq_av[j].q.val();
             self.rq_bv[j].clock.next = self.clock.val();
             self.rq_bv[j].d.next = self.rq_bv[j].q.val();
-            self.rq_mk[j].clock.next = self.clock.val();
-            self.rq_mk[j].d.next = self.rq_mk[j].q.val();
             self.rq_last[j].clock.next = self.clock.val();
             self.rq_last[j].d.next = self.rq_last[j].q.val();
             self.rq_slast[j].clock.next = self.clock.val();
@@ -408,19 +431,22 @@ impl<const P: usize> Logic for NeighbourPipeline<P> {
             self.lk_z[k].clock.next = self.clock.val();
             self.lk_z[k].d.next = self.lk_z[k].q.val();
         }
-        for k in 0..9 {
+        for k in 0..10 {
             self.ctl_v[k].clock.next = self.clock.val();
             self.ctl_l[k].clock.next = self.clock.val();
             self.ctl_s[k].clock.next = self.clock.val();
         }
         for j in 0..8 {
             self.t1[j].clock.next = self.clock.val();
+            self.u1[j].clock.next = self.clock.val();
         }
         for j in 0..4 {
             self.t2[j].clock.next = self.clock.val();
+            self.u2[j].clock.next = self.clock.val();
         }
         for j in 0..2 {
             self.t3[j].clock.next = self.clock.val();
+            self.u3[j].clock.next = self.clock.val();
         }
         self.transform.clock.next = self.clock.val();
         self.lo_a.read_clock.next = self.clock.val();
@@ -436,6 +462,11 @@ impl<const P: usize> Logic for NeighbourPipeline<P> {
             self.lanes[b].model_we.next = self.model_we.val();
             self.lanes[b].model_waddr.next = self.model_waddr.val();
             self.lanes[b].model_wdata.next = self.model_wdata.val();
+            // The B lanes' banks: the model RAM's second copy, written by the same writes.
+            self.lanes_b[b].clock.next = self.clock.val();
+            self.lanes_b[b].model_we.next = self.model_we.val();
+            self.lanes_b[b].model_waddr.next = self.model_waddr.val();
+            self.lanes_b[b].model_wdata.next = self.model_wdata.val();
         }
         // Status and the scan input: room in the point queue for the points in the transform.
         if self.transform.t1_valid.val() && self.transform.t2_valid.val() {
@@ -633,25 +664,20 @@ impl<const P: usize> Logic for NeighbourPipeline<P> {
         } else if !self.transform.t2_valid.val() && self.pq_pop.val() {
             self.pq_n.d.next = self.pq_n.q.val() - 1;
         }
-        // The read slot joins the range queue: non-empty rows (the first in `a`), or a marker
-        // for a point's last slot without any.
+        // The read slot joins the range queue: its rows in place, each flagged if non-empty
+        // (neither: a marker, queued only for a point's last slot).
         self.ra_ok.next = self.rd_in_a.q.val() && (self.lo_a.read_data.val() < self.hi_a.read_data.val());
         self.rb_ok.next = self.rd_in_b.q.val() && (self.lo_b.read_data.val() < self.hi_b.read_data.val());
         self.push.next = self.rd_valid.q.val() && (self.ra_ok.val() || self.rb_ok.val() || self.rd_last.q.val());
         if self.push.val() {
             for j in 0..4 {
                 if self.rq_wr.q.val() == self.qid[j].val() {
-                    if self.ra_ok.val() {
-                        self.rq_alo[j].d.next = self.lo_a.read_data.val();
-                        self.rq_ahi[j].d.next = self.hi_a.read_data.val();
-                    } else {
-                        self.rq_alo[j].d.next = self.lo_b.read_data.val();
-                        self.rq_ahi[j].d.next = self.hi_b.read_data.val();
-                    }
+                    self.rq_alo[j].d.next = self.lo_a.read_data.val();
+                    self.rq_ahi[j].d.next = self.hi_a.read_data.val();
                     self.rq_blo[j].d.next = self.lo_b.read_data.val();
                     self.rq_bhi[j].d.next = self.hi_b.read_data.val();
-                    self.rq_bv[j].d.next = self.ra_ok.val() && self.rb_ok.val();
-                    self.rq_mk[j].d.next = !self.ra_ok.val() && !self.rb_ok.val();
+                    self.rq_av[j].d.next = self.ra_ok.val();
+                    self.rq_bv[j].d.next = self.rb_ok.val();
                     self.rq_last[j].d.next = self.rd_last.q.val();
                     self.rq_slast[j].d.next = self.rd_slast.q.val();
                     self.rq_q[j].d.next = self.rd_q.q.val();
@@ -659,29 +685,42 @@ impl<const P: usize> Logic for NeighbourPipeline<P> {
             }
             self.rq_wr.d.next = self.rq_wr.q.val() + 1;
         }
-        // Issue: one chunk a clock from `is_addr .. is_end`, then range b; the entry's last
-        // chunk takes the next entry.
+        // Issue: one chunk of each range a clock, range A (`is_addr .. is_end`) through the A
+        // lanes and range B (`is_baddr .. is_bend`) through the B lanes; a side stops with its
+        // last chunk, the entry is done when both have (a marker at once), and its last
+        // chunk pair takes the next entry.
         self.span.next = bit_cast::<14, 13>(self.is_end.q.val()) - bit_cast::<14, 13>(self.is_addr.q.val());
+        self.span_b.next = bit_cast::<14, 13>(self.is_bend.q.val()) - bit_cast::<14, 13>(self.is_baddr.q.val());
         for b in 0..P {
-            self.lanes[b].issue.next = self.is_have.q.val() && !self.is_mk.q.val();
+            self.lanes[b].issue.next = self.is_have.q.val() && self.is_av.q.val();
             self.lanes[b].addr.next = self.is_addr.q.val();
             self.lanes[b].span.next = self.span.val();
             self.lanes[b].q.next = self.c0_q.q.val();
+            self.lanes_b[b].issue.next = self.is_have.q.val() && self.is_bv.q.val();
+            self.lanes_b[b].addr.next = self.is_baddr.q.val();
+            self.lanes_b[b].span.next = self.span_b.val();
+            self.lanes_b[b].q.next = self.c0_q.q.val();
         }
-        self.done.next = false;
-        self.ch_last.next = false;
+        self.fin_a.next = self.span.val() <= self.pc14.val();
+        self.fin_b.next = self.span_b.val() <= self.pc14.val();
+        self.done.next = self.is_have.q.val()
+            && (!self.is_av.q.val() || self.fin_a.val())
+            && (!self.is_bv.q.val() || self.fin_b.val());
+        self.ch_last.next = self.done.val() && self.is_last.q.val();
         if self.is_have.q.val() {
-            if self.is_mk.q.val() || (self.span.val() <= self.pc14.val()) {
-                if !self.is_mk.q.val() && self.is_bv.q.val() {
-                    self.is_addr.d.next = self.is_blo.q.val();
-                    self.is_end.d.next = self.is_bhi.q.val();
+            if self.is_av.q.val() {
+                if self.fin_a.val() {
+                    self.is_av.d.next = false;
+                } else {
+                    self.is_addr.d.next = self.is_addr.q.val() + self.pc13.val();
+                }
+            }
+            if self.is_bv.q.val() {
+                if self.fin_b.val() {
                     self.is_bv.d.next = false;
                 } else {
-                    self.done.next = true;
-                    self.ch_last.next = self.is_last.q.val();
+                    self.is_baddr.d.next = self.is_baddr.q.val() + self.pc13.val();
                 }
-            } else {
-                self.is_addr.d.next = self.is_addr.q.val() + self.pc13.val();
             }
         }
         self.c0_valid.d.next = self.is_have.q.val();
@@ -697,10 +736,10 @@ impl<const P: usize> Logic for NeighbourPipeline<P> {
                 if self.rq_rd.q.val() == self.qid[j].val() {
                     self.is_addr.d.next = self.rq_alo[j].q.val();
                     self.is_end.d.next = self.rq_ahi[j].q.val();
+                    self.is_av.d.next = self.rq_av[j].q.val();
+                    self.is_baddr.d.next = self.rq_blo[j].q.val();
+                    self.is_bend.d.next = self.rq_bhi[j].q.val();
                     self.is_bv.d.next = self.rq_bv[j].q.val();
-                    self.is_blo.d.next = self.rq_blo[j].q.val();
-                    self.is_bhi.d.next = self.rq_bhi[j].q.val();
-                    self.is_mk.d.next = self.rq_mk[j].q.val();
                     self.is_last.d.next = self.rq_last[j].q.val();
                     self.is_slast.d.next = self.rq_slast[j].q.val();
                     self.is_q.d.next = self.rq_q[j].q.val();
@@ -713,16 +752,16 @@ impl<const P: usize> Logic for NeighbourPipeline<P> {
         } else if !self.push.val() && self.rq_pop.val() {
             self.rq_n.d.next = self.rq_n.q.val() - 1;
         }
-        // Control beside the lanes (s1..s4, keys) and the tree (levels 1..4).
+        // Control beside the lanes (s1..s4, keys) and the tree (levels 1..5).
         self.ctl_v[0].d.next = self.c0_valid.q.val();
         self.ctl_l[0].d.next = self.c0_last.q.val();
         self.ctl_s[0].d.next = self.c0_slast.q.val();
-        for k in 1..9 {
+        for k in 1..10 {
             self.ctl_v[k].d.next = self.ctl_v[k - 1].q.val();
             self.ctl_l[k].d.next = self.ctl_l[k - 1].q.val();
             self.ctl_s[k].d.next = self.ctl_s[k - 1].q.val();
         }
-        // The min-tree over the lanes' keys (padded to 16 leaves with the neutral key).
+        // The min-tree over the A lanes' keys (padded to 16 leaves with the neutral key).
         for j in 0..(P / 2) {
             if self.lanes[2 * j + 1].key.val() < self.lanes[2 * j].key.val() {
                 self.t1[j].d.next = self.lanes[2 * j + 1].key.val();
@@ -752,21 +791,57 @@ impl<const P: usize> Logic for NeighbourPipeline<P> {
         } else {
             self.t4.d.next = self.t3[0].q.val();
         }
+        // The B lanes' tree, the same.
+        for j in 0..(P / 2) {
+            if self.lanes_b[2 * j + 1].key.val() < self.lanes_b[2 * j].key.val() {
+                self.u1[j].d.next = self.lanes_b[2 * j + 1].key.val();
+            } else {
+                self.u1[j].d.next = self.lanes_b[2 * j].key.val();
+            }
+        }
+        for j in (P / 2)..8 {
+            self.u1[j].d.next = self.cap_key.val();
+        }
+        for j in 0..4 {
+            if self.u1[2 * j + 1].q.val() < self.u1[2 * j].q.val() {
+                self.u2[j].d.next = self.u1[2 * j + 1].q.val();
+            } else {
+                self.u2[j].d.next = self.u1[2 * j].q.val();
+            }
+        }
+        for j in 0..2 {
+            if self.u2[2 * j + 1].q.val() < self.u2[2 * j].q.val() {
+                self.u3[j].d.next = self.u2[2 * j + 1].q.val();
+            } else {
+                self.u3[j].d.next = self.u2[2 * j].q.val();
+            }
+        }
+        if self.u3[1].q.val() < self.u3[0].q.val() {
+            self.u4.d.next = self.u3[1].q.val();
+        } else {
+            self.u4.d.next = self.u3[0].q.val();
+        }
+        // The smaller side.
+        if self.u4.q.val() < self.t4.q.val() {
+            self.t5.d.next = self.u4.q.val();
+        } else {
+            self.t5.d.next = self.t4.q.val();
+        }
         // Accumulate a point's chunks; its last presents the result.
-        self.m.next = self.t4.q.val();
-        if self.acc_used.q.val() && (self.acc.q.val() < self.t4.q.val()) {
+        self.m.next = self.t5.q.val();
+        if self.acc_used.q.val() && (self.acc.q.val() < self.t5.q.val()) {
             self.m.next = self.acc.q.val();
         }
         self.nn_d.next = bit_cast::<34, 21>(self.m.val().get_bits::<21>(12));
         self.nn_valid_r.d.next = false;
         self.cost_valid_r.d.next = false;
-        if self.ctl_v[8].q.val() {
-            if self.ctl_l[8].q.val() {
+        if self.ctl_v[9].q.val() {
+            if self.ctl_l[9].q.val() {
                 self.nn_valid_r.d.next = true;
                 self.nn_index_r.d.next = self.m.val().get_bits::<12>(0);
                 self.nn_dist_r.d.next = self.nn_d.val();
                 self.acc_used.d.next = false;
-                self.fin.d.next = self.ctl_s[8].q.val();
+                self.fin.d.next = self.ctl_s[9].q.val();
             } else {
                 self.acc.d.next = self.m.val();
                 self.acc_used.d.next = true;
