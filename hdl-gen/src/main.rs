@@ -59,7 +59,7 @@ struct Cli {
     #[arg(long)]
     io_pads: bool,
     /// Fail if the design uses more than this percentage of the LUTs.
-    #[arg(long, value_name = "PERCENT", default_value_t = 60.0)]
+    #[arg(long, value_name = "PERCENT", default_value_t = hdl_gen::report::DEFAULT_MAX_LUT_PERCENT)]
     max_lut_percent: f64,
     /// Fail if the design uses more DSP48A1s than this.
     #[arg(long, value_name = "N", default_value_t = 58)]
