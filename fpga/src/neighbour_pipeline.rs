@@ -36,7 +36,9 @@
 use crate::format::{dist2, transform, unpack_point, FxPoint, FxPose, MAX_POINTS, POINT_WORD_BITS};
 use crate::grid::{axis_cell, Grid, CAP_D2, CELLS, CELLS_PER_AXIS};
 use crate::grid_pipeline::{upload, GridInputs};
-use crate::pipeline::{transform_products, transform_result, transform_sums, Evaluation, Outputs, COST_MASK};
+use crate::pipeline::{
+    stream_particle, transform_products, transform_result, transform_sums, Evaluation, Outputs, StreamModel, COST_MASK,
+};
 use std::collections::VecDeque;
 
 /// Depth of the queue of transformed scan points waiting for their row lookups.
@@ -552,30 +554,25 @@ pub fn run_particle(
     pipe: &mut NeighbourPipelineModel,
     scan: &[FxPoint],
     pose: &FxPose,
-    mut gap: impl FnMut(u64) -> bool,
+    gap: impl FnMut(u64) -> bool,
 ) -> NeighbourRun {
     assert!(!scan.is_empty());
     let (chunks0, distances0) = (pipe.chunks, pipe.distances);
     pipe.step(&GridInputs::start(pose));
-    let mut next = 0;
-    let mut nearest = Vec::with_capacity(scan.len());
-    let mut clocks = 1u64;
-    loop {
-        let offer = next < scan.len() && !gap(clocks);
-        let inputs = GridInputs::offer(scan, next, offer);
-        let took = offer && pipe.outputs().scan_ready;
-        pipe.step(&inputs);
-        clocks += 1;
-        next += took as usize;
-        let o = pipe.outputs();
-        if o.nn_valid {
-            nearest.push((o.nn_index, o.nn_dist));
-        }
-        if o.cost_valid {
-            let (chunks, distances) = (pipe.chunks - chunks0, pipe.distances - distances0);
-            return NeighbourRun { evaluation: Evaluation { cost: o.cost, nearest }, clocks, chunks, distances };
-        }
-        assert!(clocks < 1 << 40, "pipeline never finished");
+    let (evaluation, clocks) = stream_particle(pipe, scan, gap);
+    NeighbourRun { evaluation, clocks, chunks: pipe.chunks - chunks0, distances: pipe.distances - distances0 }
+}
+
+impl StreamModel for NeighbourPipelineModel {
+    type Inputs = GridInputs;
+    fn step(&mut self, inputs: &GridInputs) {
+        NeighbourPipelineModel::step(self, inputs)
+    }
+    fn outputs(&self) -> Outputs {
+        NeighbourPipelineModel::outputs(self)
+    }
+    fn offer(scan: &[FxPoint], next: usize, offer: bool) -> GridInputs {
+        GridInputs::offer(scan, next, offer)
     }
 }
 
