@@ -1,11 +1,12 @@
-//! `NeighbourLane`: one lane of the neighbour pipeline (docs/pipeline.md, "The neighbour
-//! pipeline"; model [`crate::neighbour_pipeline::NeighbourPipelineModel`]) with its bank of
-//! the model RAM ([`BankRam`]). Lane `b` of `P` owns the stored points at addresses
-//! `≡ b (mod P)`; for a chunk starting at `addr` it reads the one of them among
-//! `addr .. addr + P`, bank row `(addr >> log2 P) + (b < addr mod P)`, valid if that address
-//! is below the range's end (`span = end - addr` ahead). Then the brute-force lane's
-//! distance pipeline against the chunk's query (s1 differences, s2 squares in 3 [`Mul18`],
-//! s3 `dx^2 + dy^2` and `dz^2`, s4 the sum), and the clamp: the registered key
+//! The neighbour pipeline's lanes (docs/pipeline.md, "The neighbour pipeline"; model
+//! [`crate::neighbour_pipeline::NeighbourPipelineModel`]): [`NeighbourLane`] (A, squares in
+//! DSP48A1s) and [`NeighbourLaneB`] (B, squares from block-RAM tables, [`SquareRom`]), both
+//! behind the same [`LaneFront`]: lane `b` of `P` owns the stored points at addresses
+//! `≡ b (mod P)` in its bank of the model RAM ([`BankRam`]); for a chunk starting at `addr` it
+//! reads the one of them among `addr .. addr + P`, bank row `(addr >> log2 P) + (b < addr mod
+//! P)`, valid if that address is below the range's end (`span = end - addr` ahead). Then
+//! the distance pipeline against the chunk's query (s1 differences, s2 squares, s3
+//! `dx^2 + dy^2` and `dz^2`, s4 the sum), and the clamp: the registered key
 //! `d2 << 12 | index`, or the neutral `CAP_D2 << 12` if the lane has no candidate or
 //! `d2 >= CAP_D2`.
 
@@ -88,7 +89,103 @@ end
     }
 }
 
-/// One lane (number `id` of `P`) with its bank.
+/// The front end both kinds of lane share (lane `id` of `P`): its bank of the model RAM
+/// ([`BankRam`], written with the addresses `≡ id (mod P)`) and the issue. For a chunk
+/// starting at `addr` the lane's address `addr + ((id - addr) mod P)` is its bank row
+/// (`addr >> log2 P`, plus one if `id < addr mod P`) and the candidate's index; the lane
+/// holds a candidate if that address is below the range's end (`span = end - addr` ahead).
+/// Registered with the bank's read (c0): `valid`, `index` and `point`, one edge after the
+/// issue.
+#[derive(LogicBlock)]
+pub struct LaneFront {
+    /// Clock.
+    pub clock: Signal<In, Clock>,
+    /// A chunk of a range is issued at this edge (not a marker).
+    pub issue: Signal<In, Bit>,
+    /// The chunk's first address.
+    pub addr: Signal<In, Bits<13>>,
+    /// The range's end less `addr` (14 bits; at least 1 when `issue`).
+    pub span: Signal<In, Bits<14>>,
+    /// Model RAM write port.
+    pub model_we: Signal<In, Bit>,
+    /// Model write address.
+    pub model_waddr: Signal<In, Bits<12>>,
+    /// Model write data.
+    pub model_wdata: Signal<In, Bits<48>>,
+    /// The lane holds a candidate (one edge after the issue).
+    pub valid: Signal<Out, Bit>,
+    /// The candidate's index (its address).
+    pub index: Signal<Out, Bits<12>>,
+    /// The candidate's stored point (x | y | z, Q3.13).
+    pub point: Signal<Out, Bits<48>>,
+    id: Constant<Bits<12>>,
+    pmask: Constant<Bits<12>>,
+    pc: Constant<Bits<14>>,
+    bank: BankRam,
+    v0: DFF<Bit>,
+    i0: DFF<Bits<12>>,
+    off: Signal<Local, Bits<12>>,
+    rel: Signal<Local, Bits<12>>,
+    idx: Signal<Local, Bits<12>>,
+}
+
+impl LaneFront {
+    /// Lane `id` of `lanes` (a power of two, 2 to 16).
+    pub fn new(id: usize, lanes: usize) -> LaneFront {
+        assert!(lanes.is_power_of_two() && (2..=16).contains(&lanes) && id < lanes);
+        LaneFront {
+            clock: Default::default(),
+            issue: Default::default(),
+            addr: Default::default(),
+            span: Default::default(),
+            model_we: Default::default(),
+            model_waddr: Default::default(),
+            model_wdata: Default::default(),
+            valid: Default::default(),
+            index: Default::default(),
+            point: Default::default(),
+            id: Constant::new((id as u64).into()),
+            pmask: Constant::new(((lanes - 1) as u64).into()),
+            pc: Constant::new((lanes as u64).into()),
+            bank: BankRam::new(lanes.trailing_zeros() as usize),
+            v0: Default::default(),
+            i0: Default::default(),
+            off: Default::default(),
+            rel: Default::default(),
+            idx: Default::default(),
+        }
+    }
+}
+
+impl Logic for LaneFront {
+    #[hdl_gen]
+    fn update(&mut self) {
+        dff_setup!(self, clock, v0, i0);
+        self.bank.clock.next = self.clock.val();
+        self.off.next = bit_cast::<12, 13>(self.addr.val()) & self.pmask.val();
+        self.rel.next = (self.id.val() - self.off.val()) & self.pmask.val();
+        if self.id.val() < self.off.val() {
+            self.idx.next = (bit_cast::<12, 13>(self.addr.val()) & !self.pmask.val())
+                + self.pc.val().get_bits::<12>(0)
+                + self.id.val();
+        } else {
+            self.idx.next = (bit_cast::<12, 13>(self.addr.val()) & !self.pmask.val()) + self.id.val();
+        }
+        self.bank.read_address.next = self.idx.val();
+        self.bank.write_enable.next =
+            self.model_we.val() && ((self.model_waddr.val() & self.pmask.val()) == self.id.val());
+        self.bank.write_address.next = self.model_waddr.val();
+        self.bank.write_data.next = self.model_wdata.val();
+        self.v0.d.next = self.issue.val()
+            && ((self.span.val() >= self.pc.val()) || (bit_cast::<14, 12>(self.rel.val()) < self.span.val()));
+        self.i0.d.next = self.idx.val();
+        self.valid.next = self.v0.q.val();
+        self.index.next = self.i0.q.val();
+        self.point.next = self.bank.read_data.val();
+    }
+}
+
+/// One lane (number `id` of `P`) with its front end ([`LaneFront`]).
 #[derive(LogicBlock)]
 pub struct NeighbourLane {
     /// Clock.
@@ -109,13 +206,8 @@ pub struct NeighbourLane {
     pub model_wdata: Signal<In, Bits<48>>,
     /// The clamped key `d2 << 12 | index` (or `CAP_D2 << 12`), five edges after the issue.
     pub key: Signal<Out, Bits<33>>,
-    id: Constant<Bits<12>>,
-    pmask: Constant<Bits<12>>,
-    pc: Constant<Bits<14>>,
     cap_key: Constant<Bits<33>>,
-    bank: BankRam,
-    v0: DFF<Bit>,
-    i0: DFF<Bits<12>>,
+    front: LaneFront,
     d1: [DFF<Signed<17>>; 3],
     d1b: [DFF<Signed<17>>; 3],
     v1: DFF<Bit>,
@@ -131,9 +223,6 @@ pub struct NeighbourLane {
     v4: DFF<Bit>,
     i4: DFF<Bits<12>>,
     key_r: DFF<Bits<33>>,
-    off: Signal<Local, Bits<12>>,
-    rel: Signal<Local, Bits<12>>,
-    idx: Signal<Local, Bits<12>>,
     mq: [Signal<Local, Signed<16>>; 3],
     qq: [Signal<Local, Signed<16>>; 3],
     sq: [Signal<Local, Bits<36>>; 3],
@@ -153,13 +242,8 @@ impl NeighbourLane {
             model_waddr: Default::default(),
             model_wdata: Default::default(),
             key: Default::default(),
-            id: Constant::new((id as u64).into()),
-            pmask: Constant::new(((lanes - 1) as u64).into()),
-            pc: Constant::new((lanes as u64).into()),
             cap_key: Constant::new((CAP_D2 << 12).into()),
-            bank: BankRam::new(lanes.trailing_zeros() as usize),
-            v0: Default::default(),
-            i0: Default::default(),
+            front: LaneFront::new(id, lanes),
             d1: Default::default(),
             d1b: Default::default(),
             v1: Default::default(),
@@ -175,9 +259,6 @@ impl NeighbourLane {
             v4: Default::default(),
             i4: Default::default(),
             key_r: Default::default(),
-            off: Default::default(),
-            rel: Default::default(),
-            idx: Default::default(),
             mq: Default::default(),
             qq: Default::default(),
             sq: Default::default(),
@@ -188,45 +269,32 @@ impl NeighbourLane {
 impl Logic for NeighbourLane {
     #[hdl_gen]
     fn update(&mut self) {
-        dff_setup!(self, clock, v0, i0, v1, i1, v2, i2, s3a, s3b, v3, i3, s4, v4, i4, key_r);
-        self.bank.clock.next = self.clock.val();
+        dff_setup!(self, clock, v1, i1, v2, i2, s3a, s3b, v3, i3, s4, v4, i4, key_r);
         for k in 0..3 {
             self.d1[k].clock.next = self.clock.val();
             self.d1b[k].clock.next = self.clock.val();
             self.d1b[k].d.next = self.d1b[k].q.val();
             self.mul[k].clock.next = self.clock.val();
         }
-        // Issue: the lane's address in the chunk, `addr + ((id - addr) mod P)`, is its bank
-        // row (`addr >> log2 P`, plus one if `id < addr mod P`) and its number: the index.
-        self.off.next = bit_cast::<12, 13>(self.addr.val()) & self.pmask.val();
-        self.rel.next = (self.id.val() - self.off.val()) & self.pmask.val();
-        if self.id.val() < self.off.val() {
-            self.idx.next = (bit_cast::<12, 13>(self.addr.val()) & !self.pmask.val())
-                + self.pc.val().get_bits::<12>(0)
-                + self.id.val();
-        } else {
-            self.idx.next = (bit_cast::<12, 13>(self.addr.val()) & !self.pmask.val()) + self.id.val();
-        }
-        self.bank.read_address.next = self.idx.val();
-        self.bank.write_enable.next =
-            self.model_we.val() && ((self.model_waddr.val() & self.pmask.val()) == self.id.val());
-        self.bank.write_address.next = self.model_waddr.val();
-        self.bank.write_data.next = self.model_wdata.val();
-        // c0: the lane holds a candidate if its address is below the end.
-        self.v0.d.next = self.issue.val()
-            && ((self.span.val() >= self.pc.val()) || (bit_cast::<14, 12>(self.rel.val()) < self.span.val()));
-        self.i0.d.next = self.idx.val();
+        // Issue, bank and c0: the front end.
+        self.front.clock.next = self.clock.val();
+        self.front.issue.next = self.issue.val();
+        self.front.addr.next = self.addr.val();
+        self.front.span.next = self.span.val();
+        self.front.model_we.next = self.model_we.val();
+        self.front.model_waddr.next = self.model_waddr.val();
+        self.front.model_wdata.next = self.model_wdata.val();
         // s1: differences (17-bit), twice (see `Lane`: Yosys 0.23 and the DSP48A1 pre-adder).
         for k in 0..3 {
-            self.mq[k].next = signed_cast(self.bank.read_data.val().get_bits::<16>(16 * k));
+            self.mq[k].next = signed_cast(self.front.point.val().get_bits::<16>(16 * k));
             self.qq[k].next = signed_cast(self.q.val().get_bits::<16>(16 * k));
             self.d1[k].d.next = signed_bit_cast_safe(self.qq[k].val()) - signed_bit_cast_safe(self.mq[k].val());
-            if self.v0.q.val() {
+            if self.front.valid.val() {
                 self.d1b[k].d.next = signed_bit_cast_safe(self.qq[k].val()) - signed_bit_cast_safe(self.mq[k].val());
             }
         }
-        self.v1.d.next = self.v0.q.val();
-        self.i1.d.next = self.i0.q.val();
+        self.v1.d.next = self.front.valid.val();
+        self.i1.d.next = self.front.index.val();
         // s2: squares.
         for k in 0..3 {
             self.mul[k].a.next = signed_bit_cast_safe(self.d1[k].q.val());
@@ -321,9 +389,9 @@ always @(posedge clock) begin
     }
 }
 
-/// One B lane (number `id` of `P`) with its bank of the model RAM's second copy: the
-/// [`NeighbourLane`]'s issue, bank and key, without DSP48A1s. A difference of `2^10` (`h`)
-/// or more along any axis makes the lane's key the capped one (its distance is at least
+/// One B lane (number `id` of `P`), its [`LaneFront`]'s bank a bank of the model RAM's
+/// second copy: the A lane's front end and key, without DSP48A1s. A difference of `2^10`
+/// (`h`) or more along any axis makes the lane's key the capped one (its distance is at least
 /// `CAP_D2`), so the lane squares 10-bit magnitudes `x = 512 t + y` only:
 /// `x^2 = y^2 + t (256 + y) 2^10`, `y^2` from block-RAM tables of `y^2 >> 2`
 /// ([`SquareRom`]: `dx` and `dy` through both ports of one, `dz` through another; two RAMB8
@@ -351,16 +419,11 @@ pub struct NeighbourLaneB {
     pub model_wdata: Signal<In, Bits<48>>,
     /// The clamped key `d2 << 12 | index` (or `CAP_D2 << 12`), five edges after the issue.
     pub key: Signal<Out, Bits<33>>,
-    id: Constant<Bits<12>>,
-    pmask: Constant<Bits<12>>,
-    pc: Constant<Bits<14>>,
     cap_key: Constant<Bits<33>>,
+    front: LaneFront,
     c18: Constant<Bits<22>>,
-    bank: BankRam,
     rom_xy: SquareRom<2>,
     rom_z: SquareRom<1>,
-    v0: DFF<Bit>,
-    i0: DFF<Bits<12>>,
     dp: [DFF<Signed<17>>; 3],
     dn: [DFF<Signed<17>>; 3],
     v1: DFF<Bit>,
@@ -380,9 +443,6 @@ pub struct NeighbourLaneB {
     v4: DFF<Bit>,
     i4: DFF<Bits<12>>,
     key_r: DFF<Bits<33>>,
-    off: Signal<Local, Bits<12>>,
-    rel: Signal<Local, Bits<12>>,
-    idx: Signal<Local, Bits<12>>,
     mq: [Signal<Local, Signed<16>>; 3],
     qq: [Signal<Local, Signed<16>>; 3],
     mag: [Signal<Local, Bits<17>>; 3],
@@ -405,16 +465,11 @@ impl NeighbourLaneB {
             model_waddr: Default::default(),
             model_wdata: Default::default(),
             key: Default::default(),
-            id: Constant::new((id as u64).into()),
-            pmask: Constant::new(((lanes - 1) as u64).into()),
-            pc: Constant::new((lanes as u64).into()),
             cap_key: Constant::new((CAP_D2 << 12).into()),
+            front: LaneFront::new(id, lanes),
             c18: Constant::new((1u64 << 18).into()),
-            bank: BankRam::new(lanes.trailing_zeros() as usize),
             rom_xy: Default::default(),
             rom_z: Default::default(),
-            v0: Default::default(),
-            i0: Default::default(),
             dp: Default::default(),
             dn: Default::default(),
             v1: Default::default(),
@@ -434,9 +489,6 @@ impl NeighbourLaneB {
             v4: Default::default(),
             i4: Default::default(),
             key_r: Default::default(),
-            off: Default::default(),
-            rel: Default::default(),
-            idx: Default::default(),
             mq: Default::default(),
             qq: Default::default(),
             mag: Default::default(),
@@ -450,8 +502,7 @@ impl NeighbourLaneB {
 impl Logic for NeighbourLaneB {
     #[hdl_gen]
     fn update(&mut self) {
-        dff_setup!(self, clock, v0, i0, v1, i1, far2, hi2, v2, i2, s3a, s3b, far3, v3, i3, s4, far4, v4, i4, key_r);
-        self.bank.clock.next = self.clock.val();
+        dff_setup!(self, clock, v1, i1, far2, hi2, v2, i2, s3a, s3b, far3, v3, i3, s4, far4, v4, i4, key_r);
         self.rom_xy.clock.next = self.clock.val();
         self.rom_z.clock.next = self.clock.val();
         for k in 0..3 {
@@ -462,33 +513,23 @@ impl Logic for NeighbourLaneB {
             self.lsb2[k].clock.next = self.clock.val();
             self.lsb2[k].d.next = self.lsb2[k].q.val();
         }
-        // Issue: as the A lane (`NeighbourLane`).
-        self.off.next = bit_cast::<12, 13>(self.addr.val()) & self.pmask.val();
-        self.rel.next = (self.id.val() - self.off.val()) & self.pmask.val();
-        if self.id.val() < self.off.val() {
-            self.idx.next = (bit_cast::<12, 13>(self.addr.val()) & !self.pmask.val())
-                + self.pc.val().get_bits::<12>(0)
-                + self.id.val();
-        } else {
-            self.idx.next = (bit_cast::<12, 13>(self.addr.val()) & !self.pmask.val()) + self.id.val();
-        }
-        self.bank.read_address.next = self.idx.val();
-        self.bank.write_enable.next =
-            self.model_we.val() && ((self.model_waddr.val() & self.pmask.val()) == self.id.val());
-        self.bank.write_address.next = self.model_waddr.val();
-        self.bank.write_data.next = self.model_wdata.val();
-        self.v0.d.next = self.issue.val()
-            && ((self.span.val() >= self.pc.val()) || (bit_cast::<14, 12>(self.rel.val()) < self.span.val()));
-        self.i0.d.next = self.idx.val();
+        // Issue, bank and c0: the front end.
+        self.front.clock.next = self.clock.val();
+        self.front.issue.next = self.issue.val();
+        self.front.addr.next = self.addr.val();
+        self.front.span.next = self.span.val();
+        self.front.model_we.next = self.model_we.val();
+        self.front.model_waddr.next = self.model_waddr.val();
+        self.front.model_wdata.next = self.model_wdata.val();
         // s1: the differences both ways (17-bit), so that the magnitude is a choice.
         for k in 0..3 {
-            self.mq[k].next = signed_cast(self.bank.read_data.val().get_bits::<16>(16 * k));
+            self.mq[k].next = signed_cast(self.front.point.val().get_bits::<16>(16 * k));
             self.qq[k].next = signed_cast(self.q.val().get_bits::<16>(16 * k));
             self.dp[k].d.next = signed_bit_cast_safe(self.qq[k].val()) - signed_bit_cast_safe(self.mq[k].val());
             self.dn[k].d.next = signed_bit_cast_safe(self.mq[k].val()) - signed_bit_cast_safe(self.qq[k].val());
         }
-        self.v1.d.next = self.v0.q.val();
-        self.i1.d.next = self.i0.q.val();
+        self.v1.d.next = self.front.valid.val();
+        self.i1.d.next = self.front.index.val();
         // s2: magnitude `x = 512 t + y` (`|-2^16|` is bit 16); `y^2 >> 2` from the tables, `y`'s
         // low bit, `t (256 + y) << 10` summed over the axes, a magnitude of 2^10 or more.
         for k in 0..3 {
