@@ -90,10 +90,11 @@ pub const MAX_PARTICLES: usize = pficp_fpga::weights::MAX_PARTICLES;
 /// The modelled board time of a run is multiplied by this for the run's time limit.
 pub const RUN_SAFETY: u32 = 4;
 /// Time between two Status requests while a filter runs: the registration's latency waits
-/// up to this long after the board is done (a run takes about 0.1 s), while a poll costs the
-/// line about 30 bytes (0.1 ms at 3 Mbaud, 2.6 ms at 115,200) and the board nothing (Status
-/// is answered beside the running filter).
-pub const DEFAULT_POLL: Duration = Duration::from_millis(5);
+/// up to this long after the board is done (a run takes about 0.1 s, so 5 ms, the period
+/// before, cost 2.5 ms on average), while a poll costs the line about 30 bytes (0.1 ms at
+/// 3 Mbaud; at 115,200 baud its 2.6 ms exceed the period and the polls go back to back) and
+/// the board nothing (Status is answered beside the running filter).
+pub const DEFAULT_POLL: Duration = Duration::from_millis(1);
 
 /// Counters of one client's traffic.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

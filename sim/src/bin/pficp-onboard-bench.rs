@@ -15,7 +15,7 @@
 //! the one the upload leaves, as the host's `ensure_grid` checks) and sends only the scan
 //! sample. Each one's board time is every clock from the first byte of Identify to the last
 //! byte of the Result reply: Identify, the loads, SetSizes, Run, the filter, a Status poll
-//! every `pficp::board::DEFAULT_POLL` of board time (5 ms, as the host client polls), Status
+//! every `pficp::board::DEFAULT_POLL` of board time (1 ms, as the host client polls), Status
 //! and Result.
 //! The board's bytes are compared with the byte-level reference on the way (Status replies
 //! of a running filter excepted). The prior and the polish run on the host (not timed here:
