@@ -10,7 +10,9 @@
 //! addresses of range A through the A lanes and of range B through the B lanes a clock (a
 //! *chunk* each), the model RAM held twice (one copy a set) and banked `P` ways by address
 //! so that any `P` consecutive addresses are one read of each bank. A slot costs
-//! `max(ceil(len_a / P), ceil(len_b / P))` clocks. The B lanes use no DSP48A1: a difference
+//! `max(ceil(len_a / P), ceil(len_b / P))` clocks. The last slot holds the centre row alone
+//! (the row most likely to be long) and splits it: the A lanes take its even chunks, the B
+//! lanes its odd ones, `ceil(len / 2P)` clocks. The B lanes use no DSP48A1: a difference
 //! of `2^10` or more along an axis gives a capped key anyway, so they square 10-bit
 //! magnitudes from block-RAM tables ([`B_SQUARE_LIMIT`]). A pipelined min-tree reduces a
 //! chunk pair to one `(d2, index)`, an accumulator the chunks of a point.
@@ -155,7 +157,9 @@ struct Entry {
 }
 
 /// The chunk issue: the entry being issued, range A (`a.0 .. a.1`, while `av`) through the A
-/// lanes and range B (while `bv`) through the B lanes, one chunk of each a clock.
+/// lanes and range B (while `bv`) through the B lanes, one chunk of each a clock (in a
+/// point's last slot, `last`, range B is the centre row from its second chunk on and both
+/// step `2P`).
 #[derive(Clone, Copy, Debug, Default)]
 struct Issue {
     have: bool,
@@ -359,7 +363,12 @@ impl NeighbourPipelineModel {
         // point's last slot, which is queued as a marker.
         if self.rd.valid {
             let ra = (self.rd.in_a && self.tq[0].0 < self.tq[0].1).then_some(self.tq[0]);
-            let rb = (self.rd.in_b && self.tq[1].0 < self.tq[1].1).then_some(self.tq[1]);
+            let mut rb = (self.rd.in_b && self.tq[1].0 < self.tq[1].1).then_some(self.tq[1]);
+            if self.rd.last {
+                // The centre row, split: the A lanes take its even chunks, the B lanes its
+                // odd ones (from `lo + P`, 14-bit sum, so no wrap), both striding `2P`.
+                rb = ra.and_then(|(lo, hi)| (lo as usize + p < hi as usize).then_some((lo + p as u16, hi)));
+            }
             if ra.is_some() || rb.is_some() || self.rd.last {
                 next.queue.push_back(Entry { a: ra, b: rb, last: self.rd.last, slast: self.rd.slast, q: self.rd.q });
             }
@@ -367,10 +376,12 @@ impl NeighbourPipelineModel {
         // Issue: one chunk of each range a clock, range A through the A lanes and range B
         // through the B lanes, `addr .. min(addr + P, end)` each; lane `b` of a side takes its
         // side's bank `b`, row `(addr >> log2 P) + (b < addr mod P)`, valid if the side's
-        // range is still running and its address is below `end`. A side whose chunk reaches
-        // its end stops; the entry is done when both have (a marker: at once, one clock with
-        // no valid lane).
+        // range is still running and its address is below `end`. A side then steps on by the
+        // stride (`P`; `2P` in a point's last slot, the split centre row); one whose next
+        // chunk would start at or past its end stops; the entry is done when both have (a
+        // marker: at once, one clock with no valid lane).
         let is = self.is;
+        let stride = if is.last { 2 * p } else { p };
         let mut bank_row = Vec::with_capacity(2 * p);
         let mut lane_valid = Vec::with_capacity(2 * p);
         let mut fin = [false; 2];
@@ -379,7 +390,7 @@ impl NeighbourPipelineModel {
             bank_row.extend((0..p).map(|b| ((base + (b < off) as usize) % (MAX_POINTS / p)) as u16));
             let span = end as usize - (addr as usize).min(end as usize);
             lane_valid.extend((0..p).map(|b| is.have && v && (b + p - off) % p < span.min(p)));
-            fin[side] = addr as usize + p >= end as usize;
+            fin[side] = addr as usize + stride >= end as usize;
         }
         next.bank_q = (0..2 * p).map(|j| ram[((bank_row[j] as usize) << self.log2) | (j % p)]).collect();
         let done = is.have && (!is.av || fin[0]) && (!is.bv || fin[1]);
@@ -389,10 +400,10 @@ impl NeighbourPipelineModel {
             next.is.av = is.av && !fin[0];
             next.is.bv = is.bv && !fin[1];
             if is.av && !fin[0] {
-                next.is.a.0 = is.a.0 + p as u16;
+                next.is.a.0 = is.a.0 + stride as u16;
             }
             if is.bv && !fin[1] {
-                next.is.b.0 = is.b.0 + p as u16;
+                next.is.b.0 = is.b.0 + stride as u16;
             }
         }
         next.c0 = (Ctl { valid: is.have, last: done && is.last, slast: is.slast }, is.q, lane_valid, bank_row);
@@ -588,8 +599,9 @@ pub fn clocks_per_particle(grid: &Grid, scan: &[FxPoint], pose: &FxPose, lanes: 
 
 /// The issue clocks a point's rows take (a lower bound of what it needs): over its slots
 /// ([`SLOTS`]), `max(ceil(len_a / P), ceil(len_b / P))` (the slot's rows A and B go through
-/// the A and B lanes in the same clocks; a row outside the grid or empty counts 0), summed;
-/// at least one (a point whose last slot finds no range takes a marker chunk).
+/// the A and B lanes in the same clocks; a row outside the grid or empty counts 0), and
+/// `ceil(len / 2P)` for the last slot's centre row, split over both sides; summed; at least
+/// one (a point whose last slot finds no range takes a marker chunk).
 pub fn chunks_of(grid: &Grid, q: FxPoint, lanes: usize) -> usize {
     let k = q.map(axis_cell);
     let len = |(inside, lo, hi): (bool, usize, usize)| {
@@ -600,7 +612,10 @@ pub fn chunks_of(grid: &Grid, q: FxPoint, lanes: usize) -> usize {
         }
     };
     (0..SLOTS.len())
-        .map(|s| NeighbourPipelineModel::slot_rows(k, s).map(|r| len(r).div_ceil(lanes)).into_iter().max().unwrap_or(0))
+        .map(|s| {
+            let per_chunk = if s == SLOTS.len() - 1 { 2 * lanes } else { lanes };
+            NeighbourPipelineModel::slot_rows(k, s).map(|r| len(r).div_ceil(per_chunk)).into_iter().max().unwrap_or(0)
+        })
         .sum::<usize>()
         .max(1)
 }

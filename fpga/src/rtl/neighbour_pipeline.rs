@@ -61,6 +61,8 @@ pub struct NeighbourPipeline<const P: usize> {
     pub cost: Signal<Out, Bits<48>>,
     pc13: Constant<Bits<13>>,
     pc14: Constant<Bits<14>>,
+    pc13x2: Constant<Bits<13>>,
+    pc14x2: Constant<Bits<14>>,
     c_off: Constant<Bits<6>>,
     cap_key: Constant<Bits<33>>,
     qid: [Constant<Bits<2>>; 4],
@@ -174,10 +176,14 @@ pub struct NeighbourPipeline<const P: usize> {
     rb_in: Signal<Local, Bit>,
     ra_ok: Signal<Local, Bit>,
     rb_ok: Signal<Local, Bit>,
+    split_lo: Signal<Local, Bits<14>>,
+    split_ok: Signal<Local, Bit>,
     push: Signal<Local, Bit>,
     rq_pop: Signal<Local, Bit>,
     span: Signal<Local, Bits<14>>,
     span_b: Signal<Local, Bits<14>>,
+    stride13: Signal<Local, Bits<13>>,
+    stride14: Signal<Local, Bits<14>>,
     fin_a: Signal<Local, Bit>,
     fin_b: Signal<Local, Bit>,
     done: Signal<Local, Bit>,
@@ -213,6 +219,8 @@ impl<const P: usize> NeighbourPipeline<P> {
             cost: Default::default(),
             pc13: Constant::new((P as u64).into()),
             pc14: Constant::new((P as u64).into()),
+            pc13x2: Constant::new((2 * P as u64).into()),
+            pc14x2: Constant::new((2 * P as u64).into()),
             c_off: Constant::new(32.into()),
             cap_key: Constant::new((CAP_D2 << 12).into()),
             qid: std::array::from_fn(|j| Constant::new((j as u64).into())),
@@ -319,10 +327,14 @@ impl<const P: usize> NeighbourPipeline<P> {
             rb_in: Default::default(),
             ra_ok: Default::default(),
             rb_ok: Default::default(),
+            split_lo: Default::default(),
+            split_ok: Default::default(),
             push: Default::default(),
             rq_pop: Default::default(),
             span: Default::default(),
             span_b: Default::default(),
+            stride13: Default::default(),
+            stride14: Default::default(),
             fin_a: Default::default(),
             fin_b: Default::default(),
             done: Default::default(),
@@ -669,15 +681,25 @@ impl<const P: usize> Logic for NeighbourPipeline<P> {
         self.ra_ok.next = self.rd_in_a.q.val() && (self.lo_a.read_data.val() < self.hi_a.read_data.val());
         self.rb_ok.next = self.rd_in_b.q.val() && (self.lo_b.read_data.val() < self.hi_b.read_data.val());
         self.push.next = self.rd_valid.q.val() && (self.ra_ok.val() || self.rb_ok.val() || self.rd_last.q.val());
+        // A point's last slot (the centre row alone) is split: its row B is row A from
+        // `lo + P` on (a 14-bit sum, no wrap), if that is below `hi`; both sides stride `2P`.
+        self.split_lo.next = bit_cast::<14, 13>(self.lo_a.read_data.val()) + self.pc14.val();
+        self.split_ok.next = self.ra_ok.val() && (self.split_lo.val() < bit_cast::<14, 13>(self.hi_a.read_data.val()));
         if self.push.val() {
             for j in 0..4 {
                 if self.rq_wr.q.val() == self.qid[j].val() {
                     self.rq_alo[j].d.next = self.lo_a.read_data.val();
                     self.rq_ahi[j].d.next = self.hi_a.read_data.val();
-                    self.rq_blo[j].d.next = self.lo_b.read_data.val();
-                    self.rq_bhi[j].d.next = self.hi_b.read_data.val();
                     self.rq_av[j].d.next = self.ra_ok.val();
-                    self.rq_bv[j].d.next = self.rb_ok.val();
+                    if self.rd_last.q.val() {
+                        self.rq_blo[j].d.next = self.split_lo.val().get_bits::<13>(0);
+                        self.rq_bhi[j].d.next = self.hi_a.read_data.val();
+                        self.rq_bv[j].d.next = self.split_ok.val();
+                    } else {
+                        self.rq_blo[j].d.next = self.lo_b.read_data.val();
+                        self.rq_bhi[j].d.next = self.hi_b.read_data.val();
+                        self.rq_bv[j].d.next = self.rb_ok.val();
+                    }
                     self.rq_last[j].d.next = self.rd_last.q.val();
                     self.rq_slast[j].d.next = self.rd_slast.q.val();
                     self.rq_q[j].d.next = self.rd_q.q.val();
@@ -686,9 +708,16 @@ impl<const P: usize> Logic for NeighbourPipeline<P> {
             self.rq_wr.d.next = self.rq_wr.q.val() + 1;
         }
         // Issue: one chunk of each range a clock, range A (`is_addr .. is_end`) through the A
-        // lanes and range B (`is_baddr .. is_bend`) through the B lanes; a side stops with its
-        // last chunk, the entry is done when both have (a marker at once), and its last
-        // chunk pair takes the next entry.
+        // lanes and range B (`is_baddr .. is_bend`) through the B lanes, each side stepping
+        // by the stride (`P`, or `2P` in a point's last slot, the split centre row); a side
+        // stops with its last chunk, the entry is done when both have (a marker at once), and
+        // its last chunk pair takes the next entry.
+        self.stride13.next = self.pc13.val();
+        self.stride14.next = self.pc14.val();
+        if self.is_last.q.val() {
+            self.stride13.next = self.pc13x2.val();
+            self.stride14.next = self.pc14x2.val();
+        }
         self.span.next = bit_cast::<14, 13>(self.is_end.q.val()) - bit_cast::<14, 13>(self.is_addr.q.val());
         self.span_b.next = bit_cast::<14, 13>(self.is_bend.q.val()) - bit_cast::<14, 13>(self.is_baddr.q.val());
         for b in 0..P {
@@ -701,8 +730,8 @@ impl<const P: usize> Logic for NeighbourPipeline<P> {
             self.lanes_b[b].span.next = self.span_b.val();
             self.lanes_b[b].q.next = self.c0_q.q.val();
         }
-        self.fin_a.next = self.span.val() <= self.pc14.val();
-        self.fin_b.next = self.span_b.val() <= self.pc14.val();
+        self.fin_a.next = self.span.val() <= self.stride14.val();
+        self.fin_b.next = self.span_b.val() <= self.stride14.val();
         self.done.next = self.is_have.q.val()
             && (!self.is_av.q.val() || self.fin_a.val())
             && (!self.is_bv.q.val() || self.fin_b.val());
@@ -712,14 +741,14 @@ impl<const P: usize> Logic for NeighbourPipeline<P> {
                 if self.fin_a.val() {
                     self.is_av.d.next = false;
                 } else {
-                    self.is_addr.d.next = self.is_addr.q.val() + self.pc13.val();
+                    self.is_addr.d.next = self.is_addr.q.val() + self.stride13.val();
                 }
             }
             if self.is_bv.q.val() {
                 if self.fin_b.val() {
                     self.is_bv.d.next = false;
                 } else {
-                    self.is_baddr.d.next = self.is_baddr.q.val() + self.pc13.val();
+                    self.is_baddr.d.next = self.is_baddr.q.val() + self.stride13.val();
                 }
             }
         }
