@@ -5,9 +5,9 @@
 //! nine rows (a slot) a clock from two copies of the cell table (four 4096 x 13 block RAMs);
 //! a queue of looked-up slots; the chunk issue (`P` consecutive addresses of each of the
 //! slot's two ranges a clock; a point's last slot, the centre row, split over both sets,
-//! even chunks A, odd chunks B, stride `2P`); `P` [`NeighbourLane`]s (A, range A, squares in DSP48A1s) and
-//! `P` [`NeighbourLaneB`]s (B, range B, squares from block-RAM tables), each with its bank of
-//! the model RAM (two copies, written together); a registered min-tree over `(d2, index)`
+//! even chunks A, odd chunks B, stride `2P`); `P` [`NeighbourLane`]s (A, range A, squares in
+//! DSP48A1s) and `P` [`NeighbourLaneB`]s (B, range B, squares from block-RAM tables), each
+//! with its bank of the model RAM (two copies, written together); a registered min-tree over `(d2, index)`
 //! keys, four levels a side and one across; the per-point accumulator and the cost.
 
 use super::neighbour_lane::{NeighbourLane, NeighbourLaneB};
