@@ -9,6 +9,8 @@
 //! - [`pipeline`]: the cycle-accurate reference of the nearest-neighbour pipeline.
 //! - [`neighbour_pipeline`]: the cycle-accurate reference of the neighbour pipeline (lanes
 //!   over one scan point's candidates in its 27 cells) and its functional reference.
+//! - [`surface`]: the surface residual (distance to the nearest model point's tangent
+//!   plane), its normal format and bit-exact rule.
 //! - [`weights`]: the cycle-accurate reference of the weight stage (minimum cost, exp table).
 //! - [`particle_weights`]: the two wired together, as the RTL top of that name.
 //! - [`pf`]: the on-board particle filter's bit-exact functional reference (`pf::run`), its
@@ -38,4 +40,5 @@ pub mod rtl;
 pub mod seq_state;
 pub mod sequencer;
 pub mod splitmix;
+pub mod surface;
 pub mod weights;
