@@ -41,6 +41,13 @@ impl Normalisation {
     }
 }
 
+/// A unit normal in the board's format ([`pficp_fpga::surface::FxNormal`]): each component
+/// times `2^NORMAL_FRAC`, rounded, clamped to `+-2^NORMAL_FRAC` (a non-finite component gives 0).
+pub fn quantise_normal(n: &Vector3<f64>) -> pficp_fpga::surface::FxNormal {
+    let one = (1u32 << pficp_fpga::surface::NORMAL_FRAC) as f64;
+    n.map(|v| if v.is_finite() { (v * one).round().clamp(-one, one) as i16 } else { 0 }).into()
+}
+
 /// The pose between normalised clouds for a pose between the original ones.
 pub fn normalised_pose(pose: &Pose, scan: &Normalisation, model: &Normalisation) -> Pose {
     Pose {

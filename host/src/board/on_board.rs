@@ -17,7 +17,7 @@ use crate::nn::NearestNeighbours;
 use crate::pf_icp::{prior, weight_sample, PfIcpResult, PfIcpSettings, Prior, StageTimes};
 use crate::registration::icp::Registration;
 use nalgebra::Point3;
-use pficp_fpga::format::{FxPoint, DIST_FRAC};
+use pficp_fpga::format::{coord_to_f64, FxPoint, DIST_FRAC};
 use pficp_fpga::grid::Grid;
 use pficp_fpga::messages::{Identity, ResultReply, RunState, MAX_D2_MASK, NO_COST};
 use pficp_fpga::pf::{
@@ -234,6 +234,29 @@ impl OnBoardPlan {
     pub fn emulate(&self) -> pficp_fpga::pf::PfOutcome {
         pficp_fpga::pf::run(&self.config, |p| evaluate(&self.grid, &self.scan, p))
     }
+
+    /// The filter as it would run with the surface residual (`pficp_fpga::surface`) as the
+    /// cost in place of the point-to-point distance, `normals` those of [`stored_normals`]:
+    /// the evidence for the residual stage (not yet on the board, so not a board mode).
+    pub fn emulate_surface(&self, normals: &[pficp_fpga::surface::FxNormal]) -> pficp_fpga::pf::PfOutcome {
+        pficp_fpga::pf::run(&self.config, |p| pficp_fpga::surface::evaluate(&self.grid, normals, &self.scan, p))
+    }
+}
+
+/// The normals of the stored model points (the grid's order), in the board's format: each
+/// point's principal axis of least spread over itself and its 8 nearest stored neighbours,
+/// as the host's surface computes them (`pf_icp::surface`), from the quantised points the
+/// board stores, so they depend on nothing but the store.
+pub fn stored_normals(grid: &Grid) -> Vec<pficp_fpga::surface::FxNormal> {
+    let pts: Vec<Point3<f64>> =
+        grid.points.iter().map(|p| Point3::new(coord_to_f64(p[0]), coord_to_f64(p[1]), coord_to_f64(p[2]))).collect();
+    let nn = NearestNeighbours::new(&pts);
+    pts.iter()
+        .map(|p| {
+            let near: Vec<Point3<f64>> = nn.nearest_k(p, 9).iter().map(|c| pts[c.index]).collect();
+            crate::board::fixed::quantise_normal(&crate::pf_icp::surface::least_axis(&near))
+        })
+        .collect()
 }
 
 /// `pficp_fpga::pf::evaluate` (the board's cost and largest distance for a pose), computed

@@ -85,7 +85,7 @@ pub struct Degeneracy {
 }
 
 /// Principal axis of least spread of `points` (unit; `z` if degenerate).
-pub(crate) fn least_axis(points: &[Point3<f64>]) -> Vector3<f64> {
+pub fn least_axis(points: &[Point3<f64>]) -> Vector3<f64> {
     let c = points.iter().fold(Vector3::zeros(), |a, p| a + p.coords) / points.len().max(1) as f64;
     let mut cov = Matrix3::zeros();
     for p in points {

@@ -1,0 +1,67 @@
+//! What the surface residual (`pficp_fpga::surface`) would change on the board: the board's
+//! pose alone (no host polish) with the filter's cost as today (point-to-point, capped) and
+//! with the residual along the nearest stored point's normal, on the realistic benchmark's
+//! quick set (8 cases a family, seed 1), the board sample of `on_board::DEFAULT_BOARD_POINTS`
+//! scan points. Both columns run `pficp_fpga::pf::run`, the board's bit-exact filter, on the
+//! same plan; only the cost differs.
+//!
+//! Slow (a minute or two): ignored by default. Run it with
+//! `cargo test --release -p pficp-host --test surface_residual_figures -- --ignored --nocapture`
+//! (`PFICP_SPLIT=test` for the test split, default dev; `PFICP_BOARD_POINTS=N` for another
+//! sample size). The tables it printed are in docs/decisions.md, "The surface residual".
+
+use pficp::board::on_board::{self, plan, stored_normals};
+use pficp::eval::realistic::{case, score, Family, Split};
+use pficp::nn::NearestNeighbours;
+use pficp::pf_icp::PfIcpSettings;
+use rayon::prelude::*;
+
+#[test]
+#[ignore = "a minute or two in release; prints the table of docs/decisions.md"]
+fn the_board_alone_with_the_surface_residual() {
+    let split = if std::env::var("PFICP_SPLIT").is_ok_and(|v| v == "test") { Split::Test } else { Split::Dev };
+    let points =
+        std::env::var("PFICP_BOARD_POINTS").ok().and_then(|v| v.parse().ok()).unwrap_or(on_board::DEFAULT_BOARD_POINTS);
+    println!("split {split:?}, seed 1, 8 cases a family, {points} board points; the board's pose alone");
+    println!("| family | point-to-point (today) | surface residual |");
+    println!("|---|---|---|");
+    let mut totals = [0usize; 3];
+    for family in Family::ALL {
+        let rows: Vec<(String, [bool; 2], [String; 2])> = (0..8)
+            .into_par_iter()
+            .map(|i| {
+                let c = case(family, i, split, 1);
+                let nn = NearestNeighbours::new(&c.model);
+                let settings = PfIcpSettings { seed: c.seed, ..Default::default() };
+                let plan = plan(&nn, &c.scan, &settings, points, pficp::board::MAX_POINTS).expect("plan");
+                let normals = stored_normals(&plan.grid);
+                let outs = [plan.emulate(), plan.emulate_surface(&normals)];
+                let scores =
+                    outs.map(|o| score(&on_board::params_pose(&o.params, &plan.model_norm, &plan.scan_norm), &c));
+                let ok = [scores[0].success, scores[1].success];
+                let text = scores.map(|s| {
+                    format!(
+                        "{:.2} deg, {:.2}% tr, {:.2}% sc",
+                        s.rotation_deg,
+                        100.0 * s.translation_frac,
+                        100.0 * s.scale_frac
+                    )
+                });
+                (c.id.clone(), ok, text)
+            })
+            .collect();
+        let count = |k: usize| rows.iter().filter(|r| r.1[k]).count();
+        println!("| {} | {}/8 | {}/8 |", family.name(), count(0), count(1));
+        for r in &rows {
+            if !(r.1[0] && r.1[1]) {
+                eprintln!("  {}: point-to-point {} ({}), surface {} ({})", r.0, r.1[0], r.2[0], r.1[1], r.2[1]);
+            }
+        }
+        totals[0] += count(0);
+        totals[1] += count(1);
+        totals[2] += 8;
+    }
+    println!("| all | {}/{} | {}/{} |", totals[0], totals[2], totals[1], totals[2]);
+    // The residual is the better cost on this set or the change is wrong.
+    assert!(totals[1] >= totals[0], "the surface residual lost cases: {} against {}", totals[1], totals[0]);
+}
