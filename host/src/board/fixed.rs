@@ -121,6 +121,12 @@ mod tests {
     }
 
     #[test]
+    fn normals_quantise_to_the_board_format() {
+        assert_eq!(quantise_normal(&Vector3::new(0.6, -0.8, 0.0)), [9830, -13107, 0]);
+        assert_eq!(quantise_normal(&Vector3::new(1.5, -2.0, f64::NAN)), [16384, -16384, 0]);
+    }
+
+    #[test]
     fn normalised_cloud_fits_the_unit_ball() {
         let pts: Vec<_> = (0..50).map(|i| Point3::new(i as f64, (i * i) as f64 * 0.1, -3.0)).collect();
         let n = Normalisation::of(&pts);

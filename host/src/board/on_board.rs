@@ -461,3 +461,29 @@ pub fn register_on_board(
         pf,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stored_normals_of_a_tilted_patch_are_its_normal() {
+        // A patch of the plane z = 0.5 x, in the board's format; its unit normal is
+        // (-0.5, 0, 1) / |.|, either sign.
+        let mut model = Vec::new();
+        for i in -12..12 {
+            for j in -12..12 {
+                let (x, y) = (i as f64 * 0.03, j as f64 * 0.027);
+                model.push(pficp_fpga::format::point([x, y, 0.5 * x]));
+            }
+        }
+        let grid = Grid::build(&model).unwrap();
+        let normals = stored_normals(&grid);
+        assert_eq!(normals.len(), grid.points.len());
+        let want = nalgebra::Vector3::new(-0.5, 0.0, 1.0).normalize() * 16384.0;
+        for n in normals {
+            let n = nalgebra::Vector3::new(n[0] as f64, n[1] as f64, n[2] as f64);
+            assert!((n.dot(&want).abs() - 16384.0 * 16384.0).abs() < 16384.0 * 40.0, "{n:?}");
+        }
+    }
+}
