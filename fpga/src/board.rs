@@ -120,12 +120,12 @@ use crate::format::{unpack_point, FxPoint, WeightScale, MAX_POINTS};
 use crate::messages::{
     pose_from_bytes, two_u16, EvaluateReply, Identity, NearestReply, ResultReply, RunState, StatusReply, WeightSummary,
     EVALUATE_HEADER_BYTES, FLAG_FIRST, FLAG_LAST, LOAD_HEADER_BYTES, MAX_LOAD_ENTRIES, MAX_LOAD_POINTS, MAX_NEAREST,
-    MAX_POSES, NEAREST_REQUEST_BYTES, POINT_BYTES, POSE_BYTES, RUN_REPLY_BYTES, TABLE_ENTRIES, TABLE_ENTRY_BYTES,
-    TABLE_ENTRY_MASK, TWO_U16_BYTES, W_SUM_MASK,
+    MAX_POSES, MODEL_WORDS, NEAREST_REQUEST_BYTES, NORMALS_OFFSET, POINT_BYTES, POSE_BYTES, RUN_REPLY_BYTES,
+    TABLE_ENTRIES, TABLE_ENTRY_BYTES, TABLE_ENTRY_MASK, TWO_U16_BYTES, W_SUM_MASK,
 };
-use crate::neighbour_pipeline::evaluate_stored;
 use crate::pf::{PfConfig, PfOutcome};
 use crate::protocol::{digest_update, Command, Deframer, ErrorCode, Frame, DIGEST_INIT, DIGEST_NONE};
+use crate::surface::{evaluate_stored, Scored};
 use crate::weights::{weights, COST_MAX, MAX_PARTICLES};
 
 /// The byte-level reference of the whole board (docs/protocol.md): the receiver
@@ -139,6 +139,7 @@ use crate::weights::{weights, COST_MAX, MAX_PARTICLES};
 pub struct BoardModel {
     config: BoardConfig,
     model: Vec<u64>,
+    normals: Vec<u64>,
     table: Vec<u16>,
     scan: Vec<u64>,
     model_count: u16,
@@ -159,6 +160,7 @@ impl BoardModel {
         BoardModel {
             config,
             model: vec![0; MAX_POINTS],
+            normals: vec![0; MAX_POINTS],
             table: vec![0; TABLE_ENTRIES],
             scan: vec![0; MAX_POINTS],
             model_count: 0,
@@ -213,6 +215,12 @@ impl BoardModel {
         &self.model
     }
 
+    /// The normal store (4,096 packed normals, `crate::surface::FxNormal`; LoadModel's words
+    /// from `messages::NORMALS_OFFSET`).
+    pub fn normal_store(&self) -> &[u64] {
+        &self.normals
+    }
+
     /// The cell table (4,097 entries of 13 bits, `grid::Grid::first`).
     pub fn table_store(&self) -> &[u16] {
         &self.table
@@ -256,10 +264,11 @@ impl BoardModel {
         store[range].iter().map(|&w| unpack_point(w)).collect()
     }
 
-    /// The grid search over the stores as they are (docs/pipeline.md, "The grid pipeline"):
-    /// what the RTL computes for `scan` at `pose`, whatever the table holds.
-    fn search(&self, scan: &[FxPoint], pose: &crate::format::FxPose) -> crate::pipeline::Evaluation {
-        evaluate_stored(&self.model, &self.table, scan, pose)
+    /// The grid search and the surface residual over the stores as they are
+    /// (docs/pipeline.md, "The neighbour pipeline" and "The surface residual"): what the RTL
+    /// computes for `scan` at `pose`, whatever the stores hold.
+    fn search(&self, scan: &[FxPoint], pose: &crate::format::FxPose) -> Scored {
+        evaluate_stored(&self.model, &self.normals, &self.table, scan, pose)
     }
 
     /// The command engine: checks in the order of docs/protocol.md (code, lengths,
@@ -297,12 +306,17 @@ impl BoardModel {
                 if count == 0 || count > MAX_LOAD_POINTS || d.len() != LOAD_HEADER_BYTES + POINT_BYTES * count {
                     return Err(BadLength);
                 }
-                if offset + count > MAX_POINTS {
+                let words = if command == Command::LoadModel { MODEL_WORDS } else { MAX_POINTS };
+                if offset + count > words {
                     return Err(OverCapacity);
                 }
-                let store = if command == Command::LoadModel { &mut self.model } else { &mut self.scan };
                 for (k, p) in d[LOAD_HEADER_BYTES..].chunks_exact(POINT_BYTES).enumerate() {
-                    store[offset + k] = le(p);
+                    let a = offset + k;
+                    match command {
+                        Command::LoadScan => self.scan[a] = le(p),
+                        _ if a < NORMALS_OFFSET => self.model[a] = le(p),
+                        _ => self.normals[a - NORMALS_OFFSET] = le(p),
+                    }
                 }
                 if command == Command::LoadModel {
                     if offset == 0 {
@@ -399,7 +413,7 @@ impl BoardModel {
                     return Err(OverCapacity);
                 }
                 let scan = Self::points(&self.scan, 0..self.scan_count as usize);
-                let outcome = crate::pf::run(&cfg, |pose| crate::pf::Evaluated::of(&self.search(&scan, pose)));
+                let outcome = crate::pf::run(&cfg, |pose| self.search(&scan, pose).evaluated());
                 self.outcome = Some(outcome);
                 Ok(d[..RUN_REPLY_BYTES].to_vec())
             }

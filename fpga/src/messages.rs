@@ -267,22 +267,41 @@ pub fn table_request(offset: u16, entries: &[u16]) -> Vec<u8> {
     out
 }
 
+/// LoadModel's word offset of the normal store: words `0..MAX_POINTS` are the model points,
+/// `NORMALS_OFFSET + i` the normal of stored point `i` (`crate::surface::FxNormal`, packed
+/// as a point).
+pub const NORMALS_OFFSET: usize = MAX_POINTS;
+/// LoadModel's words: the points, then their normals.
+pub const MODEL_WORDS: usize = 2 * MAX_POINTS;
+
 /// The requests (command, data) that upload a gridded model: LoadModel frames of its
-/// points as stored (sorted by cell), then LoadTable frames of its whole cell table.
-pub fn grid_upload(grid: &crate::grid::Grid) -> Vec<(crate::protocol::Command, Vec<u8>)> {
+/// points as stored (sorted by cell), LoadModel frames of their normals (`normals[i]` the
+/// normal of stored point `i`, from word [`NORMALS_OFFSET`]), then LoadTable frames of its
+/// whole cell table.
+pub fn grid_upload(
+    grid: &crate::grid::Grid,
+    normals: &[crate::surface::FxNormal],
+) -> Vec<(crate::protocol::Command, Vec<u8>)> {
     use crate::protocol::Command;
+    assert_eq!(normals.len(), grid.points.len(), "one normal per stored model point");
     let points = grid.points.chunks(MAX_LOAD_POINTS).enumerate();
+    let normals = normals.chunks(MAX_LOAD_POINTS).enumerate();
     let entries = grid.first.chunks(MAX_LOAD_ENTRIES).enumerate();
     points
         .map(|(k, c)| (Command::LoadModel, load_request((k * MAX_LOAD_POINTS) as u16, c)))
+        .chain(
+            normals.map(|(k, c)| (Command::LoadModel, load_request((NORMALS_OFFSET + k * MAX_LOAD_POINTS) as u16, c))),
+        )
         .chain(entries.map(|(k, c)| (Command::LoadTable, table_request((k * MAX_LOAD_ENTRIES) as u16, c))))
         .collect()
 }
 
 /// The model digest a board reports after [`grid_upload`]'s requests (the first a LoadModel
 /// at offset 0): what a host compares with Identify's to skip the upload.
-pub fn grid_digest(grid: &crate::grid::Grid) -> u32 {
-    grid_upload(grid).iter().fold(crate::protocol::DIGEST_INIT, |d, (_, data)| crate::protocol::digest_update(d, data))
+pub fn grid_digest(grid: &crate::grid::Grid, normals: &[crate::surface::FxNormal]) -> u32 {
+    grid_upload(grid, normals)
+        .iter()
+        .fold(crate::protocol::DIGEST_INIT, |d, (_, data)| crate::protocol::digest_update(d, data))
 }
 
 /// Bytes of two u16 fields.

@@ -23,7 +23,7 @@
 //!
 //! Any stored normal is allowed (the host stores unit normals; a zero normal gives 0).
 
-use crate::format::{transform, FxPoint, FxPose};
+use crate::format::{transform, unpack_point, FxPoint, FxPose};
 use crate::grid::{Grid, CAP_D2, NONE};
 
 /// Fraction bits of a normal's component.
@@ -48,28 +48,72 @@ pub fn residual(q: FxPoint, p: FxPoint, n: FxNormal, d2: u64) -> u64 {
 
 /// The residual of every scan point under `pose` over the gridded model with its normals
 /// (`normals[i]` the normal of stored point `i`, [`Grid::points`]' order): the grid search's
-/// nearest point ([`Grid::nearest`]), then [`residual`].
-pub fn residuals(grid: &Grid, normals: &[FxNormal], scan: &[FxPoint], pose: &FxPose) -> Vec<u64> {
+/// nearest point ([`Grid::nearest`]), then [`residual`]. Equal to [`evaluate_stored`] over
+/// the stores the upload writes (`crate::messages::grid_upload`).
+pub fn scored(grid: &Grid, normals: &[FxNormal], scan: &[FxPoint], pose: &FxPose) -> Scored {
     assert_eq!(normals.len(), grid.points.len(), "one normal per stored model point");
-    scan.iter()
+    let (nearest, residuals) = scan
+        .iter()
         .map(|&p| {
             let q = transform(pose, p);
             let nr = grid.nearest(q);
             if nr.index == NONE {
-                CAP_D2
+                ((0, CAP_D2), CAP_D2)
             } else {
-                residual(q, grid.points[nr.index as usize], normals[nr.index as usize], nr.d2)
+                let i = nr.index as usize;
+                ((nr.index, nr.d2), residual(q, grid.points[i], normals[i], nr.d2))
             }
         })
-        .collect()
+        .unzip();
+    Scored::new(nearest, residuals)
 }
 
-/// What the filter would take from the residual stage for a pose: the cost (the sum of the
+/// What the filter takes from the board for a pose ([`scored`]): the cost (the sum of the
 /// residuals, wrapping at 48 bits) and the largest residual.
 pub fn evaluate(grid: &Grid, normals: &[FxNormal], scan: &[FxPoint], pose: &FxPose) -> crate::pf::Evaluated {
-    let r = residuals(grid, normals, scan, pose);
-    let cost = r.iter().fold(0u64, |c, &x| (c + x) & crate::format::COST_MASK);
-    crate::pf::Evaluated { cost, max_d2: r.iter().copied().max().unwrap_or(0) }
+    scored(grid, normals, scan, pose).evaluated()
+}
+
+/// What the board computes for a pose over its raw stores, whatever they hold: the model
+/// store `ram` and the normal store `normals` ([`crate::format::MAX_POINTS`] packed words
+/// each) and the cell table `first`. The neighbour pipeline's results
+/// ([`crate::neighbour_pipeline::evaluate_stored`]: `(index, d2)`, capped as `(0, CAP_D2)`),
+/// then each result's [`residual`] against the stored point and normal at its index.
+pub fn evaluate_stored(ram: &[u64], normals: &[u64], first: &[u16], scan: &[FxPoint], pose: &FxPose) -> Scored {
+    assert_eq!(normals.len(), ram.len(), "a normal store as large as the model store");
+    let nearest = crate::neighbour_pipeline::evaluate_stored(ram, first, scan, pose).nearest;
+    let residuals: Vec<u64> = scan
+        .iter()
+        .zip(&nearest)
+        .map(|(&p, &(i, d2))| {
+            residual(transform(pose, p), unpack_point(ram[i as usize]), unpack_point(normals[i as usize]), d2)
+        })
+        .collect();
+    Scored::new(nearest, residuals)
+}
+
+/// A pose's results with their residuals, as the residual stage presents them.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Scored {
+    /// Per scan point: the nearest stored index and squared distance (`(0, CAP_D2)` capped).
+    pub nearest: Vec<(u16, u64)>,
+    /// Per scan point: its residual.
+    pub residuals: Vec<u64>,
+    /// The sum of the residuals, wrapping at 48 bits (the board's cost).
+    pub cost: u64,
+}
+
+impl Scored {
+    /// The cost summed from the residuals.
+    pub fn new(nearest: Vec<(u16, u64)>, residuals: Vec<u64>) -> Self {
+        let cost = residuals.iter().fold(0u64, |c, &x| (c + x) & crate::format::COST_MASK);
+        Scored { nearest, residuals, cost }
+    }
+
+    /// What the filter takes: the cost and the largest residual.
+    pub fn evaluated(&self) -> crate::pf::Evaluated {
+        crate::pf::Evaluated { cost: self.cost, max_d2: self.residuals.iter().copied().max().unwrap_or(0) }
+    }
 }
 
 #[cfg(test)]

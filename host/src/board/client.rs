@@ -55,11 +55,12 @@ use pficp_fpga::grid::{Grid, CAP_D2};
 use pficp_fpga::messages::{
     load_request, parse_two_u16, table_request, two_u16, EvaluateReply, EvaluateRequest, Identity, MessageError,
     NearestReply, NearestRequest, WeightSummary, IDENTITY_BYTES, MAX_LOAD_ENTRIES, MAX_LOAD_POINTS, MAX_NEAREST,
-    MAX_POSES, POINT_BYTES, TABLE_ENTRIES, TABLE_ENTRY_BYTES, TABLE_ENTRY_MASK,
+    MAX_POSES, NORMALS_OFFSET, POINT_BYTES, TABLE_ENTRIES, TABLE_ENTRY_BYTES, TABLE_ENTRY_MASK,
 };
 use pficp_fpga::neighbour_pipeline::clocks_bound;
 use pficp_fpga::pipeline::COST_MASK;
 use pficp_fpga::protocol::{Command, Deframer, VERSION};
+use pficp_fpga::surface::FxNormal;
 use serialport::SerialPort;
 use std::time::Duration;
 
@@ -321,36 +322,63 @@ impl BoardClient {
         Ok(())
     }
 
-    /// Upload a gridded model (protocol 3): the points sorted by cell ([`Grid::points`],
-    /// LoadModel) then the cell table ([`Grid::first`], LoadTable). `progress(done, total)`
-    /// counts the data bytes of both (6 a point, 2 a table entry), so it rises once from 0
-    /// to the total. Afterwards the board's (stored) model indices map to the host's
-    /// through [`Grid::order`] ([`Self::nearest_model`]). Sizes are not changed: the model
-    /// size in use is `grid.points.len()`.
-    pub fn load_grid(&mut self, grid: &Grid, mut progress: impl FnMut(usize, usize)) -> Result<(), BoardError> {
+    /// Upload a gridded model (protocol 4): the points sorted by cell ([`Grid::points`],
+    /// LoadModel), their normals (`normals[i]` the normal of stored point `i`, LoadModel from
+    /// word [`NORMALS_OFFSET`]) then the cell table ([`Grid::first`], LoadTable): the
+    /// requests of `messages::grid_upload`. `progress(done, total)` counts the data bytes of
+    /// all three (6 a point or normal, 2 a table entry), so it rises once from 0 to the
+    /// total. Afterwards the board's (stored) model indices map to the host's through
+    /// [`Grid::order`] ([`Self::nearest_model`]). Sizes are not changed: the model size in
+    /// use is `grid.points.len()`.
+    pub fn load_grid(
+        &mut self,
+        grid: &Grid,
+        normals: &[FxNormal],
+        mut progress: impl FnMut(usize, usize),
+    ) -> Result<(), BoardError> {
+        if normals.len() != grid.points.len() {
+            return Err(BoardError::Limit(format!(
+                "{} normals for {} model points; the board takes one a point",
+                normals.len(),
+                grid.points.len()
+            )));
+        }
         let point_bytes = grid.points.len() * POINT_BYTES;
-        let total = point_bytes + grid.first.len() * TABLE_ENTRY_BYTES;
+        let total = 2 * point_bytes + grid.first.len() * TABLE_ENTRY_BYTES;
         self.load_model(&grid.points, |done, _| progress(done * POINT_BYTES, total))?;
+        self.load_at(Command::LoadModel, NORMALS_OFFSET, normals, |done, _| {
+            if done > 0 {
+                progress(point_bytes + done * POINT_BYTES, total)
+            }
+        })?;
         self.load_table(&grid.first, |done, _| {
             if done > 0 {
-                progress(point_bytes + done * TABLE_ENTRY_BYTES, total)
+                progress(2 * point_bytes + done * TABLE_ENTRY_BYTES, total)
             }
         })?;
         self.grid_order = Some(grid.order.clone());
         Ok(())
     }
 
-    /// [`Self::load_grid`] unless the board already holds `grid`: a fresh Identify whose
-    /// model digest is the one this upload would leave (`messages::grid_digest`;
-    /// docs/protocol.md, "Resident model"). True when it uploaded.
-    pub fn ensure_grid(&mut self, grid: &Grid, progress: impl FnMut(usize, usize)) -> Result<bool, BoardError> {
+    /// [`Self::load_grid`] unless the board already holds `grid` and `normals`: a fresh
+    /// Identify whose model digest is the one this upload would leave
+    /// (`messages::grid_digest`; docs/protocol.md, "Resident model"). True when it uploaded.
+    pub fn ensure_grid(
+        &mut self,
+        grid: &Grid,
+        normals: &[FxNormal],
+        progress: impl FnMut(usize, usize),
+    ) -> Result<bool, BoardError> {
         let id = self.identify()?;
-        if id.version >= 3 && id.model_digest == pficp_fpga::messages::grid_digest(grid) {
+        if id.version >= 4
+            && normals.len() == grid.points.len()
+            && id.model_digest == pficp_fpga::messages::grid_digest(grid, normals)
+        {
             self.grid_order = Some(grid.order.clone());
             self.stats.resident += 1;
             return Ok(false);
         }
-        self.load_grid(grid, progress)?;
+        self.load_grid(grid, normals, progress)?;
         Ok(true)
     }
 
@@ -378,9 +406,24 @@ impl BoardClient {
         &mut self,
         command: Command,
         points: &[FxPoint],
+        progress: impl FnMut(usize, usize),
+    ) -> Result<(), BoardError> {
+        self.load_at(command, 0, points, progress)
+    }
+
+    /// Write `points` from word `start` (0 for points, [`NORMALS_OFFSET`] for normals).
+    fn load_at(
+        &mut self,
+        command: Command,
+        start: usize,
+        points: &[FxPoint],
         mut progress: impl FnMut(usize, usize),
     ) -> Result<(), BoardError> {
-        let what = if command == Command::LoadModel { "model" } else { "scan" };
+        let what = match (command, start) {
+            (Command::LoadModel, 0) => "model",
+            (Command::LoadModel, _) => "model's normals",
+            _ => "scan",
+        };
         let max = self.max_points(command);
         if points.is_empty() || points.len() > max {
             return Err(BoardError::Limit(format!(
@@ -389,12 +432,13 @@ impl BoardClient {
             )));
         }
         progress(0, points.len());
-        let mut offset = 0;
+        let mut done = 0;
         for chunk in points.chunks(MAX_LOAD_POINTS) {
+            let offset = start + done;
             let reply = self.transact(command, load_request(offset as u16, chunk), 4, 0, true)?;
             self.check_ack(command, &reply.data, offset, chunk.len())?;
-            offset += chunk.len();
-            progress(offset, points.len());
+            done += chunk.len();
+            progress(done, points.len());
         }
         Ok(())
     }

@@ -7,9 +7,10 @@
 //!
 //! 1. Both clouds are normalised by their own similarity ([`Normalisation::of`]) and
 //!    quantised to Q3.13. The model goes to the model store (at most 4,096 points: a larger
-//!    model is subsampled, the same points for the same seed): on a protocol 3 board
-//!    gridded (sorted by cell, with its cell table: [`BoardClient::load_grid`]; its costs
-//!    cap each distance at `h^2`), on a version 1 or 2 board as it is (brute force). The
+//!    model is subsampled, the same points for the same seed): on a protocol 4 board
+//!    gridded (sorted by cell, with its normals and cell table: [`BoardClient::load_grid`];
+//!    its costs are surface residuals capped at `h^2`, `pficp_fpga::surface`), on a version
+//!    1 or 2 board as it is (brute force). The
 //!    weight sample (the scan points the software filter takes its costs over) goes to the
 //!    scan store in Morton order ([`super::morton_sorted`]; the costs are sums, so the
 //!    order changes no cost).
@@ -40,6 +41,7 @@ use pficp_fpga::format::{FxPoint, FxPose, WeightScale, DIST_FRAC};
 use pficp_fpga::grid::Grid;
 use pficp_fpga::messages::{Identity, POINT_BYTES};
 use pficp_fpga::protocol::VERSION;
+use pficp_fpga::surface::FxNormal;
 use std::sync::Mutex;
 
 /// What the board did during one registration.
@@ -77,9 +79,9 @@ struct BoardWeights<'a> {
     model_norm: Normalisation,
     scan_norm: Normalisation,
     model: Vec<FxPoint>,
-    /// The model gridded, for a protocol 3 board (`None`: a brute-force board of version 1
-    /// or 2, which gets `model` as it is).
-    grid: Option<Grid>,
+    /// The model gridded with its normals, for a protocol 4 board (`None`: a brute-force
+    /// board of version 1 or 2, which gets `model` as it is).
+    grid: Option<(Grid, Vec<FxNormal>)>,
     /// Points in the scan store (set by `prepare`).
     sample: Mutex<usize>,
     iterations: Mutex<usize>,
@@ -107,8 +109,8 @@ impl ParticleWeights for BoardWeights<'_> {
         let scan = morton_sorted(&self.scan_norm.quantise(sample));
         let mut upload = |done, total| progress(OnBoardStep::Upload(Upload::Model), done, total);
         match &self.grid {
-            Some(grid) => {
-                if !client.ensure_grid(grid, upload)? {
+            Some((grid, normals)) => {
+                if !client.ensure_grid(grid, normals, upload)? {
                     progress(OnBoardStep::Resident, 0, 0);
                 }
             }
@@ -170,10 +172,13 @@ pub fn register_reporting(
 ) -> Result<BoardPfResult, BoardError> {
     let identity = client.identify()?;
     // Version 2 only added Run, Status and Result: the host-driven commands are version 1's;
-    // version 3 searches the model through a cell table, which the host uploads with it.
-    if !(1..=VERSION).contains(&identity.version) {
+    // version 3 searches the model through a cell table, which the host uploads with it;
+    // version 4 adds the normals the surface residual needs (a version 3 board's costs are
+    // point-to-point, which this host no longer models).
+    if !(1..=VERSION).contains(&identity.version) || identity.version == 3 {
         return Err(BoardError::Limit(format!(
-            "the board speaks protocol version {}, this host {VERSION} (1 to {VERSION} for the host-driven mode)",
+            "the board speaks protocol version {}, this host {VERSION} (1, 2 or {VERSION} for the host-driven mode; \
+             regenerate a version 3 board)",
             identity.version
         )));
     }
@@ -197,7 +202,13 @@ pub fn register_reporting(
     let model_norm = Normalisation::of(model);
     let scan_norm = Normalisation::of(scan);
     let model_q = model_norm.quantise(&board_points);
-    let grid = if identity.version >= 3 { Some(board_grid(&model_q)?) } else { None };
+    let grid = if identity.version >= 4 {
+        let grid = board_grid(&model_q)?;
+        let normals = super::on_board::stored_normals(&grid);
+        Some((grid, normals))
+    } else {
+        None
+    };
     let source = BoardWeights {
         model: model_q,
         grid,

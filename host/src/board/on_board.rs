@@ -24,6 +24,7 @@ use pficp_fpga::pf::{
     wrap24, Particle, PfConfig, PARAMS, PARAM_BITS, PARAM_TRANSLATION_FRAC, SCALE, SCALE_FRAC, SIGMA_BITS,
 };
 use pficp_fpga::protocol::{Command, ErrorCode, VERSION};
+use pficp_fpga::surface::FxNormal;
 use std::time::{Duration, Instant};
 
 /// The default number of scan points the on-board filter weighs each particle over
@@ -61,6 +62,8 @@ pub struct OnBoardPlan {
     /// `model` gridded: what the board stores (the points sorted by cell, the cell table)
     /// and searches; `grid.order` maps the board's model indices to `model`'s.
     pub grid: Grid,
+    /// The normals of `grid.points` ([`stored_normals`]), for the surface residual.
+    pub normals: Vec<FxNormal>,
     /// Whether the model was subsampled to fit the board.
     pub model_subsampled: bool,
     /// The scan points for the board (the weight sample of `board_points`), normalised,
@@ -215,9 +218,11 @@ pub fn plan_with_prior(
     let sample = weight_sample(scan, &PfIcpSettings { weight_points: board_points, ..settings.clone() });
     let config = pf_config(&prior, &model_norm, &scan_norm, sample.len(), settings);
     let model_q = model_norm.quantise(&on_board);
+    let grid = board_grid(&model_q)?;
     Ok(OnBoardPlan {
         prior,
-        grid: board_grid(&model_q)?,
+        normals: stored_normals(&grid),
+        grid,
         model: model_q,
         model_subsampled: on_board.len() < model.len(),
         scan: morton_sorted(&scan_norm.quantise(&sample)),
@@ -229,17 +234,11 @@ pub fn plan_with_prior(
 
 impl OnBoardPlan {
     /// What the board computes for this plan's Run, by the bit-exact reference
-    /// (`pficp_fpga::pf::run` over the grid search of [`Self::grid`] and [`Self::scan`]):
-    /// the software mode's board emulation, equal to the board's Result to the bit.
+    /// (`pficp_fpga::pf::run` over the grid search of [`Self::grid`] and [`Self::scan`] and
+    /// the surface residual with [`Self::normals`]): the software mode's board emulation,
+    /// equal to the board's Result to the bit.
     pub fn emulate(&self) -> pficp_fpga::pf::PfOutcome {
-        pficp_fpga::pf::run(&self.config, |p| evaluate(&self.grid, &self.scan, p))
-    }
-
-    /// The filter as it would run with the surface residual (`pficp_fpga::surface`) as the
-    /// cost in place of the point-to-point distance, `normals` those of [`stored_normals`]:
-    /// the evidence for the residual stage (not yet on the board, so not a board mode).
-    pub fn emulate_surface(&self, normals: &[pficp_fpga::surface::FxNormal]) -> pficp_fpga::pf::PfOutcome {
-        pficp_fpga::pf::run(&self.config, |p| pficp_fpga::surface::evaluate(&self.grid, normals, &self.scan, p))
+        pficp_fpga::pf::run(&self.config, |p| evaluate(&self.grid, &self.normals, &self.scan, p))
     }
 }
 
@@ -247,7 +246,7 @@ impl OnBoardPlan {
 /// point's principal axis of least spread over itself and its 8 nearest stored neighbours,
 /// as the host's surface computes them (`pf_icp::surface`), from the quantised points the
 /// board stores, so they depend on nothing but the store.
-pub fn stored_normals(grid: &Grid) -> Vec<pficp_fpga::surface::FxNormal> {
+pub fn stored_normals(grid: &Grid) -> Vec<FxNormal> {
     let pts: Vec<Point3<f64>> =
         grid.points.iter().map(|p| Point3::new(coord_to_f64(p[0]), coord_to_f64(p[1]), coord_to_f64(p[2]))).collect();
     let nn = NearestNeighbours::new(&pts);
@@ -259,20 +258,17 @@ pub fn stored_normals(grid: &Grid) -> Vec<pficp_fpga::surface::FxNormal> {
         .collect()
 }
 
-/// `pficp_fpga::pf::evaluate` (the board's cost and largest distance for a pose), computed
-/// with the grid's own search ([`Grid::nearest`]: the 27 cells around each point) instead
-/// of the reference's brute force over the model: the same capped distances bit for bit
-/// (`fpga/tests/grid.rs` proves the two searches equal; `host/tests/board_filter.rs`
-/// checks this function against the reference), some 20 times faster on 2,000 points.
-pub fn evaluate(grid: &Grid, scan: &[FxPoint], pose: &pficp_fpga::format::FxPose) -> pficp_fpga::pf::Evaluated {
-    let mut cost = 0u64;
-    let mut max_d2 = 0u64;
-    for &p in scan {
-        let d2 = grid.nearest(pficp_fpga::format::transform(pose, p)).d2;
-        cost = (cost + d2) & pficp_fpga::pipeline::COST_MASK;
-        max_d2 = max_d2.max(d2);
-    }
-    pficp_fpga::pf::Evaluated { cost, max_d2 }
+/// The board's cost and largest residual for a pose ([`pficp_fpga::surface::evaluate`]: the
+/// grid's own search, [`Grid::nearest`], then the surface residual), the same bit for bit as
+/// the board's reference over its stores (`pficp_fpga::surface::evaluate_stored`;
+/// `host/tests/board_filter.rs` checks the two equal), some 20 times faster on 2,000 points.
+pub fn evaluate(
+    grid: &Grid,
+    normals: &[FxNormal],
+    scan: &[FxPoint],
+    pose: &pficp_fpga::format::FxPose,
+) -> pficp_fpga::pf::Evaluated {
+    pficp_fpga::surface::evaluate(grid, normals, scan, pose)
 }
 
 /// What the board's filter found, in the host's terms: the filter's pose, the polish on the
@@ -423,7 +419,9 @@ pub fn register_on_board(
     let max_model = (identity.max_model as usize).min(MAX_POINTS);
     let plan = plan(nn, scan, settings, board_points, max_model)?;
     let start = Instant::now();
-    if !client.ensure_grid(&plan.grid, |done, total| progress(OnBoardStep::Upload(Upload::Model), done, total))? {
+    if !client.ensure_grid(&plan.grid, &plan.normals, |done, total| {
+        progress(OnBoardStep::Upload(Upload::Model), done, total)
+    })? {
         progress(OnBoardStep::Resident, 0, 0);
     }
     client.load_scan(&plan.scan, |done, total| progress(OnBoardStep::Upload(Upload::Scan), done, total))?;

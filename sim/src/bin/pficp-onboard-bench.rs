@@ -110,8 +110,8 @@ fn registration(b: &mut SerialBoard, plan: &on_board::OnBoardPlan, config: Board
     };
     let id = exchange(b, &Frame { code: Command::Identify as u8, seq: next(), data: vec![] })?;
     let id = messages::Identity::decode(&id.data)?;
-    let uploaded = id.model_digest != messages::grid_digest(&plan.grid);
-    let mut loads = if uploaded { messages::grid_upload(&plan.grid) } else { Vec::new() };
+    let uploaded = id.model_digest != messages::grid_digest(&plan.grid, &plan.normals);
+    let mut loads = if uploaded { messages::grid_upload(&plan.grid, &plan.normals) } else { Vec::new() };
     for (k, chunk) in plan.scan.chunks(messages::MAX_LOAD_POINTS).enumerate() {
         loads.push((Command::LoadScan, messages::load_request((k * messages::MAX_LOAD_POINTS) as u16, chunk)));
     }
