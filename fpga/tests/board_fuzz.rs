@@ -11,11 +11,10 @@ use pficp_fpga::messages::{
     parse_two_u16, pose_from_bytes, EvaluateReply, Identity, NearestReply, NearestRequest, ResultReply, RunState,
     StatusReply, FLAG_FIRST, FLAG_LAST,
 };
-use pficp_fpga::neighbour_pipeline::evaluate_stored;
 use pficp_fpga::pf::{self, PfConfig, PfOutcome, RUN_BYTES};
-use pficp_fpga::pipeline::Evaluation;
 use pficp_fpga::protocol::{digest_update, Deframer, ErrorCode, Frame, DIGEST_INIT, MAX_FRAME};
 use pficp_fpga::splitmix::SplitMix64;
+use pficp_fpga::surface::{evaluate_stored, Scored};
 use pficp_fpga::weights::weights;
 use proptest::prelude::*;
 
@@ -58,6 +57,7 @@ impl Rng {
 #[derive(Clone, PartialEq, Eq)]
 struct Snapshot {
     model: Vec<u64>,
+    normals: Vec<u64>,
     table: Vec<u16>,
     scan: Vec<u64>,
     sizes: (u16, u16),
@@ -70,6 +70,7 @@ impl Snapshot {
     fn of(b: &BoardModel) -> Snapshot {
         Snapshot {
             model: b.model_store().to_vec(),
+            normals: b.normal_store().to_vec(),
             table: b.table_store().to_vec(),
             scan: b.scan_store().to_vec(),
             sizes: b.sizes(),
@@ -83,14 +84,16 @@ impl Snapshot {
             && self.costs == b.stored_costs()
             && self.outcome.as_ref() == b.pf_outcome()
             && self.model == b.model_store()
+            && self.normals == b.normal_store()
             && self.table == b.table_store()
             && self.scan == b.scan_store()
             && self.digest == b.model_digest()
     }
 
-    /// The neighbour pipeline's search over the stores before the command (any lane count).
-    fn search(&self, scan: &[FxPoint], pose: &pficp_fpga::format::FxPose) -> Evaluation {
-        evaluate_stored(&self.model, &self.table, scan, pose)
+    /// The neighbour pipeline's search and the surface residual over the stores before the
+    /// command (any lane count).
+    fn search(&self, scan: &[FxPoint], pose: &pficp_fpga::format::FxPose) -> Scored {
+        evaluate_stored(&self.model, &self.normals, &self.table, scan, pose)
     }
 }
 
@@ -132,7 +135,7 @@ fn verdict(sizes: (u16, u16), stored: usize, ran: bool, code: u8, d: &[u8]) -> R
         0x02 | 0x03 => {
             if d.len() < 4 || !(1..=170).contains(&field(2)) || d.len() != 4 + 6 * field(2) {
                 Err(BadLength)
-            } else if field(0) + field(2) > 4096 {
+            } else if field(0) + field(2) > if code == 0x02 { 8192 } else { 4096 } {
                 Err(OverCapacity)
             } else {
                 Ok(())
@@ -205,12 +208,23 @@ fn check_reply(request: &Frame, reply: &Frame, before: &Snapshot, b: &BoardModel
             assert_eq!(&r[..], &d[..4]);
             let (offset, count) = parse_two_u16(&d[..4]).unwrap();
             let (offset, count) = (offset as usize, count as usize);
+            // LoadModel's words: the points, then their normals; LoadScan's: the scan.
             let (store, old, other, old_other) = if request.code == 0x02 {
-                (b.model_store(), &before.model, b.scan_store(), &before.scan)
+                (
+                    [b.model_store(), b.normal_store()].concat(),
+                    [&before.model[..], &before.normals[..]].concat(),
+                    b.scan_store().to_vec(),
+                    before.scan.clone(),
+                )
             } else {
-                (b.scan_store(), &before.scan, b.model_store(), &before.model)
+                (
+                    b.scan_store().to_vec(),
+                    before.scan.clone(),
+                    [b.model_store(), b.normal_store()].concat(),
+                    [&before.model[..], &before.normals[..]].concat(),
+                )
             };
-            for k in 0..4096 {
+            for k in 0..store.len() {
                 let want = if (offset..offset + count).contains(&k) {
                     let at = 4 + 6 * (k - offset);
                     (0..6).map(|j| (d[at + j] as u64) << (8 * j)).sum()
@@ -219,7 +233,7 @@ fn check_reply(request: &Frame, reply: &Frame, before: &Snapshot, b: &BoardModel
                 };
                 assert_eq!(store[k], want, "word {k}");
             }
-            assert!(other == &old_other[..]);
+            assert!(other == old_other);
             assert!(b.table_store() == &before.table[..]);
             // The digest: a LoadModel at offset 0 restarts it, a LoadModel continues it with
             // its data, a LoadScan leaves it.
@@ -244,7 +258,9 @@ fn check_reply(request: &Frame, reply: &Frame, before: &Snapshot, b: &BoardModel
                 };
                 assert_eq!(b.table_store()[k], want, "entry {k}");
             }
-            assert!(before.model == b.model_store() && before.scan == b.scan_store());
+            assert!(
+                before.model == b.model_store() && before.normals == b.normal_store() && before.scan == b.scan_store()
+            );
             assert_eq!((b.sizes(), b.stored_costs()), (before.sizes, &before.costs[..]));
             assert_eq!(b.model_digest(), digest_update(before.digest, d));
         }
@@ -289,7 +305,7 @@ fn check_reply(request: &Frame, reply: &Frame, before: &Snapshot, b: &BoardModel
             assert_eq!(&r[..], &d[..4], "particles and iterations echoed");
             let cfg = PfConfig::decode(d).expect("a Run the doc accepts decodes");
             let scan: Vec<FxPoint> = before.scan[..before.sizes.1 as usize].iter().map(|&w| unpack_point(w)).collect();
-            let want = pf::run(&cfg, |pose| pf::Evaluated::of(&before.search(&scan, pose)));
+            let want = pf::run(&cfg, |pose| before.search(&scan, pose).evaluated());
             assert_eq!(b.pf_outcome(), Some(&want));
             assert!(before.sizes == b.sizes() && before.costs == b.stored_costs(), "Run changed the stores");
             assert!(

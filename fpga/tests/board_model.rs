@@ -13,12 +13,12 @@ use pficp_fpga::neighbour_pipeline::{run_particle as grid_run, NeighbourPipeline
 #[test]
 fn wire_bytes_are_exact() {
     // Computed independently (a separate CRC-16/CCITT-FALSE and COBS in Python) for a
-    // 16-lane board at 100 MHz and 921,600 baud, protocol version 3.
+    // 16-lane board at 100 MHz and 921,600 baud, protocol version 4.
     let mut b = BoardModel::new(BoardConfig { lanes: 16, clock_hz: 100_000_000, baud: 921_600 });
     let request = [0x05, 0x01, 0x05, 0x9b, 0x7e, 0x00];
     let reply = [
-        0x04, 0x81, 0x05, 0x03, 0x02, 0x10, 0x02, 0x10, 0x02, 0x10, 0x05, 0x01, 0x25, 0xaa, 0x90, 0x04, 0xe1, 0xf5,
-        0x05, 0x03, 0x10, 0x0e, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x03, 0x08, 0x69, 0x00,
+        0x04, 0x81, 0x05, 0x04, 0x02, 0x10, 0x02, 0x10, 0x02, 0x10, 0x05, 0x01, 0x25, 0xaa, 0x90, 0x04, 0xe1, 0xf5,
+        0x05, 0x03, 0x10, 0x0e, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x03, 0x55, 0x56, 0x00,
     ];
     for (k, &byte) in request.iter().enumerate() {
         let out = b.receive(byte);
@@ -48,7 +48,7 @@ fn identify_reports_config_limits_and_sizes() {
         .iter()
         .map(|&(at, n)| le_at(&d, at, n))
         .collect();
-    assert_eq!(fields, vec![3, 4, 4096, 4096, 256, 37, 170, 144, 50_000_000, 115_200]);
+    assert_eq!(fields, vec![4, 4, 4096, 4096, 256, 37, 170, 144, 50_000_000, 115_200]);
     assert_eq!(&d[20..26], &[0; 6], "sizes and stored costs are 0 after power-up");
     ok(&mut b, req(LOAD_MODEL, 1, load_data(0, 1, &[[1, 2, 3]])));
     ok(&mut b, req(SET_SIZES, 2, u16s(1000, 4096)));
@@ -134,11 +134,23 @@ fn evaluate_and_nearest_match_the_cycle_accurate_pipeline() {
     let want = grid_run(&mut pipe, &scan, &pose, |_| false).evaluation;
     let capped = want.nearest.iter().filter(|n| n.1 == pficp_fpga::grid::CAP_D2).count();
     assert!((1..30).contains(&capped), "{capped} of 40 capped");
+    // The costs: the pipeline's results, then each one's surface residual (the test's
+    // normals are axes, `test_normal`).
+    let resid_cost = |part: &[FxPoint], nearest: &[(u16, u64)]| -> u64 {
+        part.iter()
+            .zip(nearest)
+            .map(|(&p, &(i, d2))| {
+                let q = pficp_fpga::format::transform(&pose, p);
+                pficp_fpga::surface::residual(q, g.points[i as usize], test_normal(i as usize), d2)
+            })
+            .sum()
+    };
     let d = ok(&mut b, req(EVALUATE, 0, eval_data(FLAG_FIRST, 0, 0, 1, &[pose])));
-    assert_eq!(parse_eval(&d, 1, false).0, vec![want.cost]);
+    assert_eq!(parse_eval(&d, 1, false).0, vec![resid_cost(&scan, &want.nearest)]);
+    assert_ne!(resid_cost(&scan, &want.nearest), want.cost, "the residual is not the distance");
     let d = ok(&mut b, req(NEAREST, 0, nearest_data(10, 25, &pose)));
     let part = grid_run(&mut pipe, &scan[10..35], &pose, |_| false).evaluation;
-    assert_eq!(le_at(&d, 4, 6), part.cost);
+    assert_eq!(le_at(&d, 4, 6), resid_cost(&scan[10..35], &part.nearest));
     let got: Vec<(u16, u64)> = (0..25).map(|k| (le_at(&d, 10 + 7 * k, 2) as u16, le_at(&d, 12 + 7 * k, 5))).collect();
     assert_eq!(got, part.nearest);
     assert_eq!(&part.nearest[..], &want.nearest[10..35]);
@@ -234,7 +246,7 @@ fn nearest_returns_indices_distances_and_their_cost() {
         let i = 50 + k;
         assert_eq!(le_at(&d, 10 + 7 * k, 2), home(i) as u64, "point {i}");
         assert_eq!(le_at(&d, 12 + 7 * k, 5), hand_dist(i, t), "point {i}");
-        cost += hand_dist(i, t);
+        cost += hand_resid(i, t);
     }
     assert_eq!(le_at(&d, 4, 6), cost);
     // The last scan point alone; Nearest leaves the stored costs alone.
@@ -242,8 +254,9 @@ fn nearest_returns_indices_distances_and_their_cost() {
     let before = snap(&b);
     let d = ok(&mut b, req(NEAREST, 9, nearest_data(199, 1, &shift([0; 3]))));
     let dist = hand_dist(199, [0; 3]);
+    let resid = hand_resid(199, [0; 3]);
     let mut want = u16s(199, 1);
-    want.extend((0..6).map(|k| (dist >> (8 * k)) as u8));
+    want.extend((0..6).map(|k| (resid >> (8 * k)) as u8));
     want.extend([home(199) as u8, 0]);
     want.extend((0..5).map(|k| (dist >> (8 * k)) as u8));
     assert_eq!(d, want);
@@ -272,7 +285,9 @@ fn identify_checks() {
 fn load_checks() {
     use ErrorCode::{BadLength, OverCapacity};
     let mut b = loaded(20);
-    for code in [LOAD_MODEL, LOAD_SCAN] {
+    // LoadScan's words are the scan store's 4,096; LoadModel's 8,192, the model points and
+    // then their normals (messages::NORMALS_OFFSET).
+    for (code, words) in [(LOAD_MODEL, 8192u16), (LOAD_SCAN, 4096)] {
         let p = [[1, 2, 3]; 171];
         let cases: Vec<(Vec<u8>, ErrorCode)> = vec![
             (vec![], BadLength),
@@ -286,17 +301,21 @@ fn load_checks() {
             (load_data(0, 2, &p[..3]), BadLength),
             ([load_data(0, 2, &p[..2]), vec![0]].concat(), BadLength),
             (load_data(0, 2, &p[..2])[..15].to_vec(), BadLength),
-            (load_data(4095, 2, &p[..2]), OverCapacity),
-            (load_data(4096, 1, &p[..1]), OverCapacity),
-            (load_data(3927, 170, &p[..170]), OverCapacity),
+            (load_data(words - 1, 2, &p[..2]), OverCapacity),
+            (load_data(words, 1, &p[..1]), OverCapacity),
+            (load_data(words - 169, 170, &p[..170]), OverCapacity),
             (load_data(0xffff, 170, &p[..170]), OverCapacity),
         ];
         for (data, e) in cases {
             rejects(&mut b, req(code, 7, data), e);
         }
-        ok(&mut b, req(code, 7, load_data(3926, 170, &p[..170])));
-        ok(&mut b, req(code, 7, load_data(4095, 1, &p[..1])));
+        ok(&mut b, req(code, 7, load_data(words - 170, 170, &p[..170])));
+        ok(&mut b, req(code, 7, load_data(words - 1, 1, &p[..1])));
     }
+    // A load across the points' end goes on into the normals.
+    ok(&mut b, req(LOAD_MODEL, 8, load_data(4095, 2, &[[4, 5, 6], [7, 8, 9]])));
+    assert_eq!(b.model_store()[4095], pficp_fpga::format::pack_point([4, 5, 6]));
+    assert_eq!(b.normal_store()[0], pficp_fpga::format::pack_point([7, 8, 9]));
 }
 
 #[test]
@@ -478,7 +497,7 @@ fn the_model_digest_follows_model_and_table_loads() {
     assert_eq!(digest(&mut b), DIGEST_NONE, "nothing uploaded since power-up");
     // The host's upload (LoadModel from offset 0, then the table) gives what it predicts.
     let g = load_grid(&mut b, &grid());
-    let want = grid_digest(&g);
+    let want = grid_digest(&g, &test_normals(g.points.len()));
     assert_eq!(digest(&mut b), want);
     assert_ne!(want, DIGEST_NONE);
     // Scans, sizes, Evaluate and reset leave it; a rejected load leaves it.
@@ -486,7 +505,7 @@ fn the_model_digest_follows_model_and_table_loads() {
     ok(&mut b, req(SET_SIZES, 2, u16s(64, 3)));
     ok(&mut b, req(EVALUATE, 3, eval_data(FLAG_FIRST, 0, 0, 1, &[shift([0; 3])])));
     b.reset();
-    rejects(&mut b, req(LOAD_MODEL, 4, load_data(4095, 2, &grid()[..2])), ErrorCode::OverCapacity);
+    rejects(&mut b, req(LOAD_MODEL, 4, load_data(8191, 2, &grid()[..2])), ErrorCode::OverCapacity);
     assert_eq!(digest(&mut b), want);
     // Any table or model write changes it; the same bytes again continue it.
     let t = table_request(5, &[1, 2]);

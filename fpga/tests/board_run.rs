@@ -29,7 +29,8 @@ fn direct_run(b: &BoardModel, cfg: &PfConfig) -> PfOutcome {
     let scan = b.scan_store()[..s as usize].iter().map(|&w| unpack_point(w)).collect::<Vec<FxPoint>>();
     let grid = pficp_fpga::grid::Grid::build(&model).unwrap();
     assert_eq!(&grid.first[..], b.table_store(), "the board's table is the model's");
-    pficp_fpga::pf::run(cfg, |pose| pficp_fpga::pf::evaluate(&grid, &scan, pose))
+    let normals: Vec<_> = b.normal_store()[..m as usize].iter().map(|&w| unpack_point(w)).collect();
+    pficp_fpga::pf::run(cfg, |pose| pficp_fpga::surface::evaluate(&grid, &normals, &scan, pose))
 }
 
 #[test]

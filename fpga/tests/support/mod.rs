@@ -114,12 +114,31 @@ pub fn table_requests(table: &[u16]) -> Vec<Frame> {
         .collect()
 }
 
-/// Load `model` sorted by cell with its table; the grid (its `order` maps stored indices
-/// back to `model`'s).
+/// The tests' normal of stored point `i`: the unit axis `i mod 3` (`x`, `y`, `z` in turn),
+/// so that every axis is seen by a third of the points.
+pub fn test_normal(i: usize) -> pficp_fpga::surface::FxNormal {
+    let mut n = [0; 3];
+    n[i % 3] = 1 << pficp_fpga::surface::NORMAL_FRAC;
+    n
+}
+
+/// The normals [`load_grid`] stores for `n` points.
+pub fn test_normals(n: usize) -> Vec<pficp_fpga::surface::FxNormal> {
+    (0..n).map(test_normal).collect()
+}
+
+/// Load `model` sorted by cell, its normals ([`test_normals`]) and its table, as the host
+/// does (`messages::grid_upload`); the grid (its `order` maps stored indices back to
+/// `model`'s).
 pub fn load_grid(b: &mut BoardModel, model: &[FxPoint]) -> pficp_fpga::grid::Grid {
     let g = pficp_fpga::grid::Grid::build(model).expect("the test model fits the grid");
     for (k, chunk) in g.points.chunks(MAX_LOAD_POINTS).enumerate() {
         let off = (k * MAX_LOAD_POINTS) as u16;
+        ok(b, req(LOAD_MODEL, 1, load_data(off, chunk.len() as u16, chunk)));
+    }
+    let normals = test_normals(g.points.len());
+    for (k, chunk) in normals.chunks(MAX_LOAD_POINTS).enumerate() {
+        let off = (pficp_fpga::messages::NORMALS_OFFSET + k * MAX_LOAD_POINTS) as u16;
         ok(b, req(LOAD_MODEL, 1, load_data(off, chunk.len() as u16, chunk)));
     }
     for f in table_requests(&g.first) {
@@ -151,8 +170,18 @@ pub fn hand_dist(i: usize, t: [i32; 3]) -> u64 {
     let d: u64 = (0..3).map(|a| ((offset(i)[a] + t[a]) as i64).pow(2) as u64).sum();
     d.min(pficp_fpga::grid::CAP_D2)
 }
+/// Its surface residual: the normal of the test grid's point `home(i)` is an axis
+/// ([`test_normal`]), so it is that axis's offset squared, or the cap.
+pub fn hand_resid(i: usize, t: [i32; 3]) -> u64 {
+    let k = home(i) % 3;
+    if hand_dist(i, t) >= pficp_fpga::grid::CAP_D2 {
+        pficp_fpga::grid::CAP_D2
+    } else {
+        ((offset(i)[k] + t[k]) as i64).pow(2) as u64
+    }
+}
 pub fn hand_cost(n_scan: usize, t: [i32; 3]) -> u64 {
-    (0..n_scan).map(|i| hand_dist(i, t)).sum()
+    (0..n_scan).map(|i| hand_resid(i, t)).sum()
 }
 
 /// A board with the grid as model, `n_scan` scan points, sizes set.
