@@ -15,12 +15,12 @@ use pficp::registration::methods::{PoseError, Tolerance};
 use pficp_fpga::board::BoardConfig;
 use pficp_fpga::format::WeightScale;
 use pficp_fpga::grid::CAP_D2;
-use pficp_fpga::grid_pipeline::evaluate_grid;
+use pficp_fpga::surface::scored;
 use pficp_fpga::messages::Identity;
 use pficp_fpga::protocol::{Command, ErrorCode, Frame};
 use pficp_fpga::weights::weights;
 use std::time::{Duration, Instant};
-use support::{cloud, grid, loaded, poses, reference_handler, uart_resample, upload, PtyBoard};
+use support::{cloud, grid, loaded, normals, poses, reference_handler, uart_resample, upload, PtyBoard};
 
 #[test]
 fn identify_reports_the_reference_board() {
@@ -44,15 +44,15 @@ fn load_evaluate_and_weigh_equal_the_references() {
     assert_eq!(seen.last(), Some(&(700, 700)));
     assert!(seen.windows(2).all(|w| w[0].0 < w[1].0), "progress grows: {seen:?}");
     assert_eq!(seen.len(), 1 + 700usize.div_ceil(170));
-    // The protocol 3 board searches through the cell table: the model goes gridded, its
-    // progress in data bytes over the points and the table.
+    // The protocol 4 board searches through the cell table: the model goes gridded with its
+    // normals, its progress in data bytes over the points, the normals and the table.
     let g = grid(&model);
     let mut seen = Vec::new();
-    client.load_grid(&g, |done, total| seen.push((done, total))).unwrap();
-    let total = 700 * 6 + 4097 * 2;
+    client.load_grid(&g, &normals(&model), |done, total| seen.push((done, total))).unwrap();
+    let total = 2 * 700 * 6 + 4097 * 2;
     assert_eq!((seen.first(), seen.last()), (Some(&(0, total)), Some(&(total, total))));
     assert!(seen.windows(2).all(|w| w[0].0 < w[1].0), "progress grows: {seen:?}");
-    assert_eq!(seen.len(), 1 + 700usize.div_ceil(170) + 4097usize.div_ceil(510));
+    assert_eq!(seen.len(), 1 + 2 * 700usize.div_ceil(170) + 4097usize.div_ceil(510));
     client.load_scan(&scan, |_, _| {}).unwrap();
     client.set_sizes(model.len(), scan.len()).unwrap();
     let id = client.identify().unwrap();
@@ -60,7 +60,8 @@ fn load_evaluate_and_weigh_equal_the_references() {
 
     // 50 particles: two frames (37 + 13), then the weights.
     let ps = poses(50, 3);
-    let expected: Vec<u64> = ps.iter().map(|p| evaluate_grid(&g, &scan, p).cost).collect();
+    let n = normals(&model);
+    let expected: Vec<u64> = ps.iter().map(|p| scored(&g, &n, &scan, p).cost).collect();
     let mut chosen = None;
     let (costs, summary) = client
         .costs_and_weights(&ps, |c| {
@@ -91,7 +92,7 @@ fn nearest_in_frames_equals_the_reference() {
     let pose = poses(1, 6)[0];
     let r = client.nearest(10, 320, &pose).unwrap();
     let g = grid(&model);
-    let e = evaluate_grid(&g, &scan[10..330], &pose);
+    let e = scored(&g, &normals(&model), &scan[10..330], &pose);
     assert_eq!(r.first, 10);
     assert_eq!(r.results, e.nearest);
     assert_eq!(r.cost, e.cost);
@@ -186,16 +187,17 @@ fn a_corrupted_request_is_resent() {
 #[test]
 fn a_lost_evaluate_reply_starts_the_iteration_over() {
     let (model, scan) = (cloud(200, 7), cloud(100, 8));
-    // Replies: 0 identify, 1-2 model (170 + 30 points), 3-11 cell table (9 frames of up to
-    // 510 entries), 12 scan, 13 sizes, 14 first batch (FIRST), 15 second batch (no FIRST:
-    // lost once, not repeatable), 16.. the batches again.
-    let mut board = corrupt_replies(|k| k == 15);
+    // Replies: 0 identify, 1-2 model (170 + 30 points), 3-4 their normals, 5-13 cell table
+    // (9 frames of up to 510 entries), 14 scan, 15 sizes, 16 first batch (FIRST), 17 second
+    // batch (no FIRST: lost once, not repeatable), 18.. the batches again.
+    let mut board = corrupt_replies(|k| k == 17);
     let mut client = board.client();
     upload(&mut client, &model, &scan);
     let ps = poses(45, 9);
     let scale = WeightScale::for_two_q(1e6);
     let (costs, summary) = client.costs_and_weights(&ps, |_| scale).unwrap();
-    let expected: Vec<u64> = ps.iter().map(|p| evaluate_grid(&grid(&model), &scan, p).cost).collect();
+    let (g, n) = (grid(&model), normals(&model));
+    let expected: Vec<u64> = ps.iter().map(|p| scored(&g, &n, &scan, p).cost).collect();
     assert_eq!(costs, expected, "no costs stored twice");
     assert_eq!(summary.weights, weights(&expected, &scale));
     assert_eq!(client.stats().restarts, 1);

@@ -50,9 +50,10 @@ fn run_status_and_result_equal_the_functional_reference() {
     assert_eq!(client.status().unwrap(), StatusReply::IDLE);
     let cfg = run_config(20, 8, 99);
     client.run(&cfg).unwrap();
-    let want = pf::run(&cfg, |pose| pf::evaluate(&grid(&model), &scan, pose));
+    let (g, n) = (grid(&model), normals(&model));
+    let want = pf::run(&cfg, |pose| pficp_fpga::surface::evaluate(&g, &n, &scan, pose));
     // The host's fast emulation (the grid's 27-cell search) is the reference to the bit.
-    assert_eq!(want, pf::run(&cfg, |pose| on_board::evaluate(&grid(&model), &scan, pose)));
+    assert_eq!(want, pf::run(&cfg, |pose| on_board::evaluate(&g, &n, &scan, pose)));
     let s = client.status().unwrap();
     assert_eq!(s, StatusReply { state: RunState::Done, iterations: want.iterations, best_cost: want.best.cost });
     let r = client.result().unwrap();
@@ -114,7 +115,8 @@ fn a_lost_run_reply_is_not_run_twice_blindly() {
     let cfg = run_config(8, 4, 5);
     client.run(&cfg).unwrap();
     assert_eq!(client.stats().resends, 1);
-    let want = pf::run(&cfg, |pose| pf::evaluate(&grid(&model), &scan, pose));
+    let (g, n) = (grid(&model), normals(&model));
+    let want = pf::run(&cfg, |pose| pficp_fpga::surface::evaluate(&g, &n, &scan, pose));
     assert_eq!(client.result().unwrap(), ResultReply::of(&want));
 }
 
@@ -204,12 +206,12 @@ fn pf_icp_with_the_filter_on_the_board_registers_a_reduced_model_1() {
     // The software mode's emulation (`plan.emulate`) is the same to the bit.
     let plan = on_board::plan(&nn, &ds.scan, &settings, on_board::DEFAULT_BOARD_POINTS, 4096).unwrap();
     assert_eq!(plan.config, b.config);
-    let want = pf::run(&plan.config, |p| pf::evaluate(&plan.grid, &plan.scan, p));
+    let want = pf::run(&plan.config, |p| pficp_fpga::surface::evaluate(&plan.grid, &plan.normals, &plan.scan, p));
     assert_eq!(b.result, ResultReply::of(&want));
     assert_eq!(b.result, ResultReply::of(&plan.emulate()));
     // The uploads (the model in data bytes with its cell table), then the filter's
     // progress ending at the cap.
-    let model_bytes = 300 * 6 + 4097 * 2;
+    let model_bytes = 2 * 300 * 6 + 4097 * 2;
     assert!(steps.contains(&(OnBoardStep::Upload(Upload::Model), model_bytes, model_bytes)));
     assert!(steps.contains(&(OnBoardStep::Upload(Upload::Scan), sample, sample)));
     assert_eq!(steps.last(), Some(&(OnBoardStep::Filter, 30, 30)));

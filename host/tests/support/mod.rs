@@ -183,6 +183,11 @@ pub fn poses(n: usize, seed: u64) -> Vec<FxPose> {
 }
 
 /// The model gridded as the host uploads it.
+/// The normals the host uploads with `grid(model)` (`on_board::stored_normals`).
+pub fn normals(model: &[FxPoint]) -> Vec<pficp_fpga::surface::FxNormal> {
+    pficp::board::on_board::stored_normals(&grid(model))
+}
+
 pub fn grid(model: &[FxPoint]) -> pficp_fpga::grid::Grid {
     pficp_fpga::grid::Grid::build(model).expect("a model in the cube")
 }
@@ -195,12 +200,13 @@ pub fn loaded(model: &[FxPoint], scan: &[FxPoint]) -> (PtyBoard, BoardClient) {
     (board, client)
 }
 
-/// Identify, load the model gridded (protocol 3: sorted by cell, with its cell table; the
+/// Identify, load the model gridded (protocol 4: sorted by cell, with its normals and cell table; the
 /// board's indices are then the grid's, `grid(model).order` maps them to `model`'s) and
 /// the scan, set the sizes.
 pub fn upload(client: &mut BoardClient, model: &[FxPoint], scan: &[FxPoint]) {
     client.identify().unwrap();
-    client.load_grid(&grid(model), |_, _| {}).unwrap();
+    let g = grid(model);
+    client.load_grid(&g, &pficp::board::on_board::stored_normals(&g), |_, _| {}).unwrap();
     client.load_scan(scan, |_, _| {}).unwrap();
     client.set_sizes(model.len(), scan.len()).unwrap();
 }

@@ -76,6 +76,7 @@ pub struct RequestCheck {
     max_entries: Constant<Bits<16>>,
     table_entries17: Constant<Bits<17>>,
     max_points17: Constant<Bits<17>>,
+    model_words17: Constant<Bits<17>>,
     max_points16: Constant<Bits<16>>,
     sizes_body: Constant<Bits<11>>,
     eval_header: Constant<Bits<11>>,
@@ -174,6 +175,7 @@ impl RequestCheck {
             max_entries: Constant::new(Bits::<16>::from(MAX_LOAD_ENTRIES as u64)),
             table_entries17: Constant::new(Bits::<17>::from(TABLE_ENTRIES as u64)),
             max_points17: Constant::new(Bits::<17>::from(MAX_POINTS as u64)),
+            model_words17: Constant::new(Bits::<17>::from(crate::messages::MODEL_WORDS as u64)),
             max_points16: Constant::new(Bits::<16>::from(MAX_POINTS as u64)),
             sizes_body: c11(TWO_U16_BYTES),
             eval_header: c11(EVALUATE_HEADER_BYTES),
@@ -282,7 +284,10 @@ impl Logic for RequestCheck {
                 || (self.dlen20.val() != self.times6.q.val() + self.load_header20.val())
             {
                 self.c_code.next = self.e_length.val();
-            } else if self.sum17.q.val() > self.max_points17.val() {
+            } else if (self.cmd.val() == self.c_load_model.val()) && (self.sum17.q.val() > self.model_words17.val()) {
+                // LoadModel's words: the points, then their normals (messages::MODEL_WORDS).
+                self.c_code.next = self.e_capacity.val();
+            } else if (self.cmd.val() != self.c_load_model.val()) && (self.sum17.q.val() > self.max_points17.val()) {
                 self.c_code.next = self.e_capacity.val();
             }
         } else if self.c_is_sizes.val() {
