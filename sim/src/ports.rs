@@ -90,6 +90,28 @@ pub const WEIGHT_STAGE_PORTS: &[PortSpec] = &[
     ("w_sum", false, 24),
 ];
 
+/// The ports of the surface residual stage (docs/pipeline.md, "The surface residual").
+pub const SURFACE_RESIDUAL_PORTS: &[PortSpec] = &[
+    ("clock", true, 1),
+    ("point_we", true, 1),
+    ("point_waddr", true, 12),
+    ("point_wdata", true, 48),
+    ("normal_we", true, 1),
+    ("normal_waddr", true, 12),
+    ("normal_wdata", true, 48),
+    ("in_valid", true, 1),
+    ("in_index", true, 12),
+    ("in_dist", true, 34),
+    ("in_point", true, 48),
+    ("in_cost_valid", true, 1),
+    ("nn_valid", false, 1),
+    ("nn_index", false, 12),
+    ("nn_dist", false, 34),
+    ("nn_resid", false, 21),
+    ("cost_valid", false, 1),
+    ("cost", false, 48),
+];
+
 /// The pins of the board top (`fpga/src/rtl/board/top.rs`).
 pub const BOARD_PORTS: &[PortSpec] =
     &[("clock", true, 1), ("reset_n", true, 1), ("uart_rx", true, 1), ("uart_tx", false, 1), ("leds", false, 4)];

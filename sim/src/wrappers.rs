@@ -13,6 +13,8 @@ use pficp_fpga::pipeline::PipelineModel;
 use pficp_fpga::pipeline::{Inputs, Outputs};
 use pficp_fpga::sequencer::SequencerModel;
 use pficp_fpga::sequencer::{SeqInputs, SeqOutputs};
+use pficp_fpga::surface_residual::SurfaceResidualModel;
+use pficp_fpga::surface_residual::{SurfaceInputs, SurfaceOutputs};
 use pficp_fpga::weights::WeightModel;
 use pficp_fpga::weights::{WeightInputs, WeightOutputs};
 use std::fmt;
@@ -370,6 +372,60 @@ impl Default for VerilatedWeightStage {
     }
 }
 
+/// The Verilated surface residual stage (`SurfaceResidual`) with its own `VerilatedContext`.
+pub struct VerilatedSurfaceResidual {
+    pub(crate) core: Core,
+}
+
+verilated_common!(VerilatedSurfaceResidual, SurfaceInputs);
+
+impl VerilatedSurfaceResidual {
+    /// The residual stage after reset.
+    pub fn new() -> Self {
+        VerilatedSurfaceResidual { core: Core::new(SURFACE_RESIDUAL, 0, 11, &SURFACE_OUTPUT_PORTS) }
+    }
+
+    /// Drive the input ports (masked to the port widths).
+    pub fn set_inputs(&mut self, i: &SurfaceInputs) {
+        self.core.set_inputs(&[
+            i.point_we as u64,
+            i.point_waddr as u64,
+            i.point_wdata,
+            i.normal_we as u64,
+            i.normal_waddr as u64,
+            i.normal_wdata,
+            i.in_valid as u64,
+            i.in_index as u64,
+            i.in_dist,
+            i.in_point,
+            i.in_cost_valid as u64,
+        ])
+    }
+
+    /// The output ports now.
+    pub fn outputs(&self) -> SurfaceOutputs {
+        let o = self.core.outputs::<6>();
+        SurfaceOutputs {
+            nn_valid: o[0] != 0,
+            nn_index: o[1] as u16,
+            nn_dist: o[2],
+            nn_resid: o[3] as u32,
+            cost_valid: o[4] != 0,
+            cost: o[5],
+        }
+    }
+}
+
+impl Default for VerilatedSurfaceResidual {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Output port names of the surface residual stage in the order
+/// [`SurfaceLockstep`](crate::SurfaceLockstep) compares them.
+pub const SURFACE_OUTPUT_PORTS: [&str; 6] = ports::outputs(&[ports::SURFACE_RESIDUAL_PORTS]);
+
 /// Output port names of the pipeline in the order [`Lockstep`](crate::Lockstep) compares them.
 pub const OUTPUT_PORTS: [&str; 7] = ports::outputs(&[ports::PIPELINE_PORTS]);
 
@@ -592,4 +648,27 @@ impl Rtl for VerilatedWeightStage {
         Self::new()
     }
     rtl_common!(WeightInputs);
+}
+
+impl Rtl for VerilatedSurfaceResidual {
+    type Inputs = SurfaceInputs;
+    type Outputs = SurfaceOutputs;
+    type Reference = SurfaceResidualModel;
+    const OUTPUT_PORTS: &'static [&'static str] = &SURFACE_OUTPUT_PORTS;
+    fn port_values(o: &SurfaceOutputs) -> Vec<u64> {
+        vec![o.nn_valid as u64, o.nn_index as u64, o.nn_dist, o.nn_resid as u64, o.cost_valid as u64, o.cost]
+    }
+    fn new_reference(&self) -> SurfaceResidualModel {
+        SurfaceResidualModel::new()
+    }
+    fn reference_outputs(r: &SurfaceResidualModel) -> SurfaceOutputs {
+        r.outputs()
+    }
+    fn reference_step(r: &mut SurfaceResidualModel, i: &SurfaceInputs) {
+        r.step(i)
+    }
+    fn fresh(&self) -> Self {
+        Self::new()
+    }
+    rtl_common!(SurfaceInputs);
 }

@@ -12,6 +12,9 @@
 //! - [`neighbour_pipeline`]: `NeighbourPipeline<P>`, lanes over one scan point's candidates
 //!   in its 27 cells, with [`neighbour_lane`]'s lanes and model-RAM banks
 //!   ([`crate::neighbour_pipeline::NeighbourPipelineModel`]);
+//! - [`surface_residual`]: `SurfaceResidual`, the residual stage: each result's surface
+//!   residual and their sum, without DSP48A1s
+//!   ([`crate::surface_residual::SurfaceResidualModel`]);
 //! - [`weights`]: `WeightStage`, minimum cost and exp-table weights
 //!   ([`crate::weights::WeightModel`]);
 //! - [`particle_weights`]: the two wired together ([`crate::particle_weights`]);
@@ -29,6 +32,7 @@ pub mod neighbour_lane;
 pub mod neighbour_pipeline;
 pub mod particle_weights;
 pub mod pipeline;
+pub mod surface_residual;
 pub mod transform;
 pub mod weights;
 
@@ -38,6 +42,7 @@ pub use mul18::{Mul18, MUL18_MODULE};
 pub use neighbour_lane::NeighbourLane;
 pub use neighbour_pipeline::NeighbourPipeline;
 pub use pipeline::NnPipeline;
+pub use surface_residual::SurfaceResidual;
 pub use transform::Transform;
 
 use rust_hdl::prelude::*;
@@ -126,6 +131,14 @@ pub fn particle_weights_verilog(lanes: usize) -> String {
 /// The Verilog of the weight stage alone, top module `top` (docs/weights.md).
 pub fn weight_stage_verilog() -> String {
     let mut uut = weights::WeightStage::new();
+    uut.connect_all();
+    dedup_modules(&generate_verilog(&uut))
+}
+
+/// The Verilog of the residual stage alone (`SurfaceResidual`, docs/pipeline.md "The
+/// surface residual"), top module `top`.
+pub fn surface_residual_verilog() -> String {
+    let mut uut = SurfaceResidual::new();
     uut.connect_all();
     dedup_modules(&generate_verilog(&uut))
 }
