@@ -6,7 +6,8 @@
 //! - `grid_pipeline`: `GridPipeline<P>` from `pficp_fpga::rtl::grid_pipeline_verilog(P)`
 //!   (prefix `VgridP`);
 //! - `neighbour_pipeline`: `NeighbourPipeline<P>` from
-//!   `pficp_fpga::rtl::neighbour_pipeline_verilog(P)` (prefix `VnbrP`; the grid pipeline's ports);
+//!   `pficp_fpga::rtl::neighbour_pipeline_verilog(P)` (prefix `VnbrP`; the grid pipeline's ports
+//!   and `nn_point`);
 //! - `weight_stage`: `WeightStage` from `pficp_fpga::rtl::weight_stage_verilog()` (prefix
 //!   `Vweights`);
 //! - `surface_residual`: `SurfaceResidual` from `pficp_fpga::rtl::surface_residual_verilog()`
@@ -98,8 +99,8 @@ const DESIGNS: [Design; 9] = [
         prefix: "Vnbr",
         per_lane: true,
         verilog: pficp_fpga::rtl::neighbour_pipeline_verilog,
-        ports: &[GRID_PIPELINE_PORTS],
-        spec: "docs/pipeline.md, the neighbour pipeline (sim/src/ports.rs GRID_PIPELINE_PORTS)",
+        ports: &[NEIGHBOUR_PIPELINE_PORTS],
+        spec: "docs/pipeline.md, the neighbour pipeline (sim/src/ports.rs NEIGHBOUR_PIPELINE_PORTS)",
     },
     Design {
         name: "weight_stage",
