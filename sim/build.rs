@@ -6,9 +6,12 @@
 //! - `grid_pipeline`: `GridPipeline<P>` from `pficp_fpga::rtl::grid_pipeline_verilog(P)`
 //!   (prefix `VgridP`);
 //! - `neighbour_pipeline`: `NeighbourPipeline<P>` from
-//!   `pficp_fpga::rtl::neighbour_pipeline_verilog(P)` (prefix `VnbrP`; the grid pipeline's ports);
+//!   `pficp_fpga::rtl::neighbour_pipeline_verilog(P)` (prefix `VnbrP`; the grid pipeline's ports
+//!   and `nn_point`);
 //! - `weight_stage`: `WeightStage` from `pficp_fpga::rtl::weight_stage_verilog()` (prefix
 //!   `Vweights`);
+//! - `surface_residual`: `SurfaceResidual` from `pficp_fpga::rtl::surface_residual_verilog()`
+//!   (prefix `Vsurf`);
 //! - `sequencer`: `PfSequencer` alone, from `pficp_fpga::rtl::sequencer_verilog()`;
 //! - `board` and `board_fast`: the whole board top, `pficp_fpga::rtl::board_verilog` of the
 //!   default and of the fast-UART configuration;
@@ -66,7 +69,7 @@ struct Design {
 }
 
 /// Every design that is verilated.
-const DESIGNS: [Design; 8] = [
+const DESIGNS: [Design; 9] = [
     Design {
         name: "pipeline",
         prefix: "Vpipe",
@@ -96,8 +99,8 @@ const DESIGNS: [Design; 8] = [
         prefix: "Vnbr",
         per_lane: true,
         verilog: pficp_fpga::rtl::neighbour_pipeline_verilog,
-        ports: &[GRID_PIPELINE_PORTS],
-        spec: "docs/pipeline.md, the neighbour pipeline (sim/src/ports.rs GRID_PIPELINE_PORTS)",
+        ports: &[NEIGHBOUR_PIPELINE_PORTS],
+        spec: "docs/pipeline.md, the neighbour pipeline (sim/src/ports.rs NEIGHBOUR_PIPELINE_PORTS)",
     },
     Design {
         name: "weight_stage",
@@ -106,6 +109,14 @@ const DESIGNS: [Design; 8] = [
         verilog: |_| pficp_fpga::rtl::weight_stage_verilog(),
         ports: &[WEIGHT_STAGE_PORTS],
         spec: "docs/weights.md (sim/src/ports.rs WEIGHT_STAGE_PORTS)",
+    },
+    Design {
+        name: "surface_residual",
+        prefix: "Vsurf",
+        per_lane: false,
+        verilog: |_| pficp_fpga::rtl::surface_residual_verilog(),
+        ports: &[SURFACE_RESIDUAL_PORTS],
+        spec: "docs/pipeline.md, the surface residual (sim/src/ports.rs SURFACE_RESIDUAL_PORTS)",
     },
     Design {
         name: "board",

@@ -11,6 +11,8 @@
 //!   over one scan point's candidates in its 27 cells) and its functional reference.
 //! - [`surface`]: the surface residual (distance to the nearest model point's tangent
 //!   plane), its normal format and bit-exact rule.
+//! - [`surface_residual`]: the cycle-accurate reference of the residual stage
+//!   (`SurfaceResidual`: the residual of each neighbour-pipeline result, and their sum).
 //! - [`weights`]: the cycle-accurate reference of the weight stage (minimum cost, exp table).
 //! - [`particle_weights`]: the two wired together, as the RTL top of that name.
 //! - [`pf`]: the on-board particle filter's bit-exact functional reference (`pf::run`), its
@@ -41,4 +43,5 @@ pub mod seq_state;
 pub mod sequencer;
 pub mod splitmix;
 pub mod surface;
+pub mod surface_residual;
 pub mod weights;

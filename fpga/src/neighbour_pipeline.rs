@@ -33,7 +33,8 @@
 //!
 //! [`NeighbourPipelineModel::step`] is one rising edge, [`NeighbourPipelineModel::outputs`]
 //! the output ports after it, as for [`crate::grid_pipeline::GridPipelineModel`]; the ports
-//! are the grid pipeline's ([`GridInputs`], [`Outputs`]).
+//! are the grid pipeline's ([`GridInputs`], [`Outputs`]) plus `nn_point`
+//! ([`Outputs::nn_point`]: each result's transformed scan point, registered with it).
 
 use crate::format::{dist2, transform, unpack_point, FxPoint, FxPose, MAX_POINTS, POINT_WORD_BITS};
 use crate::grid::{axis_cell, Grid, CAP_D2, CELLS, CELLS_PER_AXIS};
@@ -172,12 +173,15 @@ struct Issue {
     q: FxPoint,
 }
 
-/// Per-chunk control through the lane and tree stages.
+/// Per-chunk control through the lane and tree stages, and the chunk's transformed scan
+/// point (`q`, presented as `nn_point` with the point's result: the RTL's delay line
+/// beside the control bits).
 #[derive(Clone, Copy, Debug, Default)]
 struct Ctl {
     valid: bool,
     last: bool,
     slast: bool,
+    q: FxPoint,
 }
 
 /// A lane stage's register: control, lane valid bits, bank rows, per-lane values (the `P`
@@ -406,7 +410,7 @@ impl NeighbourPipelineModel {
                 next.is.b.0 = is.b.0 + stride as u16;
             }
         }
-        next.c0 = (Ctl { valid: is.have, last: done && is.last, slast: is.slast }, is.q, lane_valid, bank_row);
+        next.c0 = (Ctl { valid: is.have, last: done && is.last, slast: is.slast, q: is.q }, is.q, lane_valid, bank_row);
         if !is.have || done {
             next.is.have = !self.queue.is_empty();
             if let Some(e) = self.queue.front() {
@@ -492,6 +496,7 @@ impl NeighbourPipelineModel {
                 next.out.nn_valid = true;
                 next.out.nn_index = (m & 0xfff) as u16;
                 next.out.nn_dist = m >> 12;
+                next.out.nn_point = ct.q;
                 next.acc_used = false;
                 next.fin = ct.slast;
             } else {

@@ -76,6 +76,13 @@ pub struct Outputs {
     pub cost_valid: bool,
     /// The cost (48 bits).
     pub cost: u64,
+    /// The neighbour pipeline's (`NeighbourPipelineModel`, RTL port `nn_point`) transformed
+    /// scan point `q` of the result in `nn_index`/`nn_dist`: registered on the same edges
+    /// (so while `nn_valid` is low it holds the last result's point; `[0, 0, 0]` after
+    /// reset). The brute-force (`PipelineModel`) and grid (`GridPipelineModel`) pipelines
+    /// have no such port: their models leave it `[0, 0, 0]` and their lockstep wrappers do
+    /// not compare it.
+    pub nn_point: FxPoint,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

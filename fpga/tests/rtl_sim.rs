@@ -134,6 +134,8 @@ fn get_outputs<const P: usize>(x: &NnPipeline<P>) -> Outputs {
         nn_dist: x.nn_dist.val().to_u64(),
         cost_valid: x.cost_valid.val(),
         cost: x.cost.val().to_u64(),
+        // No such port on the brute-force pipeline; its model leaves it zero.
+        nn_point: [0, 0, 0],
     }
 }
 

@@ -27,7 +27,7 @@ struct Cli {
     lanes: usize,
     /// Which design to generate: the whole board (pins, UART, protocol engine, pipeline), the
     /// particle-weight pipeline (nearest-neighbour pipeline and weight stage), the
-    /// nearest-neighbour pipeline alone, the grid pipeline alone, the neighbour pipeline alone, or the weight stage alone. Only the board has pins,
+    /// nearest-neighbour pipeline alone, the grid pipeline alone, the neighbour pipeline alone, the weight stage alone, or the surface residual stage alone. Only the board has pins,
     /// so only the board gets a UCF and an ISE script.
     #[arg(long, value_enum, default_value_t = Design::Board, conflicts_with = "verilog")]
     design: Design,
@@ -116,6 +116,8 @@ enum Design {
     NeighbourPipeline,
     /// `WeightStage` alone.
     Weights,
+    /// `SurfaceResidual`: the residual stage alone (no DSP48A1).
+    SurfaceResidual,
 }
 
 /// The design's name on the command line.
@@ -128,9 +130,10 @@ fn design_name(design: Design) -> String {
 fn generated_verilog(design: Design, lanes: usize, board: &BoardConfig) -> Result<(String, String)> {
     use pficp_fpga::rtl::{
         board_verilog, grid_pipeline_verilog, neighbour_pipeline_verilog, particle_weights_verilog, pipeline_verilog,
-        weight_stage_verilog, BOARD_LANES, SUPPORTED_LANES,
+        surface_residual_verilog, weight_stage_verilog, BOARD_LANES, SUPPORTED_LANES,
     };
-    if design != Design::Weights && !SUPPORTED_LANES.contains(&lanes) {
+    let lane_free = matches!(design, Design::Weights | Design::SurfaceResidual);
+    if !lane_free && !SUPPORTED_LANES.contains(&lanes) {
         bail!("--lanes {lanes} is not supported by the RTL; use one of {SUPPORTED_LANES:?}");
     }
     Ok(match design {
@@ -155,6 +158,9 @@ fn generated_verilog(design: Design, lanes: usize, board: &BoardConfig) -> Resul
             (neighbour_pipeline_verilog(lanes), format!("pficp_fpga::rtl::neighbour_pipeline_verilog({lanes})"))
         }
         Design::Weights => (weight_stage_verilog(), "pficp_fpga::rtl::weight_stage_verilog()".to_string()),
+        Design::SurfaceResidual => {
+            (surface_residual_verilog(), "pficp_fpga::rtl::surface_residual_verilog()".to_string())
+        }
     })
 }
 

@@ -41,6 +41,7 @@ pub(crate) const PARTICLE_WEIGHTS: &str = "particle_weights";
 pub(crate) const GRID_PIPELINE: &str = "grid_pipeline";
 pub(crate) const NEIGHBOUR_PIPELINE: &str = "neighbour_pipeline";
 pub(crate) const WEIGHT_STAGE: &str = "weight_stage";
+pub(crate) const SURFACE_RESIDUAL: &str = "surface_residual";
 pub(crate) const BOARD: &str = "board";
 pub(crate) const BOARD_FAST: &str = "board_fast";
 pub(crate) const SEQUENCER: &str = "sequencer";

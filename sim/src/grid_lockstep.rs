@@ -47,9 +47,22 @@ macro_rules! grid_port_drivers {
                 &mut self,
                 scan: &[FxPoint],
                 pose: &FxPose,
+                gap: impl FnMut(u64) -> bool,
+                extra: impl FnMut(u64, &mut GridInputs),
+            ) -> Result<(Evaluation, u64), Mismatch> {
+                self.particle_with_points(scan, pose, gap, extra).map(|(e, _, c)| (e, c))
+            }
+
+            /// [`particle`](Self::particle), also returning `nn_point` with each result (in
+            /// result order; the neighbour pipeline's transformed scan points, all zero for the
+            /// grid pipeline, which has no such port).
+            pub fn particle_with_points(
+                &mut self,
+                scan: &[FxPoint],
+                pose: &FxPose,
                 mut gap: impl FnMut(u64) -> bool,
                 mut extra: impl FnMut(u64, &mut GridInputs),
-            ) -> Result<(Evaluation, u64), Mismatch> {
+            ) -> Result<(Evaluation, Vec<FxPoint>, u64), Mismatch> {
                 assert!(!scan.is_empty());
                 let mut wait = 0u64;
                 while self.outputs().busy {
@@ -60,6 +73,7 @@ macro_rules! grid_port_drivers {
                 self.step(&GridInputs::start(pose))?;
                 let (mut next, mut clocks) = (0, 1u64);
                 let mut nearest = Vec::with_capacity(scan.len());
+                let mut points = Vec::with_capacity(scan.len());
                 // Generous bound: every batch sweeps 256 rows of at most 8,191 addresses (any table).
                 let limit = 1000 + (scan.len() as u64 + 1) * (256 * 8192 + 300);
                 loop {
@@ -73,9 +87,10 @@ macro_rules! grid_port_drivers {
                     let now = self.outputs();
                     if now.nn_valid {
                         nearest.push((now.nn_index, now.nn_dist));
+                        points.push(now.nn_point);
                     }
                     if now.cost_valid {
-                        return Ok((Evaluation { cost: now.cost, nearest }, clocks));
+                        return Ok((Evaluation { cost: now.cost, nearest }, points, clocks));
                     }
                     assert!(
                         clocks < limit,

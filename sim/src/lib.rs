@@ -7,11 +7,12 @@
 //! | `neighbour_pipeline_verilog(P)` (docs/pipeline.md, the neighbour pipeline), the same P | [`VerilatedNeighbourPipeline`] | [`NeighbourPipelineModel`](pficp_fpga::neighbour_pipeline::NeighbourPipelineModel) | [`NeighbourLockstep`] |
 //! | `particle_weights_verilog(P)`, the same P | [`VerilatedParticleWeights`] | [`ParticleWeightModel`](pficp_fpga::particle_weights::ParticleWeightModel) | [`PwLockstep`] |
 //! | `weight_stage_verilog()` (docs/weights.md) | [`VerilatedWeightStage`] | [`WeightModel`](pficp_fpga::weights::WeightModel) | [`WeightLockstep`] |
+//! | `surface_residual_verilog()` (docs/pipeline.md, the surface residual) | [`VerilatedSurfaceResidual`] | [`SurfaceResidualModel`](pficp_fpga::surface_residual::SurfaceResidualModel) | [`SurfaceLockstep`] |
 //! | the sequencer `PfSequencer` alone (docs/sequencer.md) | [`VerilatedSequencer`] | [`SequencerModel`](pficp_fpga::sequencer::SequencerModel) | [`SeqLockstep`] |
 //! | `board_verilog` (the whole board top, default and fast builds) | [`VerilatedBoard`] | `BoardModel` (byte level) | [`serial::SerialBoard`] |
 //!
 //! - The wrappers run the Verilated RTL one clock at a time, with an optional VCD.
-//! - [`LockstepOf`] (the five lockstep types are its instances) drives the RTL and the
+//! - [`LockstepOf`] (the lockstep types are its instances) drives the RTL and the
 //!   reference with the same inputs and compares every output port after reset and after
 //!   every rising edge; a difference is a [`Mismatch`] that names the cycle, the signal,
 //!   both values and a VCD of the RTL run. By default the first one stops the run;

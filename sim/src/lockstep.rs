@@ -150,6 +150,9 @@ pub type Lockstep = LockstepOf<VerilatedPipeline>;
 pub type PwLockstep = LockstepOf<VerilatedParticleWeights>;
 /// The weight stage in lockstep with [`WeightModel`](pficp_fpga::weights::WeightModel).
 pub type WeightLockstep = LockstepOf<VerilatedWeightStage>;
+/// The surface residual stage in lockstep with
+/// [`SurfaceResidualModel`](pficp_fpga::surface_residual::SurfaceResidualModel).
+pub type SurfaceLockstep = LockstepOf<VerilatedSurfaceResidual>;
 /// The particle-filter sequencer in lockstep with
 /// [`SequencerModel`](pficp_fpga::sequencer::SequencerModel).
 pub type SeqLockstep = LockstepOf<VerilatedSequencer>;
@@ -536,6 +539,20 @@ impl LockstepOf<VerilatedWeightStage> {
         wait_weight_idle(&mut step, now)?;
         step(&WeightInputs { cost_valid: true, cost, ..Default::default() })?;
         Ok(())
+    }
+}
+
+impl LockstepOf<VerilatedSurfaceResidual> {
+    /// The residual-stage RTL and `SurfaceResidualModel::new()`, both after reset; VCD (on
+    /// mismatch) under the system temp directory; see [`vcd`](Self::vcd).
+    pub fn new() -> Self {
+        Self::from_rtl(VerilatedSurfaceResidual::new())
+    }
+}
+
+impl Default for LockstepOf<VerilatedSurfaceResidual> {
+    fn default() -> Self {
+        Self::new()
     }
 }
 

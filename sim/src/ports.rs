@@ -53,6 +53,31 @@ pub const GRID_PIPELINE_PORTS: &[PortSpec] = &[
     ("cost", false, 48),
 ];
 
+/// The ports of the neighbour pipeline's `top` (docs/pipeline.md, "The neighbour
+/// pipeline"): the grid pipeline's, then `nn_point` (each result's transformed scan point).
+pub const NEIGHBOUR_PIPELINE_PORTS: &[PortSpec] = &[
+    ("clock", true, 1),
+    ("model_we", true, 1),
+    ("model_waddr", true, 12),
+    ("model_wdata", true, 48),
+    ("table_we", true, 1),
+    ("table_waddr", true, 13),
+    ("table_wdata", true, 13),
+    ("start", true, 1),
+    ("pose", true, 216),
+    ("scan_valid", true, 1),
+    ("scan_data", true, 48),
+    ("scan_last", true, 1),
+    ("scan_ready", false, 1),
+    ("busy", false, 1),
+    ("nn_valid", false, 1),
+    ("nn_index", false, 12),
+    ("nn_dist", false, 34),
+    ("cost_valid", false, 1),
+    ("cost", false, 48),
+    ("nn_point", false, 48),
+];
+
 /// The ports the particle-weight pipeline (`fpga/src/rtl/particle_weights.rs`) adds to
 /// [`PIPELINE_PORTS`]: the weight stage's controls and outputs (docs/weights.md; `busy` and
 /// `count` renamed `w_busy` and `w_count`).
@@ -88,6 +113,28 @@ pub const WEIGHT_STAGE_PORTS: &[PortSpec] = &[
     ("weight", false, 16),
     ("w_done", false, 1),
     ("w_sum", false, 24),
+];
+
+/// The ports of the surface residual stage (docs/pipeline.md, "The surface residual").
+pub const SURFACE_RESIDUAL_PORTS: &[PortSpec] = &[
+    ("clock", true, 1),
+    ("point_we", true, 1),
+    ("point_waddr", true, 12),
+    ("point_wdata", true, 48),
+    ("normal_we", true, 1),
+    ("normal_waddr", true, 12),
+    ("normal_wdata", true, 48),
+    ("in_valid", true, 1),
+    ("in_index", true, 12),
+    ("in_dist", true, 34),
+    ("in_point", true, 48),
+    ("in_cost_valid", true, 1),
+    ("nn_valid", false, 1),
+    ("nn_index", false, 12),
+    ("nn_dist", false, 34),
+    ("nn_resid", false, 21),
+    ("cost_valid", false, 1),
+    ("cost", false, 48),
 ];
 
 /// The pins of the board top (`fpga/src/rtl/board/top.rs`).

@@ -5,6 +5,7 @@ use crate::core::*;
 use crate::lockstep::Rtl;
 use crate::ports;
 use pficp_fpga::board::BoardConfig;
+use pficp_fpga::format::{pack_point, unpack_point};
 use pficp_fpga::grid_pipeline::{GridInputs, GridPipelineModel};
 use pficp_fpga::neighbour_pipeline::NeighbourPipelineModel;
 use pficp_fpga::particle_weights::ParticleWeightModel;
@@ -13,6 +14,8 @@ use pficp_fpga::pipeline::PipelineModel;
 use pficp_fpga::pipeline::{Inputs, Outputs};
 use pficp_fpga::sequencer::SequencerModel;
 use pficp_fpga::sequencer::{SeqInputs, SeqOutputs};
+use pficp_fpga::surface_residual::SurfaceResidualModel;
+use pficp_fpga::surface_residual::{SurfaceInputs, SurfaceOutputs};
 use pficp_fpga::weights::WeightModel;
 use pficp_fpga::weights::{WeightInputs, WeightOutputs};
 use std::fmt;
@@ -53,7 +56,13 @@ pub(crate) fn pipeline_outputs(o: &[u64]) -> Outputs {
         nn_dist: o[4],
         cost_valid: o[5] != 0,
         cost: o[6],
+        nn_point: [0, 0, 0],
     }
+}
+
+/// The neighbour pipeline's outputs: the grid pipeline's seven words, then `nn_point`.
+pub(crate) fn neighbour_outputs(o: &[u64; 8]) -> Outputs {
+    Outputs { nn_point: unpack_point(o[7]), ..pipeline_outputs(&o[..7]) }
 }
 
 impl VerilatedPipeline {
@@ -134,7 +143,7 @@ pub(crate) fn grid_input_words(i: &GridInputs) -> [u64; 14] {
 }
 
 /// The Verilated neighbour pipeline (`NeighbourPipeline<P>`: lanes over one scan point's
-/// candidates; the grid pipeline's ports).
+/// candidates; the grid pipeline's ports and `nn_point`).
 pub struct VerilatedNeighbourPipeline {
     pub(crate) core: Core,
 }
@@ -146,7 +155,7 @@ impl VerilatedNeighbourPipeline {
     ///
     /// Panics if no model was verilated for `lanes` (see [`verilated_lanes`]).
     pub fn new(lanes: usize) -> Self {
-        VerilatedNeighbourPipeline { core: Core::new(NEIGHBOUR_PIPELINE, lanes, 14, &GRID_OUTPUT_PORTS) }
+        VerilatedNeighbourPipeline { core: Core::new(NEIGHBOUR_PIPELINE, lanes, 14, &NEIGHBOUR_OUTPUT_PORTS) }
     }
 
     /// Number of lanes.
@@ -161,7 +170,7 @@ impl VerilatedNeighbourPipeline {
 
     /// The output ports now.
     pub fn outputs(&self) -> Outputs {
-        pipeline_outputs(&self.core.outputs::<7>())
+        neighbour_outputs(&self.core.outputs::<8>())
     }
 }
 
@@ -370,11 +379,70 @@ impl Default for VerilatedWeightStage {
     }
 }
 
+/// The Verilated surface residual stage (`SurfaceResidual`) with its own `VerilatedContext`.
+pub struct VerilatedSurfaceResidual {
+    pub(crate) core: Core,
+}
+
+verilated_common!(VerilatedSurfaceResidual, SurfaceInputs);
+
+impl VerilatedSurfaceResidual {
+    /// The residual stage after reset.
+    pub fn new() -> Self {
+        VerilatedSurfaceResidual { core: Core::new(SURFACE_RESIDUAL, 0, 11, &SURFACE_OUTPUT_PORTS) }
+    }
+
+    /// Drive the input ports (masked to the port widths).
+    pub fn set_inputs(&mut self, i: &SurfaceInputs) {
+        self.core.set_inputs(&[
+            i.point_we as u64,
+            i.point_waddr as u64,
+            i.point_wdata,
+            i.normal_we as u64,
+            i.normal_waddr as u64,
+            i.normal_wdata,
+            i.in_valid as u64,
+            i.in_index as u64,
+            i.in_dist,
+            i.in_point,
+            i.in_cost_valid as u64,
+        ])
+    }
+
+    /// The output ports now.
+    pub fn outputs(&self) -> SurfaceOutputs {
+        let o = self.core.outputs::<6>();
+        SurfaceOutputs {
+            nn_valid: o[0] != 0,
+            nn_index: o[1] as u16,
+            nn_dist: o[2],
+            nn_resid: o[3] as u32,
+            cost_valid: o[4] != 0,
+            cost: o[5],
+        }
+    }
+}
+
+impl Default for VerilatedSurfaceResidual {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Output port names of the surface residual stage in the order
+/// [`SurfaceLockstep`](crate::SurfaceLockstep) compares them.
+pub const SURFACE_OUTPUT_PORTS: [&str; 6] = ports::outputs(&[ports::SURFACE_RESIDUAL_PORTS]);
+
 /// Output port names of the pipeline in the order [`Lockstep`](crate::Lockstep) compares them.
 pub const OUTPUT_PORTS: [&str; 7] = ports::outputs(&[ports::PIPELINE_PORTS]);
 
 /// Output port names of the grid pipeline in the order [`GridLockstep`](crate::GridLockstep) compares them.
 pub const GRID_OUTPUT_PORTS: [&str; 7] = ports::outputs(&[ports::GRID_PIPELINE_PORTS]);
+
+/// Output port names of the neighbour pipeline in the order
+/// [`NeighbourLockstep`](crate::NeighbourLockstep) compares them (the grid pipeline's, then
+/// `nn_point`).
+pub const NEIGHBOUR_OUTPUT_PORTS: [&str; 8] = ports::outputs(&[ports::NEIGHBOUR_PIPELINE_PORTS]);
 
 /// Output port names of the particle-weight pipeline in the order [`PwLockstep`](crate::PwLockstep) compares
 /// them (the pipeline's, then the weight stage's).
@@ -383,8 +451,16 @@ pub const PW_OUTPUT_PORTS: [&str; 15] = ports::outputs(&[ports::PIPELINE_PORTS, 
 /// Output port names of the weight stage in the order [`WeightLockstep`](crate::WeightLockstep) compares them.
 pub const WEIGHT_OUTPUT_PORTS: [&str; 8] = ports::outputs(&[ports::WEIGHT_STAGE_PORTS]);
 
+/// The ports the brute-force and grid pipelines have (not `nn_point`: their models leave it
+/// zero, and it is not compared).
 pub(crate) fn port_values(o: &Outputs) -> [u64; 7] {
     [o.scan_ready as u64, o.busy as u64, o.nn_valid as u64, o.nn_index as u64, o.nn_dist, o.cost_valid as u64, o.cost]
+}
+
+/// The neighbour pipeline's ports: the grid pipeline's, then `nn_point` (packed).
+pub(crate) fn neighbour_port_values(o: &Outputs) -> [u64; 8] {
+    let v = port_values(o);
+    [v[0], v[1], v[2], v[3], v[4], v[5], v[6], pack_point(o.nn_point)]
 }
 
 pub(crate) fn weight_port_values(o: &WeightOutputs) -> [u64; 8] {
@@ -481,9 +557,9 @@ impl Rtl for VerilatedNeighbourPipeline {
     type Inputs = GridInputs;
     type Outputs = Outputs;
     type Reference = NeighbourPipelineModel;
-    const OUTPUT_PORTS: &'static [&'static str] = &GRID_OUTPUT_PORTS;
+    const OUTPUT_PORTS: &'static [&'static str] = &NEIGHBOUR_OUTPUT_PORTS;
     fn port_values(o: &Outputs) -> Vec<u64> {
-        port_values(o).to_vec()
+        neighbour_port_values(o).to_vec()
     }
     fn new_reference(&self) -> NeighbourPipelineModel {
         NeighbourPipelineModel::new(self.lanes())
@@ -592,4 +668,27 @@ impl Rtl for VerilatedWeightStage {
         Self::new()
     }
     rtl_common!(WeightInputs);
+}
+
+impl Rtl for VerilatedSurfaceResidual {
+    type Inputs = SurfaceInputs;
+    type Outputs = SurfaceOutputs;
+    type Reference = SurfaceResidualModel;
+    const OUTPUT_PORTS: &'static [&'static str] = &SURFACE_OUTPUT_PORTS;
+    fn port_values(o: &SurfaceOutputs) -> Vec<u64> {
+        vec![o.nn_valid as u64, o.nn_index as u64, o.nn_dist, o.nn_resid as u64, o.cost_valid as u64, o.cost]
+    }
+    fn new_reference(&self) -> SurfaceResidualModel {
+        SurfaceResidualModel::new()
+    }
+    fn reference_outputs(r: &SurfaceResidualModel) -> SurfaceOutputs {
+        r.outputs()
+    }
+    fn reference_step(r: &mut SurfaceResidualModel, i: &SurfaceInputs) {
+        r.step(i)
+    }
+    fn fresh(&self) -> Self {
+        Self::new()
+    }
+    rtl_common!(SurfaceInputs);
 }

@@ -6,11 +6,12 @@
 //! rewrites between particles, writes during a particle, and tables of anything (entries up
 //! to 8,191: reversed, overlapping and wrapping ranges). Each result also equals the
 //! functional reference: `evaluate_grid` with the model's own table, `evaluate_stored` over
-//! the stores as written otherwise. Seed `PFICP_COSIM_SEED` (default 1), cases
+//! the stores as written otherwise, and each result's `nn_point` is its scan point
+//! transformed (`transform(pose, scan[k])` for the k-th result). Seed `PFICP_COSIM_SEED` (default 1), cases
 //! `PFICP_NBR_CASES` (default 40). And the B lanes' table squares at their limits
 //! (magnitudes around 2^9 and 2^10), directed.
 
-use pficp_fpga::format::{pack_point, FxPoint, FxPose, MAX_POINTS};
+use pficp_fpga::format::{pack_point, transform, FxPoint, FxPose, MAX_POINTS};
 use pficp_fpga::grid::{Grid, CELLS, CELL_LSBS};
 use pficp_fpga::grid_pipeline::{evaluate_grid, GridInputs};
 use pficp_fpga::neighbour_pipeline::evaluate_stored;
@@ -75,6 +76,11 @@ fn random_pose(r: &mut Rng) -> FxPose {
     FxPose::from_f64(&[c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c], &t)
 }
 
+/// The transformed scan points the results must present as `nn_point`, in scan order.
+fn transformed(scan: &[FxPoint], pose: &FxPose) -> Vec<FxPoint> {
+    scan.iter().map(|&p| transform(pose, p)).collect()
+}
+
 #[test]
 fn random_cases_in_lockstep() {
     let seed: u64 = std::env::var("PFICP_COSIM_SEED").ok().and_then(|s| s.parse().ok()).unwrap_or(1);
@@ -97,10 +103,11 @@ fn random_cases_in_lockstep() {
             for k in 0..1 + rng.below(3) {
                 let (scan, pose) = (random_scan(&mut rng), random_pose(&mut rng));
                 let gaps = rng.below(3);
-                let (got, _) = ls
-                    .particle(&scan, &pose, |c| gaps > 0 && c % (gaps + 1) == 1, |_, _| {})
+                let (got, points, _) = ls
+                    .particle_with_points(&scan, &pose, |c| gaps > 0 && c % (gaps + 1) == 1, |_, _| {})
                     .unwrap_or_else(|m| panic!("{ctx} particle {k}: {m}"));
                 assert_eq!(got, evaluate_grid(&grid, &scan, &pose), "{ctx} particle {k}");
+                assert_eq!(points, transformed(&scan, &pose), "{ctx} particle {k}: nn_point");
             }
             // Now and then a table of anything and model words past the model, between
             // particles: the answer is the stored reference's.
@@ -131,10 +138,11 @@ fn random_cases_in_lockstep() {
                     ram[a] = w;
                 }
                 let (scan, pose) = (random_scan(&mut rng), random_pose(&mut rng));
-                let (got, _) = ls
-                    .particle(&scan, &pose, |c| c % 4 == 3, |_, _| {})
+                let (got, points, _) = ls
+                    .particle_with_points(&scan, &pose, |c| c % 4 == 3, |_, _| {})
                     .unwrap_or_else(|m| panic!("{ctx} (any table): {m}"));
                 assert_eq!(got, evaluate_stored(&ram, &first, &scan, &pose), "{ctx} (any table)");
+                assert_eq!(points, transformed(&scan, &pose), "{ctx} (any table): nn_point");
             }
             // Now and then writes during a particle: the lockstep still holds.
             if rng.below(4) == 0 {
@@ -187,10 +195,12 @@ fn b_lane_squares_at_their_limits() {
                     scan.extend(offsets.iter().map(|&c| [m[0] + a, m[1] + b, m[2] + c]));
                 }
             }
-            let (got, _) =
-                ls.particle(&scan, &id, |_| false, |_, _| {}).unwrap_or_else(|e| panic!("{m:?}, P = {lanes}: {e}"));
+            let (got, points, _) = ls
+                .particle_with_points(&scan, &id, |_| false, |_, _| {})
+                .unwrap_or_else(|e| panic!("{m:?}, P = {lanes}: {e}"));
             let want = evaluate_grid(&grid, &scan, &id);
             assert_eq!(got, want, "{m:?}, P = {lanes}");
+            assert_eq!(points, transformed(&scan, &id), "{m:?}, P = {lanes}: nn_point");
             assert!(want.nearest.iter().filter(|n| n.1 < pficp_fpga::grid::CAP_D2).count() == 783);
         }
     }

@@ -50,6 +50,7 @@ fn every_design_is_verilated() {
             ("neighbour_pipeline", 4, "Vnbr4"),
             ("neighbour_pipeline", 16, "Vnbr16"),
             ("weight_stage", 0, "Vweights"),
+            ("surface_residual", 0, "Vsurf"),
             ("board", 0, "Vboard"),
             ("sequencer", 0, "Vseq"),
             ("board_fast", 0, "Vboardfast"),

@@ -12,6 +12,9 @@
 //! - [`neighbour_pipeline`]: `NeighbourPipeline<P>`, lanes over one scan point's candidates
 //!   in its 27 cells, with [`neighbour_lane`]'s lanes and model-RAM banks
 //!   ([`crate::neighbour_pipeline::NeighbourPipelineModel`]);
+//! - [`surface_residual`]: `SurfaceResidual`, the residual stage: each result's surface
+//!   residual and their sum, without DSP48A1s
+//!   ([`crate::surface_residual::SurfaceResidualModel`]);
 //! - [`weights`]: `WeightStage`, minimum cost and exp-table weights
 //!   ([`crate::weights::WeightModel`]);
 //! - [`particle_weights`]: the two wired together ([`crate::particle_weights`]);
@@ -29,6 +32,7 @@ pub mod neighbour_lane;
 pub mod neighbour_pipeline;
 pub mod particle_weights;
 pub mod pipeline;
+pub mod surface_residual;
 pub mod transform;
 pub mod weights;
 
@@ -38,6 +42,7 @@ pub use mul18::{Mul18, MUL18_MODULE};
 pub use neighbour_lane::NeighbourLane;
 pub use neighbour_pipeline::NeighbourPipeline;
 pub use pipeline::NnPipeline;
+pub use surface_residual::SurfaceResidual;
 pub use transform::Transform;
 
 use rust_hdl::prelude::*;
@@ -130,6 +135,14 @@ pub fn weight_stage_verilog() -> String {
     dedup_modules(&generate_verilog(&uut))
 }
 
+/// The Verilog of the residual stage alone (`SurfaceResidual`, docs/pipeline.md "The
+/// surface residual"), top module `top`.
+pub fn surface_residual_verilog() -> String {
+    let mut uut = SurfaceResidual::new();
+    uut.connect_all();
+    dedup_modules(&generate_verilog(&uut))
+}
+
 /// The Verilog of `NnPipeline<lanes>`: top module `top` (ports as docs/pipeline.md), one
 /// module per block instance, the multiplier module ([`MUL18_MODULE`]) defined once.
 ///
@@ -195,13 +208,15 @@ fn board_of<const P: usize>(config: &crate::board::BoardConfig) -> String {
 
 /// The sequencer's particle-RAM write port (`p_we`, `p_waddr`, `p_wdata`) is a probe for the
 /// co-simulation of the sequencer alone; the engine leaves it unconnected (Yosys removes
-/// it). Its three wire declarations get a targeted `UNUSEDSIGNAL` waiver, nothing else.
+/// it). The pipeline's `nn_point` feeds the surface residual, which the engine does not
+/// instantiate yet (branch `board4`). Their wire declarations get a targeted
+/// `UNUSEDSIGNAL` waiver, nothing else.
 pub fn waive_probe_ports(v: &str) -> String {
     let mut out = String::with_capacity(v.len() + 256);
     for line in v.lines() {
         let t = line.trim_start();
         let probe = t.starts_with("wire")
-            && ["filter$p_we;", "filter$p_waddr;", "filter$p_wdata;"].iter().any(|n| t.ends_with(n));
+            && ["filter$p_we;", "filter$p_waddr;", "filter$p_wdata;", "nn$nn_point;"].iter().any(|n| t.ends_with(n));
         if probe {
             out.push_str("/* verilator lint_off UNUSEDSIGNAL */\n");
             out.push_str(line);

@@ -8,7 +8,9 @@
 //! even chunks A, odd chunks B, stride `2P`); `P` [`NeighbourLane`]s (A, range A, squares in
 //! DSP48A1s) and `P` [`NeighbourLaneB`]s (B, range B, squares from block-RAM tables), each
 //! with its bank of the model RAM (two copies, written together); a registered min-tree over `(d2, index)`
-//! keys, four levels a side and one across; the per-point accumulator and the cost.
+//! keys, four levels a side and one across; the per-point accumulator and the cost. Each
+//! chunk's point (`c0_q`) rides a delay line beside the control bits (`ctl_q`, a shift
+//! register) to the accumulator, where a point's last chunk registers it as `nn_point`.
 
 use super::neighbour_lane::{NeighbourLane, NeighbourLaneB};
 use super::transform::Transform;
@@ -56,6 +58,9 @@ pub struct NeighbourPipeline<const P: usize> {
     pub nn_index: Signal<Out, Bits<12>>,
     /// Its squared distance (Q8.26), at most `CAP_D2`.
     pub nn_dist: Signal<Out, Bits<34>>,
+    /// The transformed scan point `q` whose result `nn_index`/`nn_dist` hold (packed x | y | z,
+    /// Q3.13), registered on the same edges (while `nn_valid` is low: the last result's).
+    pub nn_point: Signal<Out, Bits<48>>,
     /// `cost` holds the particle's cost (one-clock strobe).
     pub cost_valid: Signal<Out, Bit>,
     /// Sum of the squared distances (Q22.26).
@@ -132,6 +137,8 @@ pub struct NeighbourPipeline<const P: usize> {
     ctl_v: [DFF<Bit>; 10],
     ctl_l: [DFF<Bit>; 10],
     ctl_s: [DFF<Bit>; 10],
+    // The chunk's point beside the control (no enable, no logic: a shift register).
+    ctl_q: [DFF<Bits<48>>; 10],
     lanes: [NeighbourLane; P],
     lanes_b: [NeighbourLaneB; P],
     // The min-tree: the A lanes' four levels (t), the B lanes' (u), then the smaller (t5).
@@ -151,6 +158,7 @@ pub struct NeighbourPipeline<const P: usize> {
     nn_valid_r: DFF<Bit>,
     nn_index_r: DFF<Bits<12>>,
     nn_dist_r: DFF<Bits<34>>,
+    nn_point_r: DFF<Bits<48>>,
     cost_valid_r: DFF<Bit>,
     cost_r: DFF<Bits<48>>,
     // Combinational.
@@ -216,6 +224,7 @@ impl<const P: usize> NeighbourPipeline<P> {
             nn_valid: Default::default(),
             nn_index: Default::default(),
             nn_dist: Default::default(),
+            nn_point: Default::default(),
             cost_valid: Default::default(),
             cost: Default::default(),
             pc13: Constant::new((P as u64).into()),
@@ -285,6 +294,7 @@ impl<const P: usize> NeighbourPipeline<P> {
             ctl_v: Default::default(),
             ctl_l: Default::default(),
             ctl_s: Default::default(),
+            ctl_q: Default::default(),
             lanes: std::array::from_fn(|b| NeighbourLane::new(b, P)),
             lanes_b: std::array::from_fn(|b| NeighbourLaneB::new(b, P)),
             t1: Default::default(),
@@ -303,6 +313,7 @@ impl<const P: usize> NeighbourPipeline<P> {
             nn_valid_r: Default::default(),
             nn_index_r: Default::default(),
             nn_dist_r: Default::default(),
+            nn_point_r: Default::default(),
             cost_valid_r: Default::default(),
             cost_r: Default::default(),
             ready: Default::default(),
@@ -405,6 +416,7 @@ impl<const P: usize> Logic for NeighbourPipeline<P> {
             nn_valid_r,
             nn_index_r,
             nn_dist_r,
+            nn_point_r,
             cost_valid_r,
             cost_r
         );
@@ -448,6 +460,7 @@ impl<const P: usize> Logic for NeighbourPipeline<P> {
             self.ctl_v[k].clock.next = self.clock.val();
             self.ctl_l[k].clock.next = self.clock.val();
             self.ctl_s[k].clock.next = self.clock.val();
+            self.ctl_q[k].clock.next = self.clock.val();
         }
         for j in 0..8 {
             self.t1[j].clock.next = self.clock.val();
@@ -786,10 +799,12 @@ impl<const P: usize> Logic for NeighbourPipeline<P> {
         self.ctl_v[0].d.next = self.c0_valid.q.val();
         self.ctl_l[0].d.next = self.c0_last.q.val();
         self.ctl_s[0].d.next = self.c0_slast.q.val();
+        self.ctl_q[0].d.next = self.c0_q.q.val();
         for k in 1..10 {
             self.ctl_v[k].d.next = self.ctl_v[k - 1].q.val();
             self.ctl_l[k].d.next = self.ctl_l[k - 1].q.val();
             self.ctl_s[k].d.next = self.ctl_s[k - 1].q.val();
+            self.ctl_q[k].d.next = self.ctl_q[k - 1].q.val();
         }
         // The min-tree over the A lanes' keys (padded to 16 leaves with the neutral key).
         for j in 0..(P / 2) {
@@ -870,6 +885,7 @@ impl<const P: usize> Logic for NeighbourPipeline<P> {
                 self.nn_valid_r.d.next = true;
                 self.nn_index_r.d.next = self.m.val().get_bits::<12>(0);
                 self.nn_dist_r.d.next = self.nn_d.val();
+                self.nn_point_r.d.next = self.ctl_q[9].q.val();
                 self.acc_used.d.next = false;
                 self.fin.d.next = self.ctl_s[9].q.val();
             } else {
@@ -904,6 +920,7 @@ impl<const P: usize> Logic for NeighbourPipeline<P> {
         self.nn_valid.next = self.nn_valid_r.q.val();
         self.nn_index.next = self.nn_index_r.q.val();
         self.nn_dist.next = self.nn_dist_r.q.val();
+        self.nn_point.next = self.nn_point_r.q.val();
         self.cost_valid.next = self.cost_valid_r.q.val();
         self.cost.next = self.cost_r.q.val();
     }
