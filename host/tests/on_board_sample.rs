@@ -12,9 +12,9 @@
 //! for other sample sizes, default 300, 500, 1,000; `PFICP_SAMPLE_NOISE_PERCENT=1` for
 //! `U(0, 1%` of the diagonal`)` noise on every scan coordinate, default 0;
 //! `PFICP_SAMPLE_UNCAPPED=1` to emulate the protocol 2 board instead: the brute-force
-//! search, distances not capped, to see what the grid's cap changes;
-//! `PFICP_SAMPLE_SURFACE=1` for the surface residual's cost, `pficp_fpga::surface`). The tables they
-//! print are in docs/decisions.md.
+//! search, distances not capped, to see what the grid's cap changes). The board's cost is
+//! the surface residual (protocol 4, `pficp_fpga::surface`). The tables they print are in
+//! docs/decisions.md.
 
 use pficp::board::fixed::{normalised_pose, quantise_pose};
 use pficp::board::on_board;
@@ -68,10 +68,6 @@ fn scan_points_per_weight_on_the_board() {
     if uncapped {
         println!("the protocol 2 board: brute-force search, distances not capped");
     }
-    let surface = std::env::var("PFICP_SAMPLE_SURFACE").is_ok_and(|v| v == "1");
-    if surface {
-        println!("the cost of the surface residual (pficp_fpga::surface), not yet on the board");
-    }
     println!("{seeds} seeds per model, noise {noise_percent}% of the diagonal, board samples {sizes:?}");
     let board = BoardConfig::default();
     // columns: software, then each board sample size: the board's pose alone, then polished
@@ -99,9 +95,7 @@ fn scan_points_per_weight_on_the_board() {
                 .par_iter()
                 .map(|&s| {
                     let plan = on_board::plan_with_prior(prior.clone(), &nn, &ds.scan, &settings, s, 4096).unwrap();
-                    let out = if surface {
-                        plan.emulate_surface(&on_board::stored_normals(&plan.grid))
-                    } else if uncapped {
+                    let out = if uncapped {
                         pf::run(&plan.config, |p| {
                             pf::Evaluated::of(&pficp_fpga::pipeline::evaluate(&plan.model, &plan.scan, p))
                         })

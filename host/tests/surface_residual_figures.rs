@@ -1,6 +1,6 @@
-//! What the surface residual (`pficp_fpga::surface`) would change on the board: the board's
-//! pose alone (no host polish) with the filter's cost as today (point-to-point, capped) and
-//! with the residual along the nearest stored point's normal, on the realistic benchmark's
+//! What the surface residual (`pficp_fpga::surface`, protocol 4) changed on the board: the
+//! board's pose alone (no host polish) with the protocol 3 board's cost (point-to-point,
+//! capped) and with the residual along the nearest stored point's normal, on the realistic benchmark's
 //! quick set (8 cases a family, seed 1), the board sample of `on_board::DEFAULT_BOARD_POINTS`
 //! scan points. Both columns run `pficp_fpga::pf::run`, the board's bit-exact filter, on the
 //! same plan; only the cost differs.
@@ -10,7 +10,7 @@
 //! (`PFICP_SPLIT=test` for the test split, default dev; `PFICP_BOARD_POINTS=N` for another
 //! sample size). The tables it printed are in docs/decisions.md, "The surface residual".
 
-use pficp::board::on_board::{self, plan, stored_normals};
+use pficp::board::on_board::{self, plan};
 use pficp::eval::realistic::{case, score, Family, Split};
 use pficp::nn::NearestNeighbours;
 use pficp::pf_icp::PfIcpSettings;
@@ -23,7 +23,7 @@ fn the_board_alone_with_the_surface_residual() {
     let points =
         std::env::var("PFICP_BOARD_POINTS").ok().and_then(|v| v.parse().ok()).unwrap_or(on_board::DEFAULT_BOARD_POINTS);
     println!("split {split:?}, seed 1, 8 cases a family, {points} board points; the board's pose alone");
-    println!("| family | point-to-point (today) | surface residual | + tangential excess (f64, not a board rule) |");
+    println!("| family | point-to-point (protocol 3) | surface residual (the board) | + tangential excess (f64, not a board rule) |");
     println!("|---|---|---|---|");
     let mut totals = [0usize; 4];
     for family in Family::ALL {
@@ -34,8 +34,7 @@ fn the_board_alone_with_the_surface_residual() {
                 let nn = NearestNeighbours::new(&c.model);
                 let settings = PfIcpSettings { seed: c.seed, ..Default::default() };
                 let plan = plan(&nn, &c.scan, &settings, points, pficp::board::MAX_POINTS).expect("plan");
-                let normals = stored_normals(&plan.grid);
-                let outs = [plan.emulate(), plan.emulate_surface(&normals), excess_filter(&plan, &normals)];
+                let outs = [point_to_point_filter(&plan), plan.emulate(), excess_filter(&plan, &plan.normals)];
                 let scores =
                     outs.map(|o| score(&on_board::params_pose(&o.params, &plan.model_norm, &plan.scan_norm), &c));
                 let ok = [scores[0].success, scores[1].success, scores[2].success];
@@ -68,6 +67,17 @@ fn the_board_alone_with_the_surface_residual() {
     println!("| all | {}/{n} | {}/{n} | {}/{n} |", totals[0], totals[1], totals[2], n = totals[3]);
     // The residual is the better cost on this set or the change is wrong.
     assert!(totals[1] >= totals[0], "the surface residual lost cases: {} against {}", totals[1], totals[0]);
+}
+
+/// The protocol 3 board's filter: the cost the capped squared distances of the grid search
+/// (`Grid::nearest`), the largest of them beside it.
+fn point_to_point_filter(plan: &on_board::OnBoardPlan) -> pficp_fpga::pf::PfOutcome {
+    pficp_fpga::pf::run(&plan.config, |pose| {
+        let d2: Vec<u64> =
+            plan.scan.iter().map(|&p| plan.grid.nearest(pficp_fpga::format::transform(pose, p)).d2).collect();
+        let cost = d2.iter().fold(0u64, |c, &x| (c + x) & pficp_fpga::format::COST_MASK);
+        pficp_fpga::pf::Evaluated { cost, max_d2: d2.iter().copied().max().unwrap_or(0) }
+    })
 }
 
 /// The filter with the software's surface distance (`pf_icp::surface`: the residual plus the

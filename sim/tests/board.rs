@@ -48,10 +48,12 @@ fn every_command_matches_the_reference_byte_for_byte() {
     let model = cloud(300, &mut s);
     let scan = cloud(45, &mut s);
     let mut seq = 2u8;
-    // The model sorted by cell with its table (LoadModel, LoadTable), then the scan.
+    // The model sorted by cell, its normals as the host computes them, its table (LoadModel,
+    // LoadTable), then the scan.
     let grid = pficp_fpga::grid::Grid::build(&model).unwrap();
+    let normals = pficp::board::on_board::stored_normals(&grid);
     let scan_loads = scan.chunks(messages::MAX_LOAD_POINTS).enumerate();
-    let loads = messages::grid_upload(&grid).into_iter().chain(
+    let loads = messages::grid_upload(&grid, &normals).into_iter().chain(
         scan_loads.map(|(k, c)| (Command::LoadScan, messages::load_request((k * messages::MAX_LOAD_POINTS) as u16, c))),
     );
     for (cmd, data) in loads {
@@ -61,7 +63,7 @@ fn every_command_matches_the_reference_byte_for_byte() {
     }
     // The model digest after the upload (the RTL's CRC-32 against the reference's).
     let id = messages::Identity::decode(&exchange(&mut b, &req(Command::Identify, seq, vec![])).data).unwrap();
-    assert_eq!(id.model_digest, messages::grid_digest(&grid));
+    assert_eq!(id.model_digest, messages::grid_digest(&grid, &normals));
     exchange(&mut b, &req(Command::SetSizes, seq, messages::two_u16(300, 45)));
     let scale = WeightScale::for_two_q(1.0e6);
     let first = EvaluateRequest { first: true, last: false, scale, poses: (0..5).map(pose).collect() };

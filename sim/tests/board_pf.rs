@@ -8,6 +8,7 @@ use pficp_fpga::grid::Grid;
 use pficp_fpga::messages::{self, ResultReply, RunState, StatusReply};
 use pficp_fpga::pf::{self, example_cloud, example_config};
 use pficp_fpga::protocol::{Command, Frame};
+use pficp_fpga::surface::{self, FxNormal};
 use pficp_sim::serial::SerialBoard;
 
 /// Send a request and run until its reply has arrived (not until idle: the filter may run
@@ -31,14 +32,16 @@ fn req(cmd: Command, seq: u8, data: Vec<u8>) -> Frame {
     Frame { code: cmd as u8, seq, data }
 }
 
-/// Upload `model` sorted by cell with its cell table; its grid.
-fn load_grid(b: &mut SerialBoard, model: &[FxPoint]) -> Grid {
+/// Upload `model` sorted by cell with the normals the host computes for it
+/// (`on_board::stored_normals`) and its cell table; the grid and the normals.
+fn load_grid(b: &mut SerialBoard, model: &[FxPoint]) -> (Grid, Vec<FxNormal>) {
     let g = Grid::build(model).expect("the test model fits the grid");
-    for (cmd, data) in messages::grid_upload(&g) {
+    let normals = pficp::board::on_board::stored_normals(&g);
+    for (cmd, data) in messages::grid_upload(&g, &normals) {
         let r = exchange(b, &req(cmd, 1, data));
         assert_eq!(r.code, cmd as u8 | 0x80);
     }
-    g
+    (g, normals)
 }
 
 #[test]
@@ -47,7 +50,7 @@ fn the_board_runs_the_filter_and_returns_the_reference_pose() {
     let scan = example_cloud(30, [300, -150, 80], 0.0);
     let mut b = SerialBoard::new(BoardConfig::FAST_SIM).with_reference();
     b.run(100);
-    let grid = load_grid(&mut b, &model);
+    let (grid, normals) = load_grid(&mut b, &model);
     exchange(&mut b, &req(Command::LoadScan, 2, messages::load_request(0, &scan)));
     // Result before any run: NoResult.
     let r = exchange(&mut b, &req(Command::Result, 3, vec![]));
@@ -77,7 +80,7 @@ fn the_board_runs_the_filter_and_returns_the_reference_pose() {
     assert!(b.progress_frames() >= 1, "at least one Status while running");
     let r = exchange(&mut b, &req(Command::Result, seq, vec![]));
     let result = ResultReply::decode(&r.data).unwrap();
-    let outcome = pf::run(&cfg, |pose| pf::evaluate(&grid, &scan, pose));
+    let outcome = pf::run(&cfg, |pose| surface::evaluate(&grid, &normals, &scan, pose));
     assert!(outcome.best.cost * 4 < outcome.start.cost, "the filter found something: {outcome:?}");
     assert_eq!(result.pose, outcome.pose);
     assert_eq!(result.params, outcome.params);
@@ -94,7 +97,7 @@ fn commands_get_busy_while_the_filter_runs() {
     let scan = example_cloud(30, [300, -150, 80], 0.0);
     let mut b = SerialBoard::new(BoardConfig::FAST_SIM);
     b.run(100);
-    let grid = load_grid(&mut b, &model);
+    let (grid, normals) = load_grid(&mut b, &model);
     exchange(&mut b, &req(Command::LoadScan, 2, messages::load_request(0, &scan)));
     exchange(&mut b, &req(Command::SetSizes, 3, messages::two_u16(80, 30)));
     exchange(&mut b, &req(Command::Run, 4, example_config(10, 6, 11).encode()));
@@ -116,6 +119,6 @@ fn commands_get_busy_while_the_filter_runs() {
     // The scan store was not touched: the result is the reference's.
     b.run_until_idle(100_000_000).expect("the filter finishes");
     let result = ResultReply::decode(&exchange(&mut b, &req(Command::Result, 11, vec![])).data).unwrap();
-    let outcome = pf::run(&example_config(10, 6, 11), |pose| pf::evaluate(&grid, &scan, pose));
+    let outcome = pf::run(&example_config(10, 6, 11), |pose| surface::evaluate(&grid, &normals, &scan, pose));
     assert_eq!(result.pose, outcome.pose);
 }

@@ -208,15 +208,15 @@ fn board_of<const P: usize>(config: &crate::board::BoardConfig) -> String {
 
 /// The sequencer's particle-RAM write port (`p_we`, `p_waddr`, `p_wdata`) is a probe for the
 /// co-simulation of the sequencer alone; the engine leaves it unconnected (Yosys removes
-/// it). The pipeline's `nn_point` feeds the surface residual, which the engine does not
-/// instantiate yet (branch `board4`). Their wire declarations get a targeted
+/// it). The pipeline's `cost` (its sum of squared distances) is not the board's cost: the
+/// residual stage after it sums the residuals. Their wire declarations get a targeted
 /// `UNUSEDSIGNAL` waiver, nothing else.
 pub fn waive_probe_ports(v: &str) -> String {
     let mut out = String::with_capacity(v.len() + 256);
     for line in v.lines() {
         let t = line.trim_start();
         let probe = t.starts_with("wire")
-            && ["filter$p_we;", "filter$p_waddr;", "filter$p_wdata;", "nn$nn_point;"].iter().any(|n| t.ends_with(n));
+            && ["filter$p_we;", "filter$p_waddr;", "filter$p_wdata;", "nn$cost;"].iter().any(|n| t.ends_with(n));
         if probe {
             out.push_str("/* verilator lint_off UNUSEDSIGNAL */\n");
             out.push_str(line);

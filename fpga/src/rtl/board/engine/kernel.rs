@@ -10,6 +10,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
         dff_setup!(self, clock, waddr, eval_mode, start_r, wi, ncost, dig_sr, dig_restart);
         self.model_digest.clock.next = self.clock.val();
         self.nn.clock.next = self.clock.val();
+        self.surf.clock.next = self.clock.val();
         self.ws.clock.next = self.clock.val();
         self.filter.clock.next = self.clock.val();
         self.sender.clock.next = self.clock.val();
@@ -76,6 +77,20 @@ impl<const P: usize> Logic for CommandEngine<P> {
         self.nn.model_we.next = false;
         self.nn.model_waddr.next = self.waddr.q.val().get_bits::<12>(0);
         self.nn.model_wdata.next = self.inbuf.q.val().get_bits::<48>(168);
+        // The residual stage: written beside the pipeline's model store (LoadModel's words below
+        // messages::NORMALS_OFFSET are points, from it normals: address bit 12), fed by the
+        // pipeline's results; everything downstream takes its results and costs.
+        self.surf.point_we.next = false;
+        self.surf.point_waddr.next = self.waddr.q.val().get_bits::<12>(0);
+        self.surf.point_wdata.next = self.inbuf.q.val().get_bits::<48>(168);
+        self.surf.normal_we.next = false;
+        self.surf.normal_waddr.next = self.waddr.q.val().get_bits::<12>(0);
+        self.surf.normal_wdata.next = self.inbuf.q.val().get_bits::<48>(168);
+        self.surf.in_valid.next = self.nn.nn_valid.val();
+        self.surf.in_index.next = self.nn.nn_index.val();
+        self.surf.in_dist.next = self.nn.nn_dist.val();
+        self.surf.in_point.next = self.nn.nn_point.val();
+        self.surf.in_cost_valid.next = self.nn.cost_valid.val();
         self.nn.table_we.next = false;
         self.nn.table_waddr.next = self.waddr.q.val();
         self.nn.table_wdata.next = self.inbuf.q.val().get_bits::<13>(200);
@@ -89,10 +104,11 @@ impl<const P: usize> Logic for CommandEngine<P> {
         self.filter.cfg_data.next = self.inbuf.q.val().get_bits::<48>(168);
         self.filter.go.next = false;
         self.filter.nn_ready.next = !self.nn.busy.val() && !self.feeder.streaming.val() && !self.start_r.q.val();
-        self.filter.cost_valid.next = self.nn.cost_valid.val();
-        self.filter.cost.next = self.nn.cost.val();
-        self.filter.nn_valid.next = self.nn.nn_valid.val();
-        self.filter.nn_dist.next = self.nn.nn_dist.val();
+        self.filter.cost_valid.next = self.surf.cost_valid.val();
+        self.filter.cost.next = self.surf.cost.val();
+        self.filter.nn_valid.next = self.surf.nn_valid.val();
+        // The filter's largest "distance" is the largest residual.
+        self.filter.nn_dist.next = bit_cast::<34, 21>(self.surf.nn_resid.val());
         if self.filter.running.val() {
             self.nn.pose.next = self.filter.pose.val();
         }
@@ -100,15 +116,15 @@ impl<const P: usize> Logic for CommandEngine<P> {
         self.scan_store.write_address.next = self.waddr.q.val().get_bits::<12>(0);
         self.scan_store.write_data.next = self.inbuf.q.val().get_bits::<48>(168);
         self.ws.clear.next = false;
-        self.ws.cost_valid.next = self.nn.cost_valid.val() && self.eval_mode.q.val();
-        self.ws.cost.next = self.nn.cost.val();
+        self.ws.cost_valid.next = self.surf.cost_valid.val() && self.eval_mode.q.val();
+        self.ws.cost.next = self.surf.cost.val();
         self.ws.weigh.next = false;
         self.ws.pre_shift.next = self.hdr.q.val().get_bits::<6>(8);
         self.ws.q_mul.next = self.hdr.q.val().get_bits::<17>(16);
         self.aux.write_enable.next = false;
         self.aux.write_address.next = self.wi.q.val().get_bits::<8>(0);
         self.aux.write_data.next =
-            bit_cast::<46, 12>(self.nn.nn_index.val()) | (bit_cast::<46, 34>(self.nn.nn_dist.val()) << 12);
+            bit_cast::<46, 12>(self.surf.nn_index.val()) | (bit_cast::<46, 34>(self.surf.nn_dist.val()) << 12);
         self.aux.read_address.next = self.wi.q.val().get_bits::<8>(0);
 
         // A valid frame that arrives while busy gets a Busy answer afterwards (the first only).
@@ -373,8 +389,11 @@ impl<const P: usize> Logic for CommandEngine<P> {
                     self.nn.table_we.next = true;
                 } else if self.cur_cmd.q.val().get_bit(0) {
                     self.scan_store.write_enable.next = true;
+                } else if self.waddr.q.val().get_bit(12) {
+                    self.surf.normal_we.next = true;
                 } else {
                     self.nn.model_we.next = true;
+                    self.surf.point_we.next = true;
                 }
                 self.waddr.d.next = self.waddr.q.val() + 1;
                 self.idx.d.next = self.idx.q.val() + 1;
@@ -414,8 +433,8 @@ impl<const P: usize> Logic for CommandEngine<P> {
                 }
             }
             EngState::EvWait => {
-                if self.nn.cost_valid.val() {
-                    self.outbuf.d.next = bit_cast::<216, 48>(self.nn.cost.val());
+                if self.surf.cost_valid.val() {
+                    self.outbuf.d.next = bit_cast::<216, 48>(self.surf.cost.val());
                     self.ecount.d.next = self.n_cost.val();
                     self.ret.d.next = EngState::EvInc;
                     self.state.d.next = EngState::Emit;
@@ -476,12 +495,12 @@ impl<const P: usize> Logic for CommandEngine<P> {
                 }
             }
             EngState::NrWait => {
-                if self.nn.nn_valid.val() {
+                if self.surf.nn_valid.val() {
                     self.aux.write_enable.next = true;
                     self.wi.d.next = self.wi.q.val() + 1;
                 }
-                if self.nn.cost_valid.val() {
-                    self.ncost.d.next = self.nn.cost.val();
+                if self.surf.cost_valid.val() {
+                    self.ncost.d.next = self.surf.cost.val();
                     self.ret.d.next = EngState::NrHead;
                     self.state.d.next = EngState::Header;
                 }

@@ -24,6 +24,7 @@ use crate::pf::{RUN_HEADER_BYTES, RUN_WORD_BYTES};
 use crate::protocol::Command;
 use crate::protocol::{ErrorCode, CRC_BYTES, ERROR_DATA_BYTES, HEADER_BYTES};
 use crate::rtl::neighbour_pipeline::NeighbourPipeline;
+use crate::rtl::surface_residual::SurfaceResidual;
 use crate::rtl::weights::WeightStage;
 use rust_hdl::prelude::*;
 
@@ -129,6 +130,8 @@ pub struct CommandEngine<const P: usize> {
     /// Nearest results (index | distance << 12) or weights, by particle / point.
     aux: RAM<Bits<46>, 8>,
     nn: NeighbourPipeline<P>,
+    /// The residual stage after the pipeline: its results and costs are the board's.
+    surf: SurfaceResidual,
     ws: WeightStage,
     filter: PfSequencer,
     sender: ReplySender,
@@ -230,6 +233,7 @@ impl<const P: usize> CommandEngine<P> {
             scan_store: Default::default(),
             aux: Default::default(),
             nn: NeighbourPipeline::new(),
+            surf: SurfaceResidual::new(),
             ws: WeightStage::new(),
             filter: PfSequencer::new(),
             sender: ReplySender::new(config.bit_period()),
