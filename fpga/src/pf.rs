@@ -606,6 +606,23 @@ pub fn example_cloud(n: usize, shift: [i16; 3], phase: f64) -> Vec<crate::format
         .collect()
 }
 
+/// `n` points of a smooth, asymmetric height field over a disc of radius 0.6 (golden-angle
+/// sampling from `phase`), each less `shift` (LSB): a surface, so its normals are well
+/// defined, for tests of the surface residual ([`crate::surface`]); `example_cloud` is a
+/// space curve, whose normals are not.
+pub fn example_surface(n: usize, shift: [i16; 3], phase: f64) -> Vec<crate::format::FxPoint> {
+    (0..n)
+        .map(|i| {
+            let r = 0.6 * ((i as f64 + 0.5) / n as f64).sqrt();
+            let a = i as f64 * 2.399_963 + phase;
+            let (x, y) = (r * a.cos(), r * a.sin());
+            let z = 0.06 * (9.0 * x).sin() * (7.0 * y + 0.4).cos() + 0.12 * x * y + 0.05 * y;
+            let p = crate::format::point([x, y, z]);
+            [p[0] - shift[0], p[1] - shift[1], p[2] - shift[2]]
+        })
+        .collect()
+}
+
 /// The configuration that goes with [`example_cloud`]: identity start, sigmas of 0.25 in
 /// translation, 1.6% in scale, 1.4 degrees in angle, no thresholds.
 pub fn example_config(particles: u16, iterations: u16, seed: u32) -> PfConfig {

@@ -6,10 +6,13 @@ use pficp_fpga::board::BoardConfig;
 use pficp_fpga::format::FxPoint;
 use pficp_fpga::grid::Grid;
 use pficp_fpga::messages::{self, ResultReply, RunState, StatusReply};
-use pficp_fpga::pf::{self, example_cloud, example_config};
+use pficp_fpga::pf::{self, example_config, example_surface};
 use pficp_fpga::protocol::{Command, Frame};
 use pficp_fpga::surface::{self, FxNormal};
 use pficp_sim::serial::SerialBoard;
+
+/// The scan's offset from the model (LSB): the pose the filter should find translates by it.
+const SHIFT: [i16; 3] = [300, -150, 80];
 
 /// Send a request and run until its reply has arrived (not until idle: the filter may run
 /// on after the reply).
@@ -46,8 +49,8 @@ fn load_grid(b: &mut SerialBoard, model: &[FxPoint]) -> (Grid, Vec<FxNormal>) {
 
 #[test]
 fn the_board_runs_the_filter_and_returns_the_reference_pose() {
-    let model = example_cloud(80, [0, 0, 0], 0.0);
-    let scan = example_cloud(30, [300, -150, 80], 0.0);
+    let model = example_surface(80, [0, 0, 0], 0.0);
+    let scan = example_surface(30, SHIFT, 0.7);
     let mut b = SerialBoard::new(BoardConfig::FAST_SIM).with_reference();
     b.run(100);
     let (grid, normals) = load_grid(&mut b, &model);
@@ -56,7 +59,7 @@ fn the_board_runs_the_filter_and_returns_the_reference_pose() {
     let r = exchange(&mut b, &req(Command::Result, 3, vec![]));
     assert_eq!((r.code, r.data.first()), (0xff, Some(&7)), "{r:?}");
     // Run before SetSizes: OverCapacity.
-    let cfg = example_config(10, 6, 11);
+    let cfg = example_config(24, 12, 11);
     let r = exchange(&mut b, &req(Command::Run, 4, cfg.encode()));
     assert_eq!((r.code, r.data.first()), (0xff, Some(&4)), "{r:?}");
     exchange(&mut b, &req(Command::SetSizes, 5, messages::two_u16(80, 30)));
@@ -81,7 +84,13 @@ fn the_board_runs_the_filter_and_returns_the_reference_pose() {
     let r = exchange(&mut b, &req(Command::Result, seq, vec![]));
     let result = ResultReply::decode(&r.data).unwrap();
     let outcome = pf::run(&cfg, |pose| surface::evaluate(&grid, &normals, &scan, pose));
-    assert!(outcome.best.cost * 4 < outcome.start.cost, "the filter found something: {outcome:?}");
+    // The filter found something: a pose that undoes most of the scan's shift (the start,
+    // the identity, misses by all of it) at a lower cost than the start's.
+    let miss = |t: [i32; 3]| (0..3).map(|k| ((t[k] - SHIFT[k] as i32) as f64).powi(2)).sum::<f64>().sqrt();
+    let (start_miss, found_miss) = (miss([0; 3]), miss(outcome.pose.t));
+    println!("cost {} -> {}, miss {start_miss:.0} -> {found_miss:.0} LSB", outcome.start.cost, outcome.best.cost);
+    assert!(found_miss * 3.0 < start_miss, "the pose undoes the shift: {:?} against {SHIFT:?}", outcome.pose.t);
+    assert!(outcome.best.cost < outcome.start.cost, "{:?} {:?}", outcome.start, outcome.best);
     assert_eq!(result.pose, outcome.pose);
     assert_eq!(result.params, outcome.params);
     assert_eq!((result.iterations, result.cost), (outcome.iterations, outcome.best.cost));
@@ -93,8 +102,8 @@ fn the_board_runs_the_filter_and_returns_the_reference_pose() {
 /// Busy at once (the timeless reference cannot model this: no byte comparison here).
 #[test]
 fn commands_get_busy_while_the_filter_runs() {
-    let model = example_cloud(80, [0, 0, 0], 0.0);
-    let scan = example_cloud(30, [300, -150, 80], 0.0);
+    let model = example_surface(80, [0, 0, 0], 0.0);
+    let scan = example_surface(30, SHIFT, 0.7);
     let mut b = SerialBoard::new(BoardConfig::FAST_SIM);
     b.run(100);
     let (grid, normals) = load_grid(&mut b, &model);
