@@ -33,6 +33,14 @@ use std::collections::VecDeque;
 /// Edges from an input to its outputs.
 pub const SURFACE_LATENCY: usize = 10;
 
+/// An upper bound on the board's clocks for one pose's evaluation (the start edge to the
+/// stage's `cost_valid`): the neighbour pipeline's bound
+/// ([`crate::neighbour_pipeline::clocks_bound`]) and the stage's [`SURFACE_LATENCY`]; the
+/// host's deadlines and its bound on a filter run use it.
+pub fn evaluation_clocks_bound(scan_points: usize, model_points: usize, lanes: usize) -> u64 {
+    crate::neighbour_pipeline::clocks_bound(scan_points, model_points, lanes) + SURFACE_LATENCY as u64
+}
+
 /// Words of each store (12-bit addresses).
 pub const STORE_WORDS: usize = 4096;
 

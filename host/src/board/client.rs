@@ -13,7 +13,7 @@
 //! - **Every read is bounded**: each reply must arrive within the timeout (default 2 s, at
 //!   most [`MAX_TIMEOUT`]) plus the time the board needs for it, modelled from the bytes at
 //!   the baud rate ([`MIN_BAUD`] to [`MAX_BAUD`]) and, for Evaluate and Nearest, the
-//!   neighbour pipeline's clocks bounded ([`pficp_fpga::neighbour_pipeline::clocks_bound`]:
+//!   board's evaluation clocks bounded ([`pficp_fpga::surface_residual::evaluation_clocks_bound`]:
 //!   any pose, any model of that size; within 20% of the brute-force pipeline's) on the board's
 //!   lanes at its clock, never taken as slower than [`MIN_CLOCK_HZ`] whatever Identify says.
 //!   A silent board is a [`BoardError::Timeout`] (saying how many bytes came that were no
@@ -57,7 +57,7 @@ use pficp_fpga::messages::{
     NearestReply, NearestRequest, WeightSummary, IDENTITY_BYTES, MAX_LOAD_ENTRIES, MAX_LOAD_POINTS, MAX_NEAREST,
     MAX_POSES, NORMALS_OFFSET, POINT_BYTES, TABLE_ENTRIES, TABLE_ENTRY_BYTES, TABLE_ENTRY_MASK,
 };
-use pficp_fpga::neighbour_pipeline::clocks_bound;
+use pficp_fpga::surface_residual::evaluation_clocks_bound;
 use pficp_fpga::pipeline::COST_MASK;
 use pficp_fpga::protocol::{Command, Deframer, VERSION};
 use pficp_fpga::surface::FxNormal;
@@ -505,7 +505,7 @@ impl BoardClient {
         }
         let request = EvaluateRequest { first, last, scale, poses: poses.to_vec() };
         let reply_bytes = 6 * n + if last { 11 + 2 * after } else { 0 };
-        let clocks = n as u64 * clocks_bound(self.sizes.1 as usize, self.sizes.0 as usize, self.lanes())
+        let clocks = n as u64 * evaluation_clocks_bound(self.sizes.1 as usize, self.sizes.0 as usize, self.lanes())
             + if last { after as u64 + 16 } else { 0 };
         // Appending costs twice would corrupt the iteration: only FIRST or weigh-only repeat.
         let repeatable = first || n == 0;
@@ -623,7 +623,7 @@ impl BoardClient {
         while at < first + count {
             let n = (first + count - at).min(MAX_NEAREST);
             let request = NearestRequest { first: at as u16, count: n as u16, pose: *pose };
-            let clocks = clocks_bound(n, self.sizes.0 as usize, self.lanes());
+            let clocks = evaluation_clocks_bound(n, self.sizes.0 as usize, self.lanes());
             let reply = self.transact(Command::Nearest, request.encode(), 10 + 7 * n, clocks, true)?;
             let bad = |problem| BoardError::Reply { command: Command::Nearest, problem };
             let r = NearestReply::decode(&reply.data, &request).map_err(bad)?;

@@ -22,7 +22,9 @@
 //! the host's stages are the software mode's).
 //!
 //! `pficp-onboard-bench [--model-points 2000] [--scan-points 1000] [--board-points 300]
-//! [--particles 50] [--iterations 50] [--runs 3] [--seed 1]`; run in release.
+//! [--particles 50] [--iterations 50] [--runs 3] [--seed 1] [--all-iterations]`; run in
+//! release. The filter stops at the Run's thresholds (the host's, on the surface residual) or
+//! at the iteration cap; `--all-iterations` zeroes the thresholds, so every iteration runs.
 
 use anyhow::{bail, Context, Result};
 use clap::Parser;
@@ -62,6 +64,9 @@ struct Args {
     /// Seed of the dataset and the registration.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// Run every iteration (the Run's stop thresholds zeroed): the filter's worst case.
+    #[arg(long)]
+    all_iterations: bool,
 }
 
 /// Send one request; run until its reply's delimiter; check the bytes so far.
@@ -175,7 +180,10 @@ fn main() -> Result<()> {
     // The board: a first registration with the model's upload, then a second on the same
     // board, whose model digest (Identify) says it holds the model already (the host's
     // `ensure_grid`): only the scan sample, SetSizes, Run, Status polls and Result.
-    let plan = on_board::plan(&nn, &ds.scan, &settings, a.board_points, 4096)?;
+    let mut plan = on_board::plan(&nn, &ds.scan, &settings, a.board_points, 4096)?;
+    if a.all_iterations {
+        (plan.config.thr_cost, plan.config.thr_max) = (0, 0);
+    }
     let config = BoardConfig::default();
     let mut b = SerialBoard::new(config).with_reference();
     b.run(100);

@@ -5,7 +5,7 @@ use super::{BoardClient, BoardError, MAX_RETRIES, MIN_CLOCK_HZ, RUN_SAFETY};
 use pficp_fpga::messages::{
     parse_two_u16, MessageError, ResultReply, RunState, StatusReply, RESULT_BYTES, RUN_REPLY_BYTES, STATUS_BYTES,
 };
-use pficp_fpga::neighbour_pipeline::clocks_bound;
+use pficp_fpga::surface_residual::evaluation_clocks_bound;
 use pficp_fpga::pf::PfConfig;
 use pficp_fpga::protocol::Command;
 use std::time::{Duration, Instant};
@@ -207,12 +207,13 @@ impl BoardClient {
 /// ([`pficp_fpga::sequencer::run_clocks`]) with every data-dependent part at its largest
 /// (the temperature's most passes, a new best every iteration, the resampling pointer advancing
 /// through every particle) and each evaluation taking the neighbour pipeline's bound
-/// [`clocks_bound`] (any pose, any model of that size) plus one clock:
+/// [`evaluation_clocks_bound`] (any pose, any model of that size; the neighbour pipeline and
+/// the residual stage) plus one clock:
 /// `particles x iterations + iterations + 1` poses.
 pub fn run_clocks_bound(particles: u16, iterations: u16, scan_points: usize, model_points: usize, lanes: usize) -> u64 {
     use pficp_fpga::sequencer::{run_clocks, IterationShape, MAX_TEMPER_PASSES};
     let n = particles as u64;
-    let eval = 1 + clocks_bound(scan_points, model_points, lanes.max(1));
+    let eval = 1 + evaluation_clocks_bound(scan_points, model_points, lanes.max(1));
     let shape = |last: bool| IterationShape {
         particles: n,
         // The particles' evaluations overlap the next particle's propagation: at most each
