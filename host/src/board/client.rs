@@ -57,10 +57,10 @@ use pficp_fpga::messages::{
     NearestReply, NearestRequest, WeightSummary, IDENTITY_BYTES, MAX_LOAD_ENTRIES, MAX_LOAD_POINTS, MAX_NEAREST,
     MAX_POSES, NORMALS_OFFSET, POINT_BYTES, TABLE_ENTRIES, TABLE_ENTRY_BYTES, TABLE_ENTRY_MASK,
 };
-use pficp_fpga::surface_residual::evaluation_clocks_bound;
 use pficp_fpga::pipeline::COST_MASK;
 use pficp_fpga::protocol::{Command, Deframer, VERSION};
 use pficp_fpga::surface::FxNormal;
+use pficp_fpga::surface_residual::evaluation_clocks_bound;
 use serialport::SerialPort;
 use std::time::Duration;
 

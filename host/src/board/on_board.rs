@@ -116,12 +116,16 @@ pub fn board_seed(seed: u64) -> u32 {
 ///   `* r_scan / r_model`, angles in turns `* 2^24`), scaled by `region_sigmas / 2` (the
 ///   board's region is `+-2 sigma`), at least 1 LSB and at most `2^22 - 1`;
 /// - `temper_exp = clamp(round(log2(2 Q_board)), 0, 63)`: the board's cost is the sum over
-///   the `S` points of squared distances in `2^-26` normalised units, so a cost in the
+///   the `S` points of squared residuals in `2^-26` normalised units, so a cost in the
 ///   software's units (the MSD) is `S 2^26 / r_model^2` board LSBs, and so is `Q` (the
 ///   software weighs with `exp(-(c - c_min) / (2 Q))`, `Q` in the cost's units, exactly as
 ///   the host-driven mode converts it);
 /// - `thr_cost = S (threshold_avg / r_model)^2 2^26`, `thr_max = (threshold_max /
-///   r_model)^2 2^26` (at most `2^34 - 1`);
+///   r_model)^2 2^26` (at most `2^34 - 1`): since protocol 4 the board compares them with
+///   the surface residuals (distances to the tangent planes), not the point distances the
+///   software's thresholds measure; a residual is never larger, so the board may stop
+///   earlier than the software on the same data (docs/decisions.md, the surface residual
+///   on the board);
 /// - the seed from [`board_seed`], particles and iterations from `settings`.
 pub fn pf_config(
     prior: &Prior,
@@ -180,7 +184,7 @@ pub fn params_pose(params: &Particle, model_norm: &Normalisation, scan_norm: &No
     original_pose(&pose_n, scan_norm, model_norm)
 }
 
-/// A board cost (sum over `scan_points` of squared distances, Q8.26 normalised) in the
+/// A board cost (sum over `scan_points` of surface residuals, Q8.26 normalised) in the
 /// software's units (MSD in the clouds' units).
 pub fn cost_msd(cost: u64, scan_points: usize, model_norm: &Normalisation) -> f64 {
     cost as f64 * model_norm.radius * model_norm.radius / (scan_points.max(1) as f64 * (1u64 << DIST_FRAC) as f64)

@@ -5,9 +5,9 @@ use super::{BoardClient, BoardError, MAX_RETRIES, MIN_CLOCK_HZ, RUN_SAFETY};
 use pficp_fpga::messages::{
     parse_two_u16, MessageError, ResultReply, RunState, StatusReply, RESULT_BYTES, RUN_REPLY_BYTES, STATUS_BYTES,
 };
-use pficp_fpga::surface_residual::evaluation_clocks_bound;
 use pficp_fpga::pf::PfConfig;
 use pficp_fpga::protocol::Command;
+use pficp_fpga::surface_residual::evaluation_clocks_bound;
 use std::time::{Duration, Instant};
 
 impl BoardClient {
