@@ -16,7 +16,7 @@ use pficp_fpga::messages::{Identity, ResultReply, RunState, StatusReply};
 use pficp_fpga::pf::{self, PfConfig};
 use pficp_fpga::protocol::{Command, ErrorCode, Frame};
 use std::time::{Duration, Instant};
-use support::{cloud, grid, loaded, upload, PtyBoard};
+use support::{cloud, grid, loaded, normals, upload, PtyBoard};
 
 /// A Run configuration over the unit-cube clouds of [`cloud`]: centre at the identity.
 /// `register_on_board` with 50 board points, Status polled every 20 ms, no progress output.
