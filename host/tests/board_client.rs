@@ -359,7 +359,7 @@ fn pf_icp_with_the_board_weights_registers_a_reduced_model_1() {
     assert!(r.board.iterations > 5, "the filter iterated on the board's weights");
     assert_eq!(r.board.stats.resends, 0);
     assert_eq!(uploads.last(), Some(&(Upload::Scan, 300, 300)));
-    let model_bytes = 400 * 6 + 4097 * 2;
+    let model_bytes = 2 * 400 * 6 + 4097 * 2;
     assert!(uploads.contains(&(Upload::Model, model_bytes, model_bytes)));
 }
 

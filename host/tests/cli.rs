@@ -245,9 +245,9 @@ fn register_on_the_board_prints_the_software_form() {
         args.extend_from_slice(extra);
         let o = register(model, scan, &args);
         assert!(o.status.success(), "{}", stderr(&o));
-        // The model goes with its cell table (protocol 3), counted in data bytes; the next
-        // registration finds it on the board (the resident model) and says so.
-        let bytes = format!("uploaded the model: {} bytes", 300 * 6 + 4097 * 2);
+        // The model goes with its normals and its cell table (protocol 4), counted in data
+        // bytes; the next registration finds it on the board (the resident model) and says so.
+        let bytes = format!("uploaded the model: {} bytes", 2 * 300 * 6 + 4097 * 2);
         let resident = "the board holds the model already";
         assert_eq!(stderr(&o).contains(&bytes), first, "{}", stderr(&o));
         assert_eq!(stderr(&o).contains(resident), !first, "{}", stderr(&o));

@@ -607,7 +607,9 @@ impl BoardClient {
     }
 
     /// Nearest model point and squared distance of scan points `first .. first + count` at
-    /// `pose`, in frames of [`MAX_NEAREST`]; `cost` is their sum. The indices are the
+    /// `pose`, in frames of [`MAX_NEAREST`]; `cost` is the sum of their costs (the distances
+    /// before protocol 4, checked; the surface residuals since, which the reply does not
+    /// carry). The indices are the
     /// board's: positions in its model store (for a gridded model, the sorted points;
     /// [`Self::nearest_model`] gives the host's), and a protocol 3 board reports a point
     /// farther than the cap as index 0 at distance [`CAP_D2`].
@@ -634,8 +636,10 @@ impl BoardClient {
                     expected: self.sizes.0 as u64,
                 }));
             }
+            // Before protocol 4 the cost is the distances' sum; since, the residuals' (which
+            // the reply does not carry).
             let sum = r.results.iter().fold(0u64, |c, n| (c + n.1) & COST_MASK);
-            if r.cost != sum {
+            if self.identity.is_some_and(|i| i.version < 4) && r.cost != sum {
                 return Err(bad(MessageError::Field { field: "cost", got: r.cost, expected: sum }));
             }
             out.cost += r.cost;

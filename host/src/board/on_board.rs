@@ -385,7 +385,7 @@ pub fn register_on_board(
     if identity.version != VERSION {
         return Err(BoardError::Limit(format!(
             "the board speaks protocol version {}, this host {VERSION} (the on-board filter with the grid search \
-             needs {VERSION}; --host-driven works with versions 1 to {VERSION})",
+             needs {VERSION}; --host-driven works with versions 1, 2 and {VERSION})",
             identity.version
         )));
     }
