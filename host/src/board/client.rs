@@ -607,9 +607,9 @@ impl BoardClient {
     }
 
     /// Nearest model point and squared distance of scan points `first .. first + count` at
-    /// `pose`, in frames of [`MAX_NEAREST`]; `cost` is the sum of their costs (the distances
-    /// before protocol 4, checked; the surface residuals since, which the reply does not
-    /// carry). The indices are the
+    /// `pose`, in frames of [`MAX_NEAREST`]; `cost` is the sum of their costs (before
+    /// protocol 4 the distances, checked equal; since, the surface residuals, checked between
+    /// the capped points' `CAP_D2` each and `CAP_D2` a point). The indices are the
     /// board's: positions in its model store (for a gridded model, the sorted points;
     /// [`Self::nearest_model`] gives the host's), and a protocol 3 board reports a point
     /// farther than the cap as index 0 at distance [`CAP_D2`].
@@ -636,11 +636,21 @@ impl BoardClient {
                     expected: self.sizes.0 as u64,
                 }));
             }
-            // Before protocol 4 the cost is the distances' sum; since, the residuals' (which
-            // the reply does not carry).
-            let sum = r.results.iter().fold(0u64, |c, n| (c + n.1) & COST_MASK);
-            if self.identity.is_some_and(|i| i.version < 4) && r.cost != sum {
-                return Err(bad(MessageError::Field { field: "cost", got: r.cost, expected: sum }));
+            // Before protocol 4 the cost is the distances' sum. Since, it is the residuals'
+            // sum, which the reply does not carry: each residual is at most CAP_D2 and a
+            // capped point's is CAP_D2, so the cost lies between those bounds.
+            if self.identity.is_some_and(|i| i.version < 4) {
+                let sum = r.results.iter().fold(0u64, |c, n| (c + n.1) & COST_MASK);
+                if r.cost != sum {
+                    return Err(bad(MessageError::Field { field: "cost", got: r.cost, expected: sum }));
+                }
+            } else {
+                let capped = r.results.iter().filter(|n| n.1 >= CAP_D2).count() as u64;
+                let (low, high) = (capped * CAP_D2, r.results.len() as u64 * CAP_D2);
+                if r.cost < low || r.cost > high {
+                    let expected = if r.cost < low { low } else { high };
+                    return Err(bad(MessageError::Field { field: "cost", got: r.cost, expected }));
+                }
             }
             out.cost += r.cost;
             out.results.extend(r.results);
