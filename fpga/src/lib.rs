@@ -17,6 +17,8 @@
 //! - [`particle_weights`]: the two wired together, as the RTL top of that name.
 //! - [`pf`]: the on-board particle filter's bit-exact functional reference (`pf::run`), its
 //!   formats, CORDIC, pose program and PRNG.
+//! - [`polish`]: the on-board polish's bit-exact reference (point-to-plane Gauss-Newton
+//!   with scale over the board's stores; no RTL twin yet).
 //! - [`sequencer`]: the cycle-accurate model of the filter's RTL (`PfSequencer`) and its
 //!   clock formulas; [`seq_state`]: their one list of states.
 //! - [`protocol`]: the wire protocol (COBS framing, CRC-16, commands, error codes).
@@ -36,6 +38,7 @@ pub mod neighbour_pipeline;
 pub mod particle_weights;
 pub mod pf;
 pub mod pipeline;
+pub mod polish;
 pub mod protocol;
 #[cfg(feature = "rtl")]
 pub mod rtl;

@@ -77,6 +77,21 @@ pub fn quantise_pose(pose_n: &Pose) -> FxPose {
     FxPose::from_f64(&rows, &[t.x, t.y, t.z])
 }
 
+/// The normalised pose of a board pose ([`quantise_pose`]'s inverse up to its rounding):
+/// `M = s R` with `s = det(M)^(1/3)` and `R` the rotation nearest `M / s`, `T` as it is.
+/// A matrix with `det(M) <= 0` (no similarity) gives `None`.
+pub fn restore_pose(p: &FxPose) -> Option<Pose> {
+    let m = nalgebra::Matrix3::from_row_slice(&p.m.map(|v| v as f64 / (1u64 << format::MATRIX_FRAC) as f64));
+    let det = m.determinant();
+    if !(det > 0.0 && det.is_finite()) {
+        return None;
+    }
+    let scale = det.cbrt();
+    let rotation = nalgebra::Rotation3::from_matrix(&(m / scale)).into_inner();
+    let t = p.t.map(|v| v as f64 / (1u64 << format::POSE_TRANSLATION_FRAC) as f64);
+    Some(Pose { scale, rotation, translation: nalgebra::Vector3::new(t[0], t[1], t[2]) })
+}
+
 /// Bound on the error of one transformed, quantised point against the exact transform of
 /// the exact normalised point, per coordinate (normalised units), for a pose of scale
 /// `s` (normalised) and points in the unit ball: the scan point's quantisation through
@@ -118,6 +133,22 @@ mod tests {
         let m_n = Point3::from((m - scan.centre) / scan.radius);
         let d_n = Point3::from((d - model.centre) / model.radius);
         assert!((n.apply(&m_n) - d_n).norm() < 1e-12);
+    }
+
+    #[test]
+    fn a_board_pose_restores_to_its_similarity() {
+        let pose = Pose::from_params(&[0.4, -1.0, 2.0, 0.8, 0.1, -0.3, 0.6]);
+        let back = restore_pose(&quantise_pose(&pose)).expect("a similarity");
+        assert!((back.scale - 0.8).abs() < 1e-4, "{}", back.scale);
+        assert!((back.rotation - pose.rotation).norm() < 1e-4);
+        assert!((back.translation - pose.translation).norm() < 1e-4);
+        assert!((back.rotation.determinant() - 1.0).abs() < 1e-12);
+        // A reflection or a zero matrix is no similarity.
+        let mut bad = quantise_pose(&pose);
+        bad.m = [0; 9];
+        assert!(restore_pose(&bad).is_none());
+        bad.m = [-32768, 0, 0, 0, 32768, 0, 0, 0, 32768];
+        assert!(restore_pose(&bad).is_none());
     }
 
     #[test]

@@ -1,0 +1,141 @@
+//! Why the board's pose alone misses where the software's succeeds, and what the on-board
+//! polish (`pficp_fpga::polish`, its bit-exact reference; no RTL yet) would change: on the
+//! realistic benchmark's quick set (8 cases a family, seed 1) and on models 1 to 3 (Table 1
+//! truths, 2,000 model points, an independent 1,000-point scan, seeds 1 to 10), the
+//! successes of
+//! - the software mode (`pf_icp::register`),
+//! - the board's pose alone (`OnBoardPlan::emulate`, bit-exact with the board),
+//! - that pose polished by the on-board polish's reference over the board's stores, on the
+//!   board's 300-point sample and on the whole scan,
+//! - that pose polished by the host (`on_board::finish`, the product's polish),
+//!
+//! and, on the realistic set, on how many cases the filter's best cost is below its cost at
+//! the true pose (the filter found the minimum of its cost, and the minimum is off).
+//!
+//! Slow (a minute or two): ignored by default. Run it with
+//! `cargo test --release -p pficp-host --test board_polish_figures -- --ignored --nocapture`
+//! (`PFICP_SPLIT=test` for the test split, default dev). The tables are in
+//! docs/decisions.md, "Why the board's pose alone misses, and the polish on the board".
+
+use pficp::board::fixed::{normalised_pose, original_pose, quantise_pose, restore_pose};
+use pficp::board::on_board::{self, plan, OnBoardPlan};
+use pficp::cloud::bbox_diagonal;
+use pficp::datasets::{make, ModelId, Sampling, ScanSpec};
+use pficp::eval::realistic::{case, score, Family, Split};
+use pficp::geometry::Pose;
+use pficp::nn::NearestNeighbours;
+use pficp::pf_icp::{self, PfIcpSettings};
+use pficp::registration::methods::Tolerance;
+use pficp_fpga::messages::ResultReply;
+use rayon::prelude::*;
+use std::time::Duration;
+
+/// Gauss-Newton steps of the on-board polish.
+const STEPS: u32 = 10;
+
+const COLUMNS: [&str; 5] =
+    ["software", "board alone", "+ board polish, 300 points", "+ board polish, whole scan", "+ host polish"];
+
+/// The five poses of [`COLUMNS`] for one registration, and whether the filter's best cost
+/// is below its cost at `truth`.
+fn poses(
+    nn: &NearestNeighbours,
+    scan: &[nalgebra::Point3<f64>],
+    settings: &PfIcpSettings,
+    truth: &Pose,
+) -> ([Pose; 5], bool) {
+    let software = pf_icp::register(nn, scan, settings).registration.pose;
+    let plan = plan(nn, scan, settings, on_board::DEFAULT_BOARD_POINTS, pficp::board::MAX_POINTS).expect("plan");
+    let out = plan.emulate();
+    let alone = on_board::params_pose(&out.params, &plan.model_norm, &plan.scan_norm);
+    assert!(scan.len() <= pficp::board::MAX_POINTS, "the whole scan fits the board");
+    let whole = plan.scan_norm.quantise(scan);
+    let polished = |points: &[pficp_fpga::format::FxPoint]| board_polish(&plan, points, &out.pose);
+    let host = on_board::finish(&plan, nn, scan, settings, &ResultReply::of(&out), Duration::ZERO).registration.pose;
+    let at_truth = on_board::evaluate(
+        &plan.grid,
+        &plan.normals,
+        &plan.scan,
+        &quantise_pose(&normalised_pose(truth, &plan.scan_norm, &plan.model_norm)),
+    );
+    ([software, alone, polished(&plan.scan), polished(&whole), host], out.best.cost < at_truth.cost)
+}
+
+/// The on-board polish's reference from the filter's pose, in the original frame.
+fn board_polish(plan: &OnBoardPlan, scan: &[pficp_fpga::format::FxPoint], start: &pficp_fpga::format::FxPose) -> Pose {
+    let out = pficp_fpga::polish::polish(&plan.grid, &plan.normals, scan, start, STEPS);
+    let pose_n = restore_pose(&out.pose).expect("the polish keeps a similarity");
+    original_pose(&pose_n, &plan.scan_norm, &plan.model_norm)
+}
+
+fn row(name: &str, ok: &[[bool; 5]]) -> [usize; 5] {
+    let counts: [usize; 5] = std::array::from_fn(|k| ok.iter().filter(|r| r[k]).count());
+    println!("| {name} | {} |", counts.map(|c| format!("{c}/{}", ok.len())).join(" | "));
+    counts
+}
+
+#[test]
+#[ignore = "a minute or two in release; prints the tables of docs/decisions.md"]
+fn the_polish_on_the_board() {
+    let split = if std::env::var("PFICP_SPLIT").is_ok_and(|v| v == "test") { Split::Test } else { Split::Dev };
+    println!("{STEPS} polish steps; the board's sample {} points", on_board::DEFAULT_BOARD_POINTS);
+    println!("| set | {} |", COLUMNS.join(" | "));
+    println!("|---|---|---|---|---|---|");
+    let mut totals = [0usize; 5];
+    let mut below = 0;
+    let mut cases = 0;
+    for family in Family::ALL {
+        let rows: Vec<([bool; 5], bool, String)> = (0..8)
+            .into_par_iter()
+            .map(|i| {
+                let c = case(family, i, split, 1);
+                let nn = NearestNeighbours::new(&c.model);
+                let settings = PfIcpSettings { seed: c.seed, ..Default::default() };
+                let (p, under) = poses(&nn, &c.scan, &settings, &c.truth);
+                let scores = p.map(|p| score(&p, &c));
+                let text = scores
+                    .iter()
+                    .map(|s| format!("{:.2} deg {:.2}% sc", s.rotation_deg, 100.0 * s.scale_frac))
+                    .collect::<Vec<_>>()
+                    .join(", ");
+                (scores.map(|s| s.success), under, format!("{}: {text}", c.id))
+            })
+            .collect();
+        for r in rows.iter().filter(|r| r.0.iter().any(|&ok| !ok)) {
+            eprintln!("  {}", r.2);
+        }
+        let ok: Vec<[bool; 5]> = rows.iter().map(|r| r.0).collect();
+        let counts = row(&format!("{split:?} {}", family.name()), &ok);
+        for k in 0..5 {
+            totals[k] += counts[k];
+        }
+        below += rows.iter().filter(|r| r.1).count();
+        cases += rows.len();
+    }
+    println!("| {split:?} all | {} |", totals.map(|c| format!("{c}/{cases}")).join(" | "));
+    println!("the filter's best cost below its cost at the truth: {below} of {cases} cases");
+    let mut model_totals = [0usize; 5];
+    for id in ModelId::ALL {
+        let ok: Vec<[bool; 5]> = (1..=10u64)
+            .into_par_iter()
+            .map(|seed| {
+                let truth = id.table1_truth();
+                let spec = ScanSpec { sampling: Sampling::Independent { points: 1000 }, noise: 0.0, seed };
+                let ds = make(id, 2000, &truth, &spec);
+                let diag = bbox_diagonal(&ds.model);
+                let nn = NearestNeighbours::new(&ds.model);
+                let settings = PfIcpSettings { seed, ..Default::default() };
+                poses(&nn, &ds.scan, &settings, &truth).0.map(|p| Tolerance::SUCCESS.accepts(&p, &truth, diag))
+            })
+            .collect();
+        let counts = row(id.name(), &ok);
+        for k in 0..5 {
+            model_totals[k] += counts[k];
+        }
+    }
+    // The polish exists to solve what the filter alone misses: it must not lose cases.
+    assert!(
+        totals[3] >= totals[1] && model_totals[3] >= model_totals[1],
+        "the on-board polish lost cases: {totals:?}, models {model_totals:?}"
+    );
+}
