@@ -231,6 +231,55 @@ pub fn polish(grid: &Grid, normals: &[FxNormal], scan: &[FxPoint], start: &FxPos
     Polished { pose, steps: taken, last }
 }
 
+/// The polish may change a start's scale by `SCALE_DRIFT.0 / SCALE_DRIFT.1` to
+/// `SCALE_DRIFT.1 / SCALE_DRIFT.0` at most (0.8 to 1.25; the host's conclusion uses the
+/// same bounds): a polish that runs further is a collapse onto part of the model, which
+/// every one-sided cost rewards.
+pub const SCALE_DRIFT: (u64, u64) = (4, 5);
+
+/// The sum of the squared entries of `M`: `3 s^2` for a similarity of scale `s`.
+fn frobenius2(p: &FxPose) -> u64 {
+    p.m.iter().map(|&v| (v as i64 * v as i64) as u64).sum()
+}
+
+/// Whether `polished`'s scale is within [`SCALE_DRIFT`] of `start`'s (exact: the squared
+/// ratio of the matrices' Frobenius norms between `(4/5)^2` and `(5/4)^2`).
+pub fn within_drift(start: &FxPose, polished: &FxPose) -> bool {
+    let (lo, hi) = (SCALE_DRIFT.0 * SCALE_DRIFT.0, SCALE_DRIFT.1 * SCALE_DRIFT.1);
+    let (f0, f1) = (frobenius2(start) as u128, frobenius2(polished) as u128);
+    f1 * hi as u128 >= f0 * lo as u128 && f1 * lo as u128 <= f0 * hi as u128
+}
+
+/// The choice among several starts (the filter's pose first, then the host's hypotheses),
+/// as the host's conclusion chooses: each polished ([`polish`]); a polish beyond
+/// [`within_drift`] is dropped (the first start then stays unpolished, with no steps); the
+/// rest are scored by the board's cost over `scan` at their pose (the sum of the capped
+/// residuals, [`crate::surface::evaluate`]) and the lowest wins, the earlier start on a
+/// tie. Returns the winner's index, its polish and its cost; `None` without starts.
+pub fn polish_best(
+    grid: &Grid,
+    normals: &[FxNormal],
+    scan: &[FxPoint],
+    starts: &[FxPose],
+    steps: u32,
+) -> Option<(usize, Polished, u64)> {
+    starts
+        .iter()
+        .enumerate()
+        .filter_map(|(i, start)| {
+            let mut p = polish(grid, normals, scan, start, steps);
+            if !within_drift(start, &p.pose) {
+                if i > 0 {
+                    return None;
+                }
+                p = Polished { pose: *start, steps: 0, last: p.last };
+            }
+            let cost = crate::surface::evaluate(grid, normals, scan, &p.pose).cost;
+            Some((i, p, cost))
+        })
+        .min_by(|a, b| a.2.cmp(&b.2).then(a.0.cmp(&b.0)))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -341,6 +390,29 @@ mod tests {
         for i in 0..UNKNOWNS {
             assert!((step[i] as f64 - want[i]).abs() < 1e-4 * want.amax() + 64.0, "{i}: {} vs {}", step[i], want[i]);
         }
+    }
+
+    #[test]
+    fn the_best_start_wins_and_a_tie_keeps_the_first() {
+        let (grid, normals) = surface();
+        let scan = scan(&grid);
+        // A start in another basin (a quarter turn) loses to one near the truth.
+        let far = pose(1.0, 1.5, [0.0; 3]);
+        let near = pose(1.01, 0.02, [0.0; 3]);
+        let (i, p, cost) = polish_best(&grid, &normals, &scan, &[far, near], 5).unwrap();
+        assert_eq!(i, 1);
+        assert_eq!(cost, crate::surface::evaluate(&grid, &normals, &scan, &p.pose).cost);
+        assert_eq!(polish_best(&grid, &normals, &scan, &[near, near], 5).unwrap().0, 0);
+        assert!(polish_best(&grid, &normals, &scan, &[], 5).is_none());
+    }
+
+    #[test]
+    fn the_drift_bounds_are_four_fifths_and_five_quarters() {
+        let start = pose(1.0, 0.3, [0.0; 3]);
+        assert!(within_drift(&start, &pose(0.81, 0.0, [0.0; 3])));
+        assert!(within_drift(&start, &pose(1.24, 0.0, [0.0; 3])));
+        assert!(!within_drift(&start, &pose(0.79, 0.0, [0.0; 3])));
+        assert!(!within_drift(&start, &pose(1.26, 0.0, [0.0; 3])));
     }
 
     #[test]

@@ -52,8 +52,12 @@ pub const CANDIDATE_COST_FACTOR: f64 = 2.0;
 /// Scan points the candidates are polished and compared on (every k-th point of a larger
 /// scan; the winner is polished again on the whole scan).
 pub const COMPARE_POINTS: usize = 20_000;
-/// The polish may change a candidate's scale by these factors at most.
-pub const SCALE_DRIFT: (f64, f64) = (0.8, 1.25);
+/// The polish may change a candidate's scale by these factors at most (0.8 and 1.25: the
+/// on-board polish's bounds, `pficp_fpga::polish::SCALE_DRIFT`).
+pub const SCALE_DRIFT: (f64, f64) = {
+    let (a, b) = pficp_fpga::polish::SCALE_DRIFT;
+    (a as f64 / b as f64, b as f64 / a as f64)
+};
 /// Most poses polished at the end.
 pub const MAX_CANDIDATES: usize = 16;
 
@@ -126,6 +130,23 @@ pub fn local_error(pose: &Pose, reference: &Pose, at: &Point3<f64>) -> [f64; 7] 
     [t.x, t.y, t.z, pose.scale - reference.scale, r.x, r.y, r.z]
 }
 
+/// The poses polished and compared at the end (step 1 of the module doc): the filter's
+/// first, then the search's first [`ARBITRATED`] + 1 hypotheses and any other within
+/// [`CANDIDATE_COST_FACTOR`] of the best's cost, [`MAX_CANDIDATES`] in all.
+pub fn candidates(filter_pose: &Pose, hypotheses: &[Hypothesis]) -> Vec<Pose> {
+    let top = hypotheses.first().map_or(0.0, |h| h.cost);
+    std::iter::once(*filter_pose)
+        .chain(
+            hypotheses
+                .iter()
+                .enumerate()
+                .filter(|(i, h)| *i <= ARBITRATED || h.cost <= CANDIDATE_COST_FACTOR * top)
+                .take(MAX_CANDIDATES - 1)
+                .map(|(_, h)| h.pose),
+        )
+        .collect()
+}
+
 /// Conclude a registration: `filter_pose` from the filter, `hypotheses` of the search
 /// (best first), `particles` the filter's final set in `frame`'s parameters (if any).
 pub fn conclude(
@@ -140,16 +161,7 @@ pub fn conclude(
     let diag = bbox_diagonal(nn.points());
     let cap = COST_CAP * diag;
     let at = centroid(scan);
-    let mut starts = vec![*filter_pose];
-    let top = hypotheses.first().map_or(0.0, |h| h.cost);
-    starts.extend(
-        hypotheses
-            .iter()
-            .enumerate()
-            .filter(|(i, h)| *i <= ARBITRATED || h.cost <= CANDIDATE_COST_FACTOR * top)
-            .take(MAX_CANDIDATES - 1)
-            .map(|(_, h)| h.pose),
-    );
+    let starts = candidates(filter_pose, hypotheses);
     // A polish whose scale runs away from its start is a collapse onto part of the model
     // (every one-sided cost rewards it): that candidate is dropped (the filter's estimate
     // stays, unpolished).
