@@ -99,8 +99,8 @@ const DESIGNS: [Design; 9] = [
         prefix: "Vnbr",
         per_lane: true,
         verilog: pficp_fpga::rtl::neighbour_pipeline_verilog,
-        ports: &[NEIGHBOUR_PIPELINE_PORTS],
-        spec: "docs/pipeline.md, the neighbour pipeline (sim/src/ports.rs NEIGHBOUR_PIPELINE_PORTS)",
+        ports: &[GRID_PIPELINE_PORTS, NEIGHBOUR_EXTRA_PORTS],
+        spec: "docs/pipeline.md, the neighbour pipeline (sim/src/ports.rs GRID_PIPELINE_PORTS + NEIGHBOUR_EXTRA_PORTS)",
     },
     Design {
         name: "weight_stage",

@@ -53,30 +53,9 @@ pub const GRID_PIPELINE_PORTS: &[PortSpec] = &[
     ("cost", false, 48),
 ];
 
-/// The ports of the neighbour pipeline's `top` (docs/pipeline.md, "The neighbour
-/// pipeline"): the grid pipeline's, then `nn_point` (each result's transformed scan point).
-pub const NEIGHBOUR_PIPELINE_PORTS: &[PortSpec] = &[
-    ("clock", true, 1),
-    ("model_we", true, 1),
-    ("model_waddr", true, 12),
-    ("model_wdata", true, 48),
-    ("table_we", true, 1),
-    ("table_waddr", true, 13),
-    ("table_wdata", true, 13),
-    ("start", true, 1),
-    ("pose", true, 216),
-    ("scan_valid", true, 1),
-    ("scan_data", true, 48),
-    ("scan_last", true, 1),
-    ("scan_ready", false, 1),
-    ("busy", false, 1),
-    ("nn_valid", false, 1),
-    ("nn_index", false, 12),
-    ("nn_dist", false, 34),
-    ("cost_valid", false, 1),
-    ("cost", false, 48),
-    ("nn_point", false, 48),
-];
+/// The ports the neighbour pipeline's `top` (docs/pipeline.md, "The neighbour pipeline")
+/// adds to [`GRID_PIPELINE_PORTS`]: `nn_point`, each result's transformed scan point.
+pub const NEIGHBOUR_EXTRA_PORTS: &[PortSpec] = &[("nn_point", false, 48)];
 
 /// The ports the particle-weight pipeline (`fpga/src/rtl/particle_weights.rs`) adds to
 /// [`PIPELINE_PORTS`]: the weight stage's controls and outputs (docs/weights.md; `busy` and

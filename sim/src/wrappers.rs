@@ -442,7 +442,8 @@ pub const GRID_OUTPUT_PORTS: [&str; 7] = ports::outputs(&[ports::GRID_PIPELINE_P
 /// Output port names of the neighbour pipeline in the order
 /// [`NeighbourLockstep`](crate::NeighbourLockstep) compares them (the grid pipeline's, then
 /// `nn_point`).
-pub const NEIGHBOUR_OUTPUT_PORTS: [&str; 8] = ports::outputs(&[ports::NEIGHBOUR_PIPELINE_PORTS]);
+pub const NEIGHBOUR_OUTPUT_PORTS: [&str; 8] =
+    ports::outputs(&[ports::GRID_PIPELINE_PORTS, ports::NEIGHBOUR_EXTRA_PORTS]);
 
 /// Output port names of the particle-weight pipeline in the order [`PwLockstep`](crate::PwLockstep) compares
 /// them (the pipeline's, then the weight stage's).
