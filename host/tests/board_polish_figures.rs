@@ -14,7 +14,8 @@
 //!
 //! Slow (a minute or two): ignored by default. Run it with
 //! `cargo test --release -p pficp-host --test board_polish_figures -- --ignored --nocapture`
-//! (`PFICP_SPLIT=test` for the test split, default dev). The tables are in
+//! (`PFICP_SPLIT=test` for the test split, default dev; `PFICP_POLISH_STEPS` and
+//! `PFICP_POLISH_STARTS` for fewer steps and starts). The tables are in
 //! docs/decisions.md, "Why the board's pose alone misses, and the polish on the board".
 
 use pficp::board::fixed::{normalised_pose, original_pose, quantise_pose, restore_pose};
@@ -31,8 +32,16 @@ use pficp_fpga::messages::ResultReply;
 use rayon::prelude::*;
 use std::time::Duration;
 
-/// Gauss-Newton steps of the on-board polish.
-const STEPS: u32 = 10;
+/// Gauss-Newton steps of the on-board polish (`PFICP_POLISH_STEPS`, default 10).
+fn steps() -> u32 {
+    std::env::var("PFICP_POLISH_STEPS").ok().and_then(|v| v.parse().ok()).unwrap_or(10)
+}
+
+/// Most starts of the on-board polish's choice (`PFICP_POLISH_STARTS`, default all the
+/// conclusion's candidates).
+fn max_starts() -> usize {
+    std::env::var("PFICP_POLISH_STARTS").ok().and_then(|v| v.parse().ok()).unwrap_or(usize::MAX)
+}
 
 const COLUMNS: [&str; 6] = [
     "software",
@@ -43,14 +52,14 @@ const COLUMNS: [&str; 6] = [
     "+ host polish",
 ];
 
-/// The six poses of [`COLUMNS`] for one registration, and whether the filter's best cost
-/// is below its cost at `truth`.
+/// The six poses of [`COLUMNS`] for one registration, whether the filter's best cost is
+/// below its cost at `truth`, and the on-board polish's starts.
 fn poses(
     nn: &NearestNeighbours,
     scan: &[nalgebra::Point3<f64>],
     settings: &PfIcpSettings,
     truth: &Pose,
-) -> ([Pose; 6], bool) {
+) -> ([Pose; 6], bool, usize) {
     let software = pf_icp::register(nn, scan, settings).registration.pose;
     let plan = plan(nn, scan, settings, on_board::DEFAULT_BOARD_POINTS, pficp::board::MAX_POINTS).expect("plan");
     let out = plan.emulate();
@@ -71,6 +80,7 @@ fn poses(
     // The starts the host's conclusion compares, the filter's pose exactly as the board has it.
     let starts: Vec<pficp_fpga::format::FxPose> = candidates(&alone, &plan.prior.hypotheses)
         .iter()
+        .take(max_starts())
         .enumerate()
         .map(
             |(i, p)| {
@@ -83,16 +93,17 @@ fn poses(
         )
         .collect();
     let (_, best, _) =
-        pficp_fpga::polish::polish_best(&plan.grid, &plan.normals, &whole, &starts, STEPS).expect("a start");
+        pficp_fpga::polish::polish_best(&plan.grid, &plan.normals, &whole, &starts, steps()).expect("a start");
     (
         [software, alone, polished(&plan.scan), polished(&whole), restore(&best.pose), host],
         out.best.cost < at_truth.cost,
+        starts.len(),
     )
 }
 
 /// The on-board polish's reference from the filter's pose, in the original frame.
 fn board_polish(plan: &OnBoardPlan, scan: &[pficp_fpga::format::FxPoint], start: &pficp_fpga::format::FxPose) -> Pose {
-    let out = pficp_fpga::polish::polish(&plan.grid, &plan.normals, scan, start, STEPS);
+    let out = pficp_fpga::polish::polish(&plan.grid, &plan.normals, scan, start, steps());
     original_pose(&restore_pose(&out.pose).expect("the polish keeps a similarity"), &plan.scan_norm, &plan.model_norm)
 }
 
@@ -106,27 +117,33 @@ fn row(name: &str, ok: &[[bool; 6]]) -> [usize; 6] {
 #[ignore = "a minute or two in release; prints the tables of docs/decisions.md"]
 fn the_polish_on_the_board() {
     let split = if std::env::var("PFICP_SPLIT").is_ok_and(|v| v == "test") { Split::Test } else { Split::Dev };
-    println!("{STEPS} polish steps; the board's sample {} points", on_board::DEFAULT_BOARD_POINTS);
+    println!(
+        "{} polish steps, at most {} starts; the board's sample {} points",
+        steps(),
+        max_starts(),
+        on_board::DEFAULT_BOARD_POINTS
+    );
     println!("| set | {} |", COLUMNS.join(" | "));
     println!("|---|---|---|---|---|---|---|");
     let mut totals = [0usize; 6];
     let mut below = 0;
+    let mut starts = Vec::new();
     let mut cases = 0;
     for family in Family::ALL {
-        let rows: Vec<([bool; 6], bool, String)> = (0..8)
+        let rows: Vec<([bool; 6], bool, String, usize)> = (0..8)
             .into_par_iter()
             .map(|i| {
                 let c = case(family, i, split, 1);
                 let nn = NearestNeighbours::new(&c.model);
                 let settings = PfIcpSettings { seed: c.seed, ..Default::default() };
-                let (p, under) = poses(&nn, &c.scan, &settings, &c.truth);
+                let (p, under, n_starts) = poses(&nn, &c.scan, &settings, &c.truth);
                 let scores = p.map(|p| score(&p, &c));
                 let text = scores
                     .iter()
                     .map(|s| format!("{:.2} deg {:.2}% sc", s.rotation_deg, 100.0 * s.scale_frac))
                     .collect::<Vec<_>>()
                     .join(", ");
-                (scores.map(|s| s.success), under, format!("{}: {text}", c.id))
+                (scores.map(|s| s.success), under, format!("{}: {text}", c.id), n_starts)
             })
             .collect();
         for r in rows.iter().filter(|r| r.0.iter().any(|&ok| !ok)) {
@@ -138,10 +155,18 @@ fn the_polish_on_the_board() {
             totals[k] += counts[k];
         }
         below += rows.iter().filter(|r| r.1).count();
+        starts.extend(rows.iter().map(|r| r.3));
         cases += rows.len();
     }
     println!("| {split:?} all | {} |", totals.map(|c| format!("{c}/{cases}")).join(" | "));
     println!("the filter's best cost below its cost at the truth: {below} of {cases} cases");
+    starts.sort_unstable();
+    println!(
+        "the on-board polish's starts a case: {} to {}, median {}",
+        starts[0],
+        starts[starts.len() - 1],
+        starts[starts.len() / 2]
+    );
     let mut model_totals = [0usize; 6];
     for id in ModelId::ALL {
         let ok: Vec<[bool; 6]> = (1..=10u64)
