@@ -135,6 +135,7 @@ pub fn gate(sums: &PassSums) -> Option<u64> {
 }
 
 /// The step of the normal equations in Q.30 (module doc), or `None` at a pivot `<= 0`.
+#[allow(clippy::needless_range_loop)]
 pub fn solve(sums: &PassSums) -> Option<[i64; UNKNOWNS]> {
     let a = |i: usize, j: usize| sums.a[upper(i, j)] as i128;
     let trace: i128 = (0..UNKNOWNS).map(|i| a(i, i)).sum();
