@@ -454,10 +454,10 @@ mod tests {
         // A scale step of 2^-4 multiplies the matrix by 17/16 (exact on these entries).
         let s = update(&diag16(), &[0, 0, 0, 0, 0, 0, 1 << 26]);
         assert_eq!(s.m, diag16().m.map(|v| v / 16 * 17));
-        // A quarter-turn step about z, second order: E = [[1 - w^2/2, -w], [w, 1 - w^2/2]].
+        // A step of 0.125 rad about z, to second order: E = [[1 - w^2/2, -w], [w, 1 - w^2/2]].
         let w = 1i64 << 27;
         let r = update(&diag16(), &[0, 0, w, 0, 0, 0, 0]);
-        let c = 16384 - (16384 * (w * w >> 31) >> 30) as i32; // 1 - 1/128 of 2^14
+        let c = 16384 - ((16384 * ((w * w) >> 31)) >> 30) as i32; // 1 - 1/128 of 2^14
         assert_eq!([r.m[0], r.m[1], r.m[3], r.m[4], r.m[8]], [c, -2048, 2048, c, 16384]);
     }
 
