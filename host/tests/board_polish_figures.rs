@@ -66,45 +66,35 @@ fn poses(
     let alone = on_board::params_pose(&out.params, &plan.model_norm, &plan.scan_norm);
     assert!(scan.len() <= pficp::board::MAX_POINTS, "the whole scan fits the board");
     let whole = plan.scan_norm.quantise(scan);
-    let polished = |points: &[pficp_fpga::format::FxPoint]| board_polish(&plan, points, &out.pose);
-    let host = on_board::finish(&plan, nn, scan, settings, &ResultReply::of(&out), Duration::ZERO).registration.pose;
-    let at_truth = on_board::evaluate(
-        &plan.grid,
-        &plan.normals,
-        &plan.scan,
-        &quantise_pose(&normalised_pose(truth, &plan.scan_norm, &plan.model_norm)),
-    );
-    let restore = |p: &pficp_fpga::format::FxPose| {
-        original_pose(&restore_pose(p).expect("the polish keeps a similarity"), &plan.scan_norm, &plan.model_norm)
+    let polished = |points: &[pficp_fpga::format::FxPoint]| {
+        restored(&plan, &pficp_fpga::polish::polish(&plan.grid, &plan.normals, points, &out.pose, steps()).pose)
     };
+    let host = on_board::finish(&plan, nn, scan, settings, &ResultReply::of(&out), Duration::ZERO).registration.pose;
+    let at_truth = on_board::evaluate(&plan.grid, &plan.normals, &plan.scan, &on_board_pose(&plan, truth));
     // The starts the host's conclusion compares, the filter's pose exactly as the board has it.
     let starts: Vec<pficp_fpga::format::FxPose> = candidates(&alone, &plan.prior.hypotheses)
         .iter()
         .take(max_starts())
         .enumerate()
-        .map(
-            |(i, p)| {
-                if i == 0 {
-                    out.pose
-                } else {
-                    quantise_pose(&normalised_pose(p, &plan.scan_norm, &plan.model_norm))
-                }
-            },
-        )
+        .map(|(i, p)| if i == 0 { out.pose } else { on_board_pose(&plan, p) })
         .collect();
     let (_, best, _) =
         pficp_fpga::polish::polish_best(&plan.grid, &plan.normals, &whole, &starts, steps()).expect("a start");
     (
-        [software, alone, polished(&plan.scan), polished(&whole), restore(&best.pose), host],
+        [software, alone, polished(&plan.scan), polished(&whole), restored(&plan, &best.pose), host],
         out.best.cost < at_truth.cost,
         starts.len(),
     )
 }
 
-/// The on-board polish's reference from the filter's pose, in the original frame.
-fn board_polish(plan: &OnBoardPlan, scan: &[pficp_fpga::format::FxPoint], start: &pficp_fpga::format::FxPose) -> Pose {
-    let out = pficp_fpga::polish::polish(&plan.grid, &plan.normals, scan, start, steps());
-    original_pose(&restore_pose(&out.pose).expect("the polish keeps a similarity"), &plan.scan_norm, &plan.model_norm)
+/// A pose (original frame) as the board holds it.
+fn on_board_pose(plan: &OnBoardPlan, pose: &Pose) -> pficp_fpga::format::FxPose {
+    quantise_pose(&normalised_pose(pose, &plan.scan_norm, &plan.model_norm))
+}
+
+/// A board pose (a polish's result) in the original frame.
+fn restored(plan: &OnBoardPlan, pose: &pficp_fpga::format::FxPose) -> Pose {
+    original_pose(&restore_pose(pose).expect("the polish keeps a similarity"), &plan.scan_norm, &plan.model_norm)
 }
 
 fn row(name: &str, ok: &[[bool; 6]]) -> [usize; 6] {

@@ -123,9 +123,9 @@ pub fn board_seed(seed: u64) -> u32 {
 /// - `thr_cost = S (threshold_avg / r_model)^2 2^26`, `thr_max = (threshold_max /
 ///   r_model)^2 2^26` (at most `2^34 - 1`): since protocol 4 the board compares them with
 ///   the surface residuals (distances to the tangent planes), not the point distances the
-///   software's thresholds measure; a residual is at most the point distance (rounding aside), so the board may stop
-///   earlier than the software on the same data (docs/decisions.md, the surface residual
-///   on the board);
+///   software's thresholds measure; a residual is at most the point distance (rounding
+///   aside), so the board may stop earlier than the software on the same data
+///   (docs/decisions.md, the surface residual on the board);
 /// - the seed from [`board_seed`], particles and iterations from `settings`.
 pub fn pf_config(
     prior: &Prior,
