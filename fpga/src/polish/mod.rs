@@ -54,6 +54,8 @@
 //! a pass gated by the previous one, and if at least 7 points passed and the solve gives a
 //! step, the update. [`polish_best`] chooses among starts.
 
+pub mod program;
+
 use crate::format::{transform, FxPoint, FxPose};
 use crate::grid::{Grid, NONE};
 use crate::pf::sat18;
@@ -91,16 +93,6 @@ pub struct PassSums {
 /// `(x + 2^(k-1)) >> k`: round half up.
 fn round_shift(x: i128, k: u32) -> i128 {
     (x + (1i128 << (k - 1))) >> k
-}
-
-/// `n / d` truncated toward zero (`d > 0`).
-fn div_trunc(n: i128, d: i128) -> i128 {
-    let q = n.abs() / d;
-    if n < 0 {
-        -q
-    } else {
-        q
-    }
 }
 
 /// The index of `(i, j)`, `i <= j`, in [`PassSums::a`].
@@ -153,40 +145,12 @@ pub fn gate(sums: &PassSums) -> Option<u64> {
 }
 
 /// The step of the normal equations in Q.30 (module doc), or `None` at a pivot below
-/// `lambda / 2`. `sums` must come from [`pass`] (module doc: other sums may overflow).
-#[allow(clippy::needless_range_loop)]
+/// `lambda / 2`: [`program::solve_program`] run as the board runs it. `sums` must come
+/// from [`pass`] (module doc: other sums may overflow).
 pub fn solve(sums: &PassSums) -> Option<[i64; UNKNOWNS]> {
-    let a = |i: usize, j: usize| sums.a[upper(i, j)] as i128;
-    let trace: i128 = (0..UNKNOWNS).map(|i| a(i, i)).sum();
-    let lambda = (trace >> 30) + LAMBDA_FLOOR;
-    let one = 1i128 << STEP_FRAC;
-    let mut l = [[0i128; UNKNOWNS]; UNKNOWNS];
-    let mut d = [0i128; UNKNOWNS];
-    for j in 0..UNKNOWNS {
-        // v_k = L_jk D_k (A's units).
-        let v: Vec<i128> = (0..j).map(|k| round_shift(l[j][k] * d[k], STEP_FRAC)).collect();
-        d[j] = a(j, j) + lambda - (0..j).map(|k| round_shift(l[j][k] * v[k], STEP_FRAC)).sum::<i128>();
-        if 2 * d[j] < lambda {
-            return None;
-        }
-        l[j][j] = one;
-        for i in j + 1..UNKNOWNS {
-            let num = a(i, j) - (0..j).map(|k| round_shift(l[i][k] * v[k], STEP_FRAC)).sum::<i128>();
-            l[i][j] = div_trunc(num << STEP_FRAC, d[j]);
-        }
-    }
-    // L y = -b; D z = y; L^T delta = z. `b` is in units of 2^-27 (J 2^-14 times s 2^-13)
-    // and `A` of 2^-28, so a step in Q.30 is `y 2^31 / D`.
-    let mut y = [0i128; UNKNOWNS];
-    for i in 0..UNKNOWNS {
-        y[i] = -(sums.b[i] as i128) - (0..i).map(|k| round_shift(l[i][k] * y[k], STEP_FRAC)).sum::<i128>();
-    }
-    let mut delta = [0i128; UNKNOWNS];
-    for i in (0..UNKNOWNS).rev() {
-        let z = div_trunc(y[i] << (STEP_FRAC + 1), d[i]);
-        delta[i] = z - (i + 1..UNKNOWNS).map(|k| round_shift(l[k][i] * delta[k], STEP_FRAC)).sum::<i128>();
-    }
-    Some(delta.map(|v| v.clamp(-STEP_LIMIT as i128, STEP_LIMIT as i128) as i64))
+    let mut r = program::solve_inputs(sums);
+    program::run(&program::solve_program(), &mut r).ok()?;
+    Some(program::solve_output(&r))
 }
 
 /// The pose after a step (module doc).
@@ -301,6 +265,59 @@ pub fn polish_best(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The solve as the module doc writes it, in `i128` (the test profile checks overflow):
+    /// the oracle of the program.
+    #[allow(clippy::needless_range_loop)]
+    fn solve_direct(sums: &PassSums) -> Option<[i64; UNKNOWNS]> {
+        let a = |i: usize, j: usize| sums.a[upper(i, j)] as i128;
+        let trace: i128 = (0..UNKNOWNS).map(|i| a(i, i)).sum();
+        let lambda = (trace >> 30) + LAMBDA_FLOOR;
+        let one = 1i128 << STEP_FRAC;
+        let mut l = [[0i128; UNKNOWNS]; UNKNOWNS];
+        let mut d = [0i128; UNKNOWNS];
+        for j in 0..UNKNOWNS {
+            // v_k = L_jk D_k (A's units).
+            let v: Vec<i128> = (0..j).map(|k| round_shift(l[j][k] * d[k], STEP_FRAC)).collect();
+            d[j] = a(j, j) + lambda - (0..j).map(|k| round_shift(l[j][k] * v[k], STEP_FRAC)).sum::<i128>();
+            if 2 * d[j] < lambda {
+                return None;
+            }
+            l[j][j] = one;
+            for i in j + 1..UNKNOWNS {
+                let num = a(i, j) - (0..j).map(|k| round_shift(l[i][k] * v[k], STEP_FRAC)).sum::<i128>();
+                l[i][j] = div_trunc(num << STEP_FRAC, d[j]);
+            }
+        }
+        // L y = -b; D z = y; L^T delta = z. `b` is in units of 2^-27 (J 2^-14 times s 2^-13)
+        // and `A` of 2^-28, so a step in Q.30 is `y 2^31 / D`.
+        let mut y = [0i128; UNKNOWNS];
+        for i in 0..UNKNOWNS {
+            y[i] = -(sums.b[i] as i128) - (0..i).map(|k| round_shift(l[i][k] * y[k], STEP_FRAC)).sum::<i128>();
+        }
+        let mut delta = [0i128; UNKNOWNS];
+        for i in (0..UNKNOWNS).rev() {
+            let z = div_trunc(y[i] << (STEP_FRAC + 1), d[i]);
+            delta[i] = z - (i + 1..UNKNOWNS).map(|k| round_shift(l[k][i] * delta[k], STEP_FRAC)).sum::<i128>();
+        }
+        Some(delta.map(|v| v.clamp(-STEP_LIMIT as i128, STEP_LIMIT as i128) as i64))
+    }
+
+    /// `n / d` truncated toward zero (`d > 0`).
+    fn div_trunc(n: i128, d: i128) -> i128 {
+        let q = n.abs() / d;
+        if n < 0 {
+            -q
+        } else {
+            q
+        }
+    }
+
+    /// The program agrees with the direct solve on `sums`.
+    fn agree(sums: &PassSums) {
+        assert_eq!(solve(sums), solve_direct(sums), "{sums:?}");
+    }
+
     use crate::format::{point, MATRIX_FRAC};
 
     /// A bumpy height field's grid and unit normals (by finite differences of the field).
@@ -410,6 +427,7 @@ mod tests {
         let stats = pass(&grid, &normals, &scan(&grid), &start, None);
         let sums = pass(&grid, &normals, &scan(&grid), &start, gate(&stats));
         let step = solve(&sums).expect("positive pivots");
+        agree(&sums);
         let a = nalgebra::SMatrix::<f64, 7, 7>::from_fn(|i, j| sums.a[upper(i, j)] as f64);
         let b = nalgebra::SVector::<f64, 7>::from_fn(|i, _| sums.b[i] as f64);
         let want = -a.cholesky().unwrap().solve(&b) * 2f64.powi(31);
@@ -473,6 +491,7 @@ mod tests {
         // A negative diagonal entry (no Gram matrix has one): its pivot is below lambda / 2.
         sums.a[upper(2, 2)] = -100;
         assert_eq!(solve(&sums), None);
+        agree(&sums);
         // The clamp: a huge right-hand side on a unit system gives +-2^27.
         let mut big = PassSums { a: vec![0; 28], ..Default::default() };
         for i in 0..UNKNOWNS {
@@ -481,6 +500,7 @@ mod tests {
         big.b = [1 << 40, -(1 << 40), 0, 0, 0, 0, 1];
         let step = solve(&big).unwrap();
         assert_eq!((step[0], step[1], step[2]), (-STEP_LIMIT, STEP_LIMIT, 0));
+        agree(&big);
     }
 
     /// The Jacobian is the residual's derivative: a small step in one unknown moves each
@@ -543,6 +563,25 @@ mod tests {
             proptest::prop_assert!(se < 1e-3 && ae < 1e-3, "scale {se}, angle {ae}, {out:?}");
         }
 
+        /// The program and the direct solve agree on Gram systems of up to 4,096 rows of
+        /// 18-bit entries (a few distinct rows, repeated), rank-deficient ones among them.
+        #[test]
+        fn the_program_is_the_direct_solve(
+            rows in proptest::collection::vec((proptest::array::uniform7(-(1i64 << 17)..(1 << 17)), -(1i64 << 12)..(1 << 12)), 1..12),
+            repeat in 1i64..=341,
+        ) {
+            let mut sums = PassSums { a: vec![0; 28], ..Default::default() };
+            for (j, s) in &rows {
+                for r in 0..UNKNOWNS {
+                    for c in r..UNKNOWNS {
+                        sums.a[upper(r, c)] += j[r] * j[c] * repeat;
+                    }
+                    sums.b[r] += j[r] * s * repeat;
+                }
+            }
+            proptest::prop_assert_eq!(solve(&sums), solve_direct(&sums));
+        }
+
         /// Any pose the format holds (a matrix of 18-bit entries, any translation): no
         /// overflow (the test profile checks), and the result is the start or a step from it.
         #[test]
@@ -581,7 +620,7 @@ mod tests {
         assert!(sums.a.iter().all(|v| v.abs() <= 1 << 46));
         assert!(sums.b.iter().all(|v| v.abs() < 1 << 42));
         assert!(sums.sum_r2 < 1 << 36);
-        let _ = solve(&sums);
+        agree(&sums);
         let out = polish(&grid, &normals, &scan, &pose, 2);
         assert!(out.steps <= 2);
     }
