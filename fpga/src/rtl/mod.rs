@@ -18,6 +18,8 @@
 //! - [`weights`]: `WeightStage`, minimum cost and exp-table weights
 //!   ([`crate::weights::WeightModel`]);
 //! - [`particle_weights`]: the two wired together ([`crate::particle_weights`]);
+//! - [`polish`]: the on-board polish's blocks: `PolishProgram`, the datapath of the
+//!   solve's program ([`crate::polish::program`]);
 //! - [`board`]: the board top and its blocks, the sequencer among them
 //!   ([`crate::board::BoardModel`], [`crate::sequencer::SequencerModel`]).
 //!
@@ -32,6 +34,7 @@ pub mod neighbour_lane;
 pub mod neighbour_pipeline;
 pub mod particle_weights;
 pub mod pipeline;
+pub mod polish;
 pub mod surface_residual;
 pub mod transform;
 pub mod weights;

@@ -1,0 +1,194 @@
+//! `PolishProgram` in rust_hdl's simulator against [`pficp_fpga::polish::program::run`]:
+//! the solve's program on Gram systems of up to 4,096 rows (the widest the pass makes), a
+//! system whose pivot stops the program, a zero system and one whose step the clamp bounds.
+//! After each run every one of the 64 registers and the failed flag must equal the model's;
+//! a short program takes every instruction through its edge cases the same way.
+#![cfg(feature = "rtl")]
+
+use pficp_fpga::polish::program::{run, solve_inputs, solve_program, Op, REGISTERS};
+use pficp_fpga::polish::{upper, PassSums, UNKNOWNS};
+use pficp_fpga::rtl::polish::PolishProgram;
+use pficp_fpga::splitmix::SplitMix64;
+use rust_hdl::prelude::*;
+use std::sync::{Arc, Mutex};
+
+/// `v` as a 128-bit word.
+fn word(v: i128) -> Bits<128> {
+    (0..128).fold(Bits::<128>::default(), |b, i| b.replace_bit(i, (v >> i) & 1 == 1))
+}
+
+/// A 128-bit word as a signed value.
+fn value(b: Bits<128>) -> i128 {
+    ((b.get_bits::<64>(64).to_u64() as u128) << 64 | b.get_bits::<64>(0).to_u64() as u128) as i128
+}
+
+/// The sums of `rows` (a Jacobian row and a residual each), each row counted `repeat` times.
+fn gram(rows: &[([i64; UNKNOWNS], i64)], repeat: i64) -> PassSums {
+    let mut sums = PassSums { a: vec![0; 28], ..Default::default() };
+    for (j, s) in rows {
+        for r in 0..UNKNOWNS {
+            for c in r..UNKNOWNS {
+                sums.a[upper(r, c)] += j[r] * j[c] * repeat;
+            }
+            sums.b[r] += j[r] * s * repeat;
+        }
+    }
+    sums
+}
+
+/// The systems: random Gram systems (full rank and not), the widest, the edge cases.
+fn cases() -> Vec<PassSums> {
+    let mut rng = SplitMix64(0x5eed_0013);
+    let mut entry = |bits: u32| (rng.next_u64() >> (64 - bits)) as i64 - (1 << (bits - 1));
+    let mut out = Vec::new();
+    for (n_rows, repeat) in [(12, 1), (9, 341), (5, 7), (20, 200)] {
+        let rows: Vec<_> = (0..n_rows).map(|_| (std::array::from_fn(|_| entry(18)), entry(13))).collect();
+        out.push(gram(&rows, repeat));
+    }
+    // The widest: 4,096 rows at the largest magnitudes, alternating signs.
+    let wide: Vec<_> = (0..8)
+        .map(|r| {
+            (
+                std::array::from_fn(|c| if (r + c) % 3 == 0 { -(1 << 17) } else { (1 << 17) - 1 }),
+                (1 << 12) - 1 - r as i64,
+            )
+        })
+        .collect();
+    out.push(gram(&wide, 512));
+    let mut degenerate = PassSums { a: vec![0; 28], ..Default::default() };
+    out.push(degenerate.clone());
+    degenerate.a[upper(2, 2)] = -100;
+    out.push(degenerate);
+    let mut big = PassSums { a: vec![0; 28], ..Default::default() };
+    for i in 0..UNKNOWNS {
+        big.a[upper(i, i)] = 1 << 20;
+    }
+    big.b = [1 << 40, -(1 << 40), 0, 0, 0, 0, 1];
+    out.push(big);
+    out
+}
+
+/// Run `program` in `PolishProgram` from each register file of `inputs`, and in the model;
+/// every register and the failed flag must agree. Returns the clocks of each run.
+fn check(program: Vec<Op>, inputs: Vec<[i128; REGISTERS]>) -> Vec<u64> {
+    let expected: Vec<([i128; REGISTERS], bool)> = inputs
+        .iter()
+        .map(|r0| {
+            let mut r = *r0;
+            let failed = run(&program, &mut r).is_err();
+            (r, failed)
+        })
+        .collect();
+    let found = Arc::new(Mutex::new(Vec::<String>::new()));
+    let clocks = Arc::new(Mutex::new(Vec::<u64>::new()));
+    let (out, out_clocks) = (found.clone(), clocks.clone());
+    let mut uut = PolishProgram::new(&program);
+    uut.connect_all();
+    let mut sim = Simulation::new();
+    sim.add_clock(5, |x: &mut Box<PolishProgram>| x.clock.next = !x.clock.val());
+    sim.add_testbench(move |mut sim: Sim<PolishProgram>| {
+        let mut x = sim.init()?;
+        x.reset.next = false;
+        wait_clock_true!(sim, clock, x);
+        for (case, (r0, (want, want_failed))) in inputs.iter().zip(&expected).enumerate() {
+            for (addr, &v) in r0.iter().enumerate() {
+                x.load.next = true;
+                x.load_addr.next = (addr as u64).into();
+                x.load_data.next = word(v);
+                wait_clock_cycle!(sim, clock, x);
+            }
+            x.load.next = false;
+            x.go.next = true;
+            wait_clock_cycle!(sim, clock, x);
+            x.go.next = false;
+            let mut n = 0u64;
+            while x.busy.val() && n < 200_000 {
+                wait_clock_cycle!(sim, clock, x);
+                n += 1;
+            }
+            out_clocks.lock().unwrap().push(n);
+            if x.failed.val() != *want_failed {
+                out.lock().unwrap().push(format!("case {case}: failed {} against {want_failed}", x.failed.val()));
+            }
+            for (addr, &w) in want.iter().enumerate() {
+                x.read_addr.next = (addr as u64).into();
+                wait_clock_cycle!(sim, clock, x);
+                if value(x.read_data.val()) != w {
+                    out.lock()
+                        .unwrap()
+                        .push(format!("case {case}: r{addr} = {}, the model {w}", value(x.read_data.val())));
+                }
+            }
+        }
+        sim.done(x)
+    });
+    sim.run(Box::new(uut), 1_000_000_000).expect("simulation");
+    let errors = found.lock().unwrap();
+    assert!(errors.is_empty(), "{} mismatches, the first: {}", errors.len(), errors[0]);
+    let clocks = clocks.lock().unwrap().clone();
+    clocks
+}
+
+#[test]
+fn the_solve_program_matches_the_model_register_for_register() {
+    let inputs: Vec<_> = cases().iter().map(solve_inputs).collect();
+    let outcomes: Vec<bool> = inputs.iter().map(|r0| run(&solve_program(), &mut r0.clone()).is_err()).collect();
+    assert!(outcomes.contains(&true) && outcomes.contains(&false), "both outcomes are exercised");
+    eprintln!("clocks a solve: {:?}", check(solve_program(), inputs));
+}
+
+/// Every kind of instruction on its edge cases: exact quotients (a remainder equal to the
+/// divisor), negative dividends and products, the most negative value, wrapping, a zero
+/// divisor, rounding ties either side of zero, both sides of a clamp and a stop that does
+/// and does not fire.
+#[test]
+fn each_instruction_matches_the_model_on_its_edge_cases() {
+    let mut program = Vec::new();
+    let mut d = 20u8;
+    let mut next = || {
+        d += 1;
+        d - 1
+    };
+    for a in 0..6u8 {
+        for b in 0..6u8 {
+            program.push(Op::Add { d: next(), a, b });
+            program.push(Op::Sub { d: next(), a, b });
+            program.push(Op::Mul { d: next(), a, b, k: (a + b) % 3 });
+            program.push(Op::Div { d: next(), a, b, k: a % 2 });
+            program.push(Op::Clamp { d: next(), a, b });
+        }
+        program.push(Op::Shr { d: next(), a, k: 1 + a });
+        program.push(Op::StopBelow { a, b: 6 });
+    }
+    // The destinations wrap around the file; the constants come last.
+    for op in program.iter_mut() {
+        match op {
+            Op::Add { d, .. }
+            | Op::Sub { d, .. }
+            | Op::Mul { d, .. }
+            | Op::Div { d, .. }
+            | Op::Clamp { d, .. }
+            | Op::Shr { d, .. } => *d = 7 + *d % 57,
+            _ => {}
+        }
+    }
+    program.push(Op::constant(63, 5 << 100));
+    let files: Vec<[i128; REGISTERS]> = [
+        [12, 3, -12, -3, 0, 1],
+        [i128::MIN, -1, i128::MAX, 2, 7, -7],
+        [-6, 4, 6, -4, 10, 5],
+        [1 << 100, 3 << 98, -(1 << 64), 1 << 63, 99, -100],
+    ]
+    .iter()
+    .flat_map(|six| {
+        // Once with a stop bound that lets every test pass, once with one that stops.
+        [i128::MIN, 0].map(|bound| {
+            let mut r = [0i128; REGISTERS];
+            r[..6].copy_from_slice(six);
+            r[6] = bound;
+            r
+        })
+    })
+    .collect();
+    check(program, files);
+}
