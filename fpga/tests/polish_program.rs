@@ -172,6 +172,9 @@ fn each_instruction_matches_the_model_on_its_edge_cases() {
             _ => {}
         }
     }
+    // A rounding whose `+ 1` would overflow 128 bits (the most positive product, k = 1).
+    program.push(Op::constant(62, 1));
+    program.push(Op::Mul { d: 61, a: 2, b: 62, k: 1 });
     program.push(Op::constant(63, 5 << 100));
     let files: Vec<[i128; REGISTERS]> = [
         [12, 3, -12, -3, 0, 1],

@@ -41,8 +41,8 @@ pub enum Op {
         /// Subtrahend.
         b: u8,
     },
-    /// `r[d] = rnd_k(r[a] r[b])` (`k = 0`: the product): `((p >> (k - 1)) + 1) >> 1`,
-    /// which is `(p + 2^(k-1)) >> k`.
+    /// `r[d] = rnd_k(r[a] r[b])` (`k = 0`: the product, modulo 2^128): `((p >> (k - 1)) +
+    /// 1) >> 1` without overflow, which is `(p + 2^(k-1)) >> k`.
     Mul {
         /// Destination.
         d: u8,
@@ -167,12 +167,14 @@ pub fn rom_words(program: &[Op]) -> Vec<u32> {
     program.iter().enumerate().map(|(i, op)| op.encode() | ((i == last) as u32) << FIELD_LAST).collect()
 }
 
-/// `(p + 2^(k-1)) >> k` as the RTL forms it, modulo 2^128 (`k = 0`: `p`).
-fn round_wrapping(p: i128, k: u8) -> i128 {
+/// `(p + 2^(k-1)) >> k` as the RTL forms it, `(u + 1) >> 1` for `u = p >> (k - 1)`
+/// without overflow (`k = 0`: `p`).
+fn round_half_up(p: i128, k: u8) -> i128 {
     if k == 0 {
         p
     } else {
-        (p >> (k - 1)).wrapping_add(1) >> 1
+        let u = p >> (k - 1);
+        (u >> 1) + (u & 1)
     }
 }
 
@@ -183,7 +185,7 @@ pub fn run(program: &[Op], r: &mut [i128; REGISTERS]) -> Result<(), usize> {
         match op {
             Op::Add { d, a, b } => r[d as usize] = r[a as usize].wrapping_add(r[b as usize]),
             Op::Sub { d, a, b } => r[d as usize] = r[a as usize].wrapping_sub(r[b as usize]),
-            Op::Mul { d, a, b, k } => r[d as usize] = round_wrapping(r[a as usize].wrapping_mul(r[b as usize]), k),
+            Op::Mul { d, a, b, k } => r[d as usize] = round_half_up(r[a as usize].wrapping_mul(r[b as usize]), k),
             Op::Div { d, a, b, k } => {
                 let n = r[a as usize] << k;
                 let divisor = r[b as usize] as u128;

@@ -1,8 +1,10 @@
 //! `PolishProgram`: the datapath that runs a [`crate::polish::program`] program (in ROM)
 //! over 64 x 128-bit registers, the RTL twin of [`crate::polish::program::run`] (test:
-//! `fpga/tests/polish_program.rs`, against the model on the solve's inputs). One adder
-//! a unit, no DSP48A1: a shift-and-add multiplier (a clock a bit of the multiplier's
-//! magnitude), a restoring divider (128 clocks), shifts a bit a clock. An instruction takes
+//! `fpga/tests/polish_program.rs`, against the model on the solve's inputs). No DSP48A1
+//! and one 129-bit adder for every unit, `alu = A + (B ^ inv) + cin` with `A` one of
+//! `x`, `acc`, `rem2`, 0 and `B` one of the second operand, `x`, `y`, 1: a shift-and-add
+//! multiplier over the multiplier's magnitude (a clock a bit; a negative multiplier
+//! subtracts), a restoring divider (128 clocks), shifts a bit a clock. An instruction takes
 //! `fetch`, `operand`, `exec` and `write` (4 clocks for an add) plus its unit's clocks.
 
 use crate::polish::program::{rom_words, Op, FIELD_A, FIELD_B, FIELD_D, FIELD_K, FIELD_LAST};
@@ -15,9 +17,9 @@ pub enum ProgramState {
     Idle,
     /// Latch the instruction at the program counter; read its first operand.
     Fetch,
-    /// Latch the first operand; read the second.
+    /// Latch the first operand; read the second (held until the instruction ends).
     Operand,
-    /// Execute: an add, subtract or clamp ends here; the others start their unit.
+    /// Execute: an add or subtract ends here; the others start their unit.
     Exec,
     /// Shift-and-add over the multiplier's magnitude.
     Mul,
@@ -25,8 +27,18 @@ pub enum ProgramState {
     Round,
     /// Left shifts (a dividend's, a constant's).
     ShiftLeft,
-    /// Restoring division, a quotient bit a clock.
+    /// The dividend's magnitude.
+    DivAbs,
+    /// Restoring division, a quotient bit a clock; then the quotient's sign.
     Div,
+    /// A clamp below its bound: `y = -bound`.
+    ClampNeg,
+    /// A clamp: the operand against `-bound`.
+    ClampLow,
+    /// A stop test: `2 r[a]` (in `acc`) against the bound.
+    StopTest,
+    /// `acc = 0 + B` for the `B` source in `take` (a clamp's or a constant's result).
+    Take,
     /// Write the result; the next instruction or the end.
     Write,
 }
@@ -64,23 +76,23 @@ pub struct PolishProgram {
     neg: DFF<Bit>,
     cnt: DFF<Bits<8>>,
     fail: DFF<Bit>,
+    take: DFF<Bits<2>>,
     rf: RAM<Bits<128>, 6>,
     prog: ROM<Bits<30>, 9>,
     kind: Signal<Local, Bits<4>>,
     opb: Signal<Local, Bits<128>>,
-    negb: Signal<Local, Bits<128>>,
-    x_neg: Signal<Local, Bits<128>>,
-    x_abs: Signal<Local, Bits<128>>,
-    b_abs: Signal<Local, Bits<128>>,
-    twice: Signal<Local, Bits<128>>,
-    below: Signal<Local, Bit>,
-    above: Signal<Local, Bit>,
-    under: Signal<Local, Bit>,
-    acc_inc: Signal<Local, Bits<128>>,
+    // The adder: its sources' selects, the operands (sign-extended to 129 bits; `y` is
+    // zero-extended for a divisor), the sum and the sum shifted right.
+    sel_a: Signal<Local, Bits<2>>,
+    sel_b: Signal<Local, Bits<2>>,
+    inv: Signal<Local, Bit>,
+    cin: Signal<Local, Bit>,
+    alu_a: Signal<Local, Bits<129>>,
+    alu_b: Signal<Local, Bits<129>>,
+    alu: Signal<Local, Bits<129>>,
+    alu_sra: Signal<Local, Bits<128>>,
     acc_sra: Signal<Local, Bits<128>>,
-    acc_inc_sra: Signal<Local, Bits<128>>,
     rem2: Signal<Local, Bits<129>>,
-    y_wide: Signal<Local, Bits<129>>,
 }
 
 impl PolishProgram {
@@ -108,6 +120,7 @@ impl PolishProgram {
             neg: Default::default(),
             cnt: Default::default(),
             fail: Default::default(),
+            take: Default::default(),
             rf: RAM::new((0..64u64).map(|a| (Bits::<6>::from(a), Bits::<128>::default())).collect()),
             prog: ROM::new(
                 words
@@ -118,19 +131,16 @@ impl PolishProgram {
             ),
             kind: Default::default(),
             opb: Default::default(),
-            negb: Default::default(),
-            x_neg: Default::default(),
-            x_abs: Default::default(),
-            b_abs: Default::default(),
-            twice: Default::default(),
-            below: Default::default(),
-            above: Default::default(),
-            under: Default::default(),
-            acc_inc: Default::default(),
+            sel_a: Default::default(),
+            sel_b: Default::default(),
+            inv: Default::default(),
+            cin: Default::default(),
+            alu_a: Default::default(),
+            alu_b: Default::default(),
+            alu: Default::default(),
+            alu_sra: Default::default(),
             acc_sra: Default::default(),
-            acc_inc_sra: Default::default(),
             rem2: Default::default(),
-            y_wide: Default::default(),
         }
     }
 }
@@ -146,7 +156,7 @@ const _: () = {
 impl Logic for PolishProgram {
     #[hdl_gen]
     fn update(&mut self) {
-        dff_setup!(self, clock, state, pc, ins, x, y, acc, rem, neg, cnt, fail);
+        dff_setup!(self, clock, state, pc, ins, x, y, acc, rem, neg, cnt, fail, take);
         self.rf.read_clock.next = self.clock.val();
         self.rf.write_clock.next = self.clock.val();
         self.prog.address.next = self.pc.q.val();
@@ -156,41 +166,134 @@ impl Logic for PolishProgram {
         self.busy.next = self.state.q.val() != ProgramState::Idle;
         self.failed.next = self.fail.q.val();
 
-        // The units' combinational parts.
-        self.negb.next = bits::<128>(0) - self.opb.val();
-        self.x_neg.next = bits::<128>(0) - self.x.q.val();
-        self.x_abs.next = self.x.q.val();
-        if self.x.q.val().get_bit(127) {
-            self.x_abs.next = self.x_neg.val();
-        }
-        self.b_abs.next = self.opb.val();
-        if self.opb.val().get_bit(127) {
-            self.b_abs.next = self.negb.val();
-        }
-        // Signed comparisons: by the sign bits where they differ, else unsigned.
-        self.twice.next = self.x.q.val() + self.x.q.val();
-        self.below.next = self.twice.val() < self.opb.val();
-        if self.twice.val().get_bit(127) != self.opb.val().get_bit(127) {
-            self.below.next = self.twice.val().get_bit(127);
-        }
-        self.above.next = self.x.q.val() > self.opb.val();
-        if self.x.q.val().get_bit(127) != self.opb.val().get_bit(127) {
-            self.above.next = self.opb.val().get_bit(127);
-        }
-        self.under.next = self.x.q.val() < self.negb.val();
-        if self.x.q.val().get_bit(127) != self.negb.val().get_bit(127) {
-            self.under.next = self.x.q.val().get_bit(127);
-        }
-        self.acc_inc.next = self.acc.q.val() + 1;
-        self.acc_sra.next = (self.acc.q.val() >> 1).replace_bit(127, self.acc.q.val().get_bit(127));
-        self.acc_inc_sra.next = (self.acc_inc.val() >> 1).replace_bit(127, self.acc_inc.val().get_bit(127));
+        // The adder: A is x (0), acc (1), rem2 (2) or 0 (3); B is the second operand (0),
+        // x (1), y (2) or 1 (3); each state below picks them.
+        self.sel_a.next = 3.into();
+        self.sel_b.next = 0.into();
+        self.inv.next = false;
+        self.cin.next = false;
         self.rem2.next = (self.rem.q.val() << 1) | bit_cast::<129, 1>(self.x.q.val().get_bits::<1>(127));
-        self.y_wide.next = bit_cast::<129, 128>(self.y.q.val());
 
-        self.rf.read_address.next = self.read_addr.val();
+        self.rf.read_address.next = self.ins.q.val().get_bits::<6>(16);
         self.rf.write_enable.next = false;
         self.rf.write_address.next = self.ins.q.val().get_bits::<6>(4);
         self.rf.write_data.next = self.acc.q.val();
+
+        match self.state.q.val() {
+            ProgramState::Idle => {
+                self.rf.read_address.next = self.read_addr.val();
+            }
+            ProgramState::Fetch => {
+                self.rf.read_address.next = self.prog.data.val().get_bits::<6>(10);
+            }
+            ProgramState::Exec => {
+                if self.kind.val() == 0 {
+                    self.sel_a.next = 0.into();
+                }
+                if self.kind.val() == 1 {
+                    self.sel_a.next = 0.into();
+                    self.inv.next = true;
+                    self.cin.next = true;
+                }
+                if self.kind.val() == 2 {
+                    self.inv.next = true;
+                    self.cin.next = true;
+                }
+                if self.kind.val() == 4 {
+                    self.sel_b.next = 1.into();
+                }
+                if self.kind.val() == 6 {
+                    self.sel_a.next = 0.into();
+                    self.inv.next = true;
+                }
+                if self.kind.val() == 7 {
+                    self.sel_a.next = 0.into();
+                    self.sel_b.next = 1.into();
+                }
+            }
+            ProgramState::Mul => {
+                self.sel_a.next = 1.into();
+                self.sel_b.next = 1.into();
+                self.inv.next = self.neg.q.val();
+                self.cin.next = self.neg.q.val();
+            }
+            ProgramState::Round => {
+                self.sel_a.next = 1.into();
+                self.sel_b.next = 3.into();
+            }
+            ProgramState::DivAbs => {
+                self.sel_b.next = 1.into();
+                self.inv.next = true;
+                self.cin.next = true;
+            }
+            ProgramState::Div => {
+                if self.cnt.q.val().any() {
+                    self.sel_a.next = 2.into();
+                    self.sel_b.next = 2.into();
+                    self.inv.next = true;
+                    self.cin.next = true;
+                } else {
+                    self.sel_b.next = 1.into();
+                    self.inv.next = self.neg.q.val();
+                    self.cin.next = self.neg.q.val();
+                }
+            }
+            ProgramState::ClampNeg => {
+                self.inv.next = true;
+                self.cin.next = true;
+            }
+            ProgramState::ClampLow => {
+                self.sel_a.next = 0.into();
+                self.sel_b.next = 2.into();
+                self.inv.next = true;
+                self.cin.next = true;
+            }
+            ProgramState::StopTest => {
+                self.sel_a.next = 1.into();
+                self.inv.next = true;
+                self.cin.next = true;
+            }
+            ProgramState::Take => {
+                self.sel_b.next = self.take.q.val();
+            }
+            _ => {}
+        }
+
+        self.alu_a.next = 0.into();
+        if self.sel_a.val() == 0 {
+            self.alu_a.next =
+                bit_cast::<129, 128>(self.x.q.val()) | (bit_cast::<129, 1>(self.x.q.val().get_bits::<1>(127)) << 128);
+        }
+        if self.sel_a.val() == 1 {
+            self.alu_a.next = bit_cast::<129, 128>(self.acc.q.val())
+                | (bit_cast::<129, 1>(self.acc.q.val().get_bits::<1>(127)) << 128);
+        }
+        if self.sel_a.val() == 2 {
+            self.alu_a.next = self.rem2.val();
+        }
+        self.alu_b.next = 1.into();
+        if self.sel_b.val() == 0 {
+            self.alu_b.next =
+                bit_cast::<129, 128>(self.opb.val()) | (bit_cast::<129, 1>(self.opb.val().get_bits::<1>(127)) << 128);
+        }
+        if self.sel_b.val() == 1 {
+            self.alu_b.next =
+                bit_cast::<129, 128>(self.x.q.val()) | (bit_cast::<129, 1>(self.x.q.val().get_bits::<1>(127)) << 128);
+        }
+        if self.sel_b.val() == 2 {
+            // A divisor is unsigned; a clamp's `-bound` is not.
+            self.alu_b.next = bit_cast::<129, 128>(self.y.q.val());
+            if self.kind.val() != 3 {
+                self.alu_b.next = bit_cast::<129, 128>(self.y.q.val())
+                    | (bit_cast::<129, 1>(self.y.q.val().get_bits::<1>(127)) << 128);
+            }
+        }
+        if self.inv.val() {
+            self.alu_b.next = !self.alu_b.val();
+        }
+        self.alu.next = self.alu_a.val() + self.alu_b.val() + bit_cast::<129, 1>(self.cin.val().into());
+        self.alu_sra.next = self.alu.val().get_bits::<128>(1);
+        self.acc_sra.next = (self.acc.q.val() >> 1).replace_bit(127, self.acc.q.val().get_bit(127));
 
         match self.state.q.val() {
             ProgramState::Idle => {
@@ -207,27 +310,25 @@ impl Logic for PolishProgram {
             }
             ProgramState::Fetch => {
                 self.ins.d.next = self.prog.data.val();
-                self.rf.read_address.next = self.prog.data.val().get_bits::<6>(10);
                 self.state.d.next = ProgramState::Operand;
             }
             ProgramState::Operand => {
                 self.x.d.next = self.rf.read_data.val();
-                self.rf.read_address.next = self.ins.q.val().get_bits::<6>(16);
                 self.state.d.next = ProgramState::Exec;
             }
             ProgramState::Exec => {
                 self.cnt.d.next = bit_cast::<8, 7>(self.ins.q.val().get_bits::<7>(22));
                 self.state.d.next = ProgramState::Write;
-                if self.kind.val() == 0 {
-                    self.acc.d.next = self.x.q.val() + self.opb.val();
-                }
-                if self.kind.val() == 1 {
-                    self.acc.d.next = self.x.q.val() - self.opb.val();
+                if self.kind.val() < 2 {
+                    self.acc.d.next = self.alu.val().get_bits::<128>(0);
                 }
                 if self.kind.val() == 2 {
-                    self.neg.d.next = self.x.q.val().get_bit(127) ^ self.opb.val().get_bit(127);
-                    self.x.d.next = self.x_abs.val();
-                    self.y.d.next = self.b_abs.val();
+                    // x times |B|, subtracting when B is negative.
+                    self.neg.d.next = self.opb.val().get_bit(127);
+                    self.y.d.next = self.opb.val();
+                    if self.opb.val().get_bit(127) {
+                        self.y.d.next = self.alu.val().get_bits::<128>(0);
+                    }
                     self.acc.d.next = 0.into();
                     self.state.d.next = ProgramState::Mul;
                 }
@@ -236,7 +337,7 @@ impl Logic for PolishProgram {
                     self.state.d.next = ProgramState::ShiftLeft;
                 }
                 if self.kind.val() == 4 {
-                    self.acc.d.next = self.x.q.val();
+                    self.acc.d.next = self.alu.val().get_bits::<128>(0);
                     self.state.d.next = ProgramState::Round;
                 }
                 if self.kind.val() == 5 {
@@ -244,36 +345,26 @@ impl Logic for PolishProgram {
                     self.state.d.next = ProgramState::ShiftLeft;
                 }
                 if self.kind.val() == 6 {
-                    self.acc.d.next = self.x.q.val();
-                    if self.above.val() {
-                        self.acc.d.next = self.opb.val();
-                    } else if self.under.val() {
-                        self.acc.d.next = self.negb.val();
+                    // x + ~B = x - B - 1 is not negative: x > B, the result is B.
+                    self.take.d.next = 0.into();
+                    self.state.d.next = ProgramState::Take;
+                    if self.alu.val().get_bit(128) {
+                        self.state.d.next = ProgramState::ClampNeg;
                     }
                 }
                 if self.kind.val() == 7 {
-                    if self.below.val() {
-                        self.fail.d.next = true;
-                        self.state.d.next = ProgramState::Idle;
-                    } else if self.ins.q.val().get_bit(29) {
-                        self.state.d.next = ProgramState::Idle;
-                    } else {
-                        self.pc.d.next = self.pc.q.val() + 1;
-                        self.state.d.next = ProgramState::Fetch;
-                    }
+                    self.acc.d.next = self.alu.val().get_bits::<128>(0);
+                    self.state.d.next = ProgramState::StopTest;
                 }
             }
             ProgramState::Mul => {
                 if self.y.q.val().any() {
                     if self.y.q.val().get_bit(0) {
-                        self.acc.d.next = self.acc.q.val() + self.x.q.val();
+                        self.acc.d.next = self.alu.val().get_bits::<128>(0);
                     }
                     self.x.d.next = self.x.q.val() << 1;
                     self.y.d.next = self.y.q.val() >> 1;
                 } else {
-                    if self.neg.q.val() {
-                        self.acc.d.next = bits::<128>(0) - self.acc.q.val();
-                    }
                     self.state.d.next = ProgramState::Round;
                 }
             }
@@ -282,7 +373,7 @@ impl Logic for PolishProgram {
                     self.cnt.d.next = self.cnt.q.val() - 1;
                     self.acc.d.next = self.acc_sra.val();
                     if (self.cnt.q.val() == 1) && (self.kind.val() == 2) {
-                        self.acc.d.next = self.acc_inc_sra.val();
+                        self.acc.d.next = self.alu_sra.val();
                     }
                 } else {
                     self.state.d.next = ProgramState::Write;
@@ -293,33 +384,62 @@ impl Logic for PolishProgram {
                     self.cnt.d.next = self.cnt.q.val() - 1;
                     self.x.d.next = self.x.q.val() << 1;
                 } else if self.kind.val() == 3 {
-                    self.neg.d.next = self.x.q.val().get_bit(127);
-                    self.x.d.next = self.x_abs.val();
-                    self.rem.d.next = 0.into();
-                    self.cnt.d.next = 128.into();
-                    self.state.d.next = ProgramState::Div;
+                    self.state.d.next = ProgramState::DivAbs;
                 } else {
-                    self.acc.d.next = self.x.q.val();
-                    self.state.d.next = ProgramState::Write;
+                    self.take.d.next = 1.into();
+                    self.state.d.next = ProgramState::Take;
                 }
+            }
+            ProgramState::DivAbs => {
+                self.neg.d.next = self.x.q.val().get_bit(127);
+                if self.x.q.val().get_bit(127) {
+                    self.x.d.next = self.alu.val().get_bits::<128>(0);
+                }
+                self.rem.d.next = 0.into();
+                self.cnt.d.next = 128.into();
+                self.state.d.next = ProgramState::Div;
             }
             ProgramState::Div => {
                 if self.cnt.q.val().any() {
                     self.cnt.d.next = self.cnt.q.val() - 1;
-                    if self.rem2.val() >= self.y_wide.val() {
-                        self.rem.d.next = self.rem2.val() - self.y_wide.val();
-                        self.x.d.next = (self.x.q.val() << 1) | bits::<128>(1);
-                    } else {
+                    if self.alu.val().get_bit(128) {
                         self.rem.d.next = self.rem2.val();
                         self.x.d.next = self.x.q.val() << 1;
+                    } else {
+                        self.rem.d.next = self.alu.val();
+                        self.x.d.next = (self.x.q.val() << 1) | bits::<128>(1);
                     }
                 } else {
-                    self.acc.d.next = self.x.q.val();
-                    if self.neg.q.val() {
-                        self.acc.d.next = self.x_neg.val();
-                    }
+                    self.acc.d.next = self.alu.val().get_bits::<128>(0);
                     self.state.d.next = ProgramState::Write;
                 }
+            }
+            ProgramState::ClampNeg => {
+                self.y.d.next = self.alu.val().get_bits::<128>(0);
+                self.state.d.next = ProgramState::ClampLow;
+            }
+            ProgramState::ClampLow => {
+                // x - (-B) < 0: the result is -B, else x.
+                self.take.d.next = 1.into();
+                if self.alu.val().get_bit(128) {
+                    self.take.d.next = 2.into();
+                }
+                self.state.d.next = ProgramState::Take;
+            }
+            ProgramState::StopTest => {
+                if self.alu.val().get_bit(128) {
+                    self.fail.d.next = true;
+                    self.state.d.next = ProgramState::Idle;
+                } else if self.ins.q.val().get_bit(29) {
+                    self.state.d.next = ProgramState::Idle;
+                } else {
+                    self.pc.d.next = self.pc.q.val() + 1;
+                    self.state.d.next = ProgramState::Fetch;
+                }
+            }
+            ProgramState::Take => {
+                self.acc.d.next = self.alu.val().get_bits::<128>(0);
+                self.state.d.next = ProgramState::Write;
             }
             ProgramState::Write => {
                 self.rf.write_enable.next = true;
