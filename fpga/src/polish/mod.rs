@@ -1,8 +1,10 @@
 //! The on-board polish: point-to-plane Gauss-Newton with scale over the board's own stores,
 //! the bit-exact reference of what the board is to run after its particle filter
 //! (docs/decisions.md, "Why the board's pose alone misses, and the polish on the board").
-//! No RTL twin yet: this model fixes the arithmetic the RTL must match, and the host's
-//! figures (`host/tests/board_polish_figures.rs`) measure it.
+//! This model fixes the arithmetic the RTL must match, and the host's figures
+//! (`host/tests/board_polish_figures.rs`) measure it. The solve runs as a program
+//! ([`program`]) whose datapath is built (`crate::rtl::polish::PolishProgram`); the pass,
+//! the update and the polish's control are not built yet.
 //!
 //! **Why.** The filter minimises its cost over 50 particles x 50 iterations; among those
 //! 2,500 poses the lowest cost belongs to a pose a little off the truth (on 30 of the 32
