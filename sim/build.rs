@@ -12,6 +12,8 @@
 //!   `Vweights`);
 //! - `surface_residual`: `SurfaceResidual` from `pficp_fpga::rtl::surface_residual_verilog()`
 //!   (prefix `Vsurf`);
+//! - `polish_program`: `PolishProgram` with the solve's program, from
+//!   `pficp_fpga::rtl::polish_program_verilog()` (prefix `Vpolish`);
 //! - `sequencer`: `PfSequencer` alone, from `pficp_fpga::rtl::sequencer_verilog()`;
 //! - `board` and `board_fast`: the whole board top, `pficp_fpga::rtl::board_verilog` of the
 //!   default and of the fast-UART configuration;
@@ -69,7 +71,7 @@ struct Design {
 }
 
 /// Every design that is verilated.
-const DESIGNS: [Design; 9] = [
+const DESIGNS: [Design; 10] = [
     Design {
         name: "pipeline",
         prefix: "Vpipe",
@@ -117,6 +119,14 @@ const DESIGNS: [Design; 9] = [
         verilog: |_| pficp_fpga::rtl::surface_residual_verilog(),
         ports: &[SURFACE_RESIDUAL_PORTS],
         spec: "docs/pipeline.md, the surface residual (sim/src/ports.rs SURFACE_RESIDUAL_PORTS)",
+    },
+    Design {
+        name: "polish_program",
+        prefix: "Vpolish",
+        per_lane: false,
+        verilog: |_| pficp_fpga::rtl::polish_program_verilog(),
+        ports: &[POLISH_PROGRAM_PORTS],
+        spec: "fpga/src/rtl/polish/program.rs (sim/src/ports.rs POLISH_PROGRAM_PORTS)",
     },
     Design {
         name: "board",

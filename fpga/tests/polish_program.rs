@@ -5,10 +5,8 @@
 //! a short program takes every instruction through its edge cases the same way.
 #![cfg(feature = "rtl")]
 
-use pficp_fpga::polish::program::{run, solve_inputs, solve_program, Op, REGISTERS};
-use pficp_fpga::polish::{upper, PassSums, UNKNOWNS};
+use pficp_fpga::polish::program::{run, solve_inputs, solve_program, solve_systems, Op, REGISTERS};
 use pficp_fpga::rtl::polish::PolishProgram;
-use pficp_fpga::splitmix::SplitMix64;
 use rust_hdl::prelude::*;
 use std::sync::{Arc, Mutex};
 
@@ -20,52 +18,6 @@ fn word(v: i128) -> Bits<128> {
 /// A 128-bit word as a signed value.
 fn value(b: Bits<128>) -> i128 {
     ((b.get_bits::<64>(64).to_u64() as u128) << 64 | b.get_bits::<64>(0).to_u64() as u128) as i128
-}
-
-/// The sums of `rows` (a Jacobian row and a residual each), each row counted `repeat` times.
-fn gram(rows: &[([i64; UNKNOWNS], i64)], repeat: i64) -> PassSums {
-    let mut sums = PassSums { a: vec![0; 28], ..Default::default() };
-    for (j, s) in rows {
-        for r in 0..UNKNOWNS {
-            for c in r..UNKNOWNS {
-                sums.a[upper(r, c)] += j[r] * j[c] * repeat;
-            }
-            sums.b[r] += j[r] * s * repeat;
-        }
-    }
-    sums
-}
-
-/// The systems: random Gram systems (full rank and not), the widest, the edge cases.
-fn cases() -> Vec<PassSums> {
-    let mut rng = SplitMix64(0x5eed_0013);
-    let mut entry = |bits: u32| (rng.next_u64() >> (64 - bits)) as i64 - (1 << (bits - 1));
-    let mut out = Vec::new();
-    for (n_rows, repeat) in [(12, 1), (9, 341), (5, 7), (20, 200)] {
-        let rows: Vec<_> = (0..n_rows).map(|_| (std::array::from_fn(|_| entry(18)), entry(13))).collect();
-        out.push(gram(&rows, repeat));
-    }
-    // The widest: 4,096 rows at the largest magnitudes, alternating signs.
-    let wide: Vec<_> = (0..8)
-        .map(|r| {
-            (
-                std::array::from_fn(|c| if (r + c) % 3 == 0 { -(1 << 17) } else { (1 << 17) - 1 }),
-                (1 << 12) - 1 - r as i64,
-            )
-        })
-        .collect();
-    out.push(gram(&wide, 512));
-    let mut degenerate = PassSums { a: vec![0; 28], ..Default::default() };
-    out.push(degenerate.clone());
-    degenerate.a[upper(2, 2)] = -100;
-    out.push(degenerate);
-    let mut big = PassSums { a: vec![0; 28], ..Default::default() };
-    for i in 0..UNKNOWNS {
-        big.a[upper(i, i)] = 1 << 20;
-    }
-    big.b = [1 << 40, -(1 << 40), 0, 0, 0, 0, 1];
-    out.push(big);
-    out
 }
 
 /// Run `program` in `PolishProgram` from each register file of `inputs`, and in the model;
@@ -131,7 +83,7 @@ fn check(program: Vec<Op>, inputs: Vec<[i128; REGISTERS]>) -> Vec<u64> {
 
 #[test]
 fn the_solve_program_matches_the_model_register_for_register() {
-    let inputs: Vec<_> = cases().iter().map(solve_inputs).collect();
+    let inputs: Vec<_> = solve_systems(0x5eed_0013, 4).iter().map(solve_inputs).collect();
     let outcomes: Vec<bool> = inputs.iter().map(|r0| run(&solve_program(), &mut r0.clone()).is_err()).collect();
     assert!(outcomes.contains(&true) && outcomes.contains(&false), "both outcomes are exercised");
     eprintln!("clocks a solve: {:?}", check(solve_program(), inputs));

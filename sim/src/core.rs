@@ -45,6 +45,7 @@ pub(crate) const SURFACE_RESIDUAL: &str = "surface_residual";
 pub(crate) const BOARD: &str = "board";
 pub(crate) const BOARD_FAST: &str = "board_fast";
 pub(crate) const SEQUENCER: &str = "sequencer";
+pub(crate) const POLISH_PROGRAM: &str = "polish_program";
 
 /// Lane counts with a Verilated pipeline (and particle-weight pipeline): the build verilates
 /// 4 and 16 unless `PFICP_SIM_LANES` says otherwise.

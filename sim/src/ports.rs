@@ -146,6 +146,20 @@ pub const SEQUENCER_PORTS: &[PortSpec] = &[
     ("p_wdata", false, 24),
 ];
 
+/// The ports of the polish's datapath (`fpga/src/rtl/polish/program.rs`).
+pub const POLISH_PROGRAM_PORTS: &[PortSpec] = &[
+    ("clock", true, 1),
+    ("reset", true, 1),
+    ("load", true, 1),
+    ("load_addr", true, 6),
+    ("load_data", true, 128),
+    ("read_addr", true, 6),
+    ("go", true, 1),
+    ("read_data", false, 128),
+    ("busy", false, 1),
+    ("failed", false, 1),
+];
+
 /// The names of the output ports of `lists` (concatenated), in order; `N` must be their
 /// count (checked at compile time).
 pub const fn outputs<const N: usize>(lists: &[&[PortSpec]]) -> [&'static str; N] {

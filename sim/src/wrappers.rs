@@ -272,6 +272,77 @@ impl VerilatedBoard {
     }
 }
 
+/// The input ports of the polish's datapath (`PolishProgram`; its reference is
+/// `pficp_fpga::polish::program::run`, a functional one: no cycle model).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ProgramInputs {
+    /// Synchronous reset.
+    pub reset: bool,
+    /// While idle: write `load_data` to `load_addr`.
+    pub load: bool,
+    /// Register to load.
+    pub load_addr: u8,
+    /// Value to load.
+    pub load_data: i128,
+    /// While idle: the register `read_data` shows after the next clock.
+    pub read_addr: u8,
+    /// Run the program.
+    pub go: bool,
+}
+
+/// The output ports of the polish's datapath.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ProgramOutputs {
+    /// The register read.
+    pub read_data: i128,
+    /// Running.
+    pub busy: bool,
+    /// The last run stopped at a `StopBelow`.
+    pub failed: bool,
+}
+
+/// The Verilated polish datapath with the solve's program (`PolishProgram`).
+pub struct VerilatedPolishProgram {
+    pub(crate) core: Core,
+}
+
+verilated_common!(VerilatedPolishProgram, ProgramInputs);
+
+/// Output words of the polish datapath, one name per `u64` (wide ports repeat).
+pub(crate) const POLISH_PROGRAM_OUTPUT_WORDS: [&str; 4] = ports::output_words(ports::POLISH_PROGRAM_PORTS);
+
+impl VerilatedPolishProgram {
+    /// The datapath after power-up (idle, registers zero).
+    pub fn new() -> Self {
+        VerilatedPolishProgram { core: Core::new(POLISH_PROGRAM, 0, 7, &POLISH_PROGRAM_OUTPUT_WORDS) }
+    }
+
+    /// Drive the input ports (masked to the port widths).
+    pub fn set_inputs(&mut self, i: &ProgramInputs) {
+        self.core.set_inputs(&[
+            i.reset as u64,
+            i.load as u64,
+            i.load_addr as u64,
+            i.load_data as u64,
+            (i.load_data >> 64) as u64,
+            i.read_addr as u64,
+            i.go as u64,
+        ])
+    }
+
+    /// The output ports now.
+    pub fn outputs(&self) -> ProgramOutputs {
+        let o = self.core.outputs::<4>();
+        ProgramOutputs { read_data: (o[0] as u128 | (o[1] as u128) << 64) as i128, busy: o[2] != 0, failed: o[3] != 0 }
+    }
+}
+
+impl Default for VerilatedPolishProgram {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 /// The Verilated particle-filter sequencer alone (`PfSequencer`, docs/sequencer.md).
 pub struct VerilatedSequencer {
     pub(crate) core: Core,

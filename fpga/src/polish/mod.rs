@@ -572,15 +572,7 @@ mod tests {
             rows in proptest::collection::vec((proptest::array::uniform7(-(1i64 << 17)..(1 << 17)), -(1i64 << 12)..(1 << 12)), 1..12),
             repeat in 1i64..=341,
         ) {
-            let mut sums = PassSums { a: vec![0; 28], ..Default::default() };
-            for (j, s) in &rows {
-                for r in 0..UNKNOWNS {
-                    for c in r..UNKNOWNS {
-                        sums.a[upper(r, c)] += j[r] * j[c] * repeat;
-                    }
-                    sums.b[r] += j[r] * s * repeat;
-                }
-            }
+            let sums = program::gram(&rows, repeat);
             proptest::prop_assert_eq!(solve(&sums), solve_direct(&sums));
         }
 

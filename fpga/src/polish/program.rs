@@ -303,6 +303,57 @@ pub fn solve_output(r: &[i128; REGISTERS]) -> [i64; UNKNOWNS] {
     std::array::from_fn(|i| r[SUM_B as usize + i] as i64)
 }
 
+/// The normal equations of `rows` (a Jacobian row and its residual each), each row counted
+/// `repeat` times, as [`super::pass`] sums them.
+pub fn gram(rows: &[([i64; UNKNOWNS], i64)], repeat: i64) -> PassSums {
+    let mut sums = PassSums { a: vec![0; UNKNOWNS * (UNKNOWNS + 1) / 2], ..Default::default() };
+    for (j, s) in rows {
+        for r in 0..UNKNOWNS {
+            for c in r..UNKNOWNS {
+                sums.a[upper(r, c)] += j[r] * j[c] * repeat;
+            }
+            sums.b[r] += j[r] * s * repeat;
+        }
+    }
+    sums
+}
+
+/// The systems the RTL's tests solve: `random` Gram systems of 5 to 20 random rows (18-bit
+/// entries, 13-bit residuals) repeated up to 4,096 rows in all, some of them rank-deficient,
+/// from `seed`; then the widest (4,096 rows at full scale), a zero system, one with a
+/// negative pivot (the program stops) and one whose step the clamp bounds.
+pub fn solve_systems(seed: u64, random: usize) -> Vec<PassSums> {
+    let mut rng = crate::splitmix::SplitMix64(seed);
+    let mut out = Vec::new();
+    for _ in 0..random {
+        let n_rows = 5 + rng.below(16) as usize;
+        let repeat = 1 + rng.below(4096 / n_rows as u64) as i64;
+        let mut entry = |bits: u32| (rng.next_u64() >> (64 - bits)) as i64 - (1 << (bits - 1));
+        let rows: Vec<_> = (0..n_rows).map(|_| (std::array::from_fn(|_| entry(18)), entry(13))).collect();
+        out.push(gram(&rows, repeat));
+    }
+    let wide: Vec<_> = (0..8)
+        .map(|r| {
+            (
+                std::array::from_fn(|c| if (r + c) % 3 == 0 { -(1 << 17) } else { (1 << 17) - 1 }),
+                (1 << 12) - 1 - r as i64,
+            )
+        })
+        .collect();
+    out.push(gram(&wide, 512));
+    let mut degenerate = gram(&[], 1);
+    out.push(degenerate.clone());
+    degenerate.a[upper(2, 2)] = -100;
+    out.push(degenerate);
+    let mut big = gram(&[], 1);
+    for i in 0..UNKNOWNS {
+        big.a[upper(i, i)] = 1 << 20;
+    }
+    big.b = [1 << 40, -(1 << 40), 0, 0, 0, 0, 1];
+    out.push(big);
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -45,6 +45,7 @@ pub use mul18::{Mul18, MUL18_MODULE};
 pub use neighbour_lane::NeighbourLane;
 pub use neighbour_pipeline::NeighbourPipeline;
 pub use pipeline::NnPipeline;
+pub use polish::PolishProgram;
 pub use surface_residual::SurfaceResidual;
 pub use transform::Transform;
 
@@ -144,6 +145,21 @@ pub fn surface_residual_verilog() -> String {
     let mut uut = SurfaceResidual::new();
     uut.connect_all();
     dedup_modules(&generate_verilog(&uut))
+}
+
+/// The Verilog of the polish's datapath alone with the solve's program in ROM
+/// (`PolishProgram`, docs/decisions.md "The solve on the board"), top module `top`; the
+/// register file marked `ram_style = "distributed"` ([`distributed_register_files`]).
+pub fn polish_program_verilog() -> String {
+    let mut uut = PolishProgram::new(&crate::polish::program::solve_program());
+    uut.connect_all();
+    distributed_register_files(&dedup_modules(&generate_verilog(&uut)))
+}
+
+/// The 64 x 128-bit register files marked for distributed RAM: without the attribute Yosys
+/// maps one to 4 RAMB16 (rust_hdl emits no attributes).
+pub fn distributed_register_files(v: &str) -> String {
+    v.replace("    reg[127:0] mem[63:0];", "    (* ram_style = \"distributed\" *) reg[127:0] mem[63:0];")
 }
 
 /// The Verilog of `NnPipeline<lanes>`: top module `top` (ports as docs/pipeline.md), one
