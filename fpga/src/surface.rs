@@ -41,9 +41,15 @@ pub fn residual(q: FxPoint, p: FxPoint, n: FxNormal, d2: u64) -> u64 {
     if d2 >= CAP_D2 {
         return CAP_D2;
     }
-    let a: i64 = (0..3).map(|k| n[k] as i64 * (q[k] as i64 - p[k] as i64)).sum();
-    let s = (a + (1 << (NORMAL_FRAC - 1))) >> NORMAL_FRAC;
+    let s = signed_residual(q, p, n);
     ((s * s) as u64).min(CAP_D2)
+}
+
+/// The signed distance of `q` from the tangent plane at `p` with normal `n`, in coordinate
+/// LSBs: `rnd_14(n . (q - p))` (round half up), which [`residual`] squares.
+pub fn signed_residual(q: FxPoint, p: FxPoint, n: FxNormal) -> i64 {
+    let a: i64 = (0..3).map(|k| n[k] as i64 * (q[k] as i64 - p[k] as i64)).sum();
+    (a + (1 << (NORMAL_FRAC - 1))) >> NORMAL_FRAC
 }
 
 /// The residual of every scan point under `pose` over the gridded model with its normals

@@ -61,7 +61,7 @@ pub mod program;
 use crate::format::{transform, FxPoint, FxPose};
 use crate::grid::{Grid, NONE};
 use crate::pf::sat18;
-use crate::surface::{FxNormal, NORMAL_FRAC};
+use crate::surface::{signed_residual, FxNormal, NORMAL_FRAC};
 
 /// Unknowns of a step: a small rotation (3), a translation (3), a relative scale.
 pub const UNKNOWNS: usize = 7;
@@ -103,40 +103,57 @@ pub fn upper(i: usize, j: usize) -> usize {
     i * UNKNOWNS - i * (i + 1) / 2 + j
 }
 
+impl PassSums {
+    /// No points yet.
+    pub fn new() -> Self {
+        PassSums { a: vec![0; UNKNOWNS * (UNKNOWNS + 1) / 2], ..Default::default() }
+    }
+
+    /// Add a found point with signed residual `s` (module doc): to the statistics, and if
+    /// `tau2` lets it in, its Jacobian row (`row`, called only then) to the normal equations.
+    pub fn add_point(&mut self, s: i64, tau2: Option<u64>, row: impl FnOnce() -> [i64; UNKNOWNS]) {
+        let r2 = (s * s) as u64;
+        self.sum_r2 += r2;
+        self.found += 1;
+        if tau2.is_none_or(|tau2| r2 > tau2) {
+            return;
+        }
+        let j = row();
+        for r in 0..UNKNOWNS {
+            for c in r..UNKNOWNS {
+                self.a[upper(r, c)] += j[r] * j[c];
+            }
+            self.b[r] += j[r] * s;
+        }
+        self.inliers += 1;
+    }
+}
+
+/// The Jacobian row (Q3.14, module doc) of a point whose image `q` lies under a pose with
+/// translation `t`, its nearest stored point's normal `n`: `[sat18(rnd_13(x x n)), n,
+/// sat18(rnd_13(n . x))]` with `x = q - t`.
+pub fn jacobian(q: FxPoint, t: [i32; 3], n: FxNormal) -> [i64; UNKNOWNS] {
+    let n = n.map(|v| v as i64);
+    let x: [i64; 3] = std::array::from_fn(|k| q[k] as i64 - t[k] as i64);
+    let cross = [x[1] * n[2] - x[2] * n[1], x[2] * n[0] - x[0] * n[2], x[0] * n[1] - x[1] * n[0]];
+    let shift = NORMAL_FRAC + crate::format::COORD_FRAC - JACOBIAN_FRAC;
+    let dot: i64 = (0..3).map(|k| x[k] * n[k]).sum();
+    let jac = |v: i64| sat18(round_shift(v as i128, shift) as i64) as i64;
+    [jac(cross[0]), jac(cross[1]), jac(cross[2]), n[0], n[1], n[2], jac(dot)]
+}
+
 /// One pass over `scan` under `pose` (module doc): the normal equations of the points whose
 /// squared residual is at most `tau2` (`None`: none, statistics only).
 pub fn pass(grid: &Grid, normals: &[FxNormal], scan: &[FxPoint], pose: &FxPose, tau2: Option<u64>) -> PassSums {
-    let mut sums = PassSums { a: vec![0; UNKNOWNS * (UNKNOWNS + 1) / 2], ..Default::default() };
+    let mut sums = PassSums::new();
     for &p in scan {
         let q = transform(pose, p);
         let nr = grid.nearest(q);
         if nr.index == NONE {
             continue;
         }
-        let m = grid.points[nr.index as usize];
-        let n = normals[nr.index as usize].map(|v| v as i64);
-        let a: i64 = (0..3).map(|k| n[k] * (q[k] as i64 - m[k] as i64)).sum();
-        let s = (a + (1 << (NORMAL_FRAC - 1))) >> NORMAL_FRAC;
-        let r2 = (s * s) as u64;
-        sums.sum_r2 += r2;
-        sums.found += 1;
-        let Some(tau2) = tau2 else { continue };
-        if r2 > tau2 {
-            continue;
-        }
-        let x: [i64; 3] = std::array::from_fn(|k| q[k] as i64 - pose.t[k] as i64);
-        let cross = [x[1] * n[2] - x[2] * n[1], x[2] * n[0] - x[0] * n[2], x[0] * n[1] - x[1] * n[0]];
-        let shift = NORMAL_FRAC + crate::format::COORD_FRAC - JACOBIAN_FRAC;
-        let dot: i64 = (0..3).map(|k| x[k] * n[k]).sum();
-        let jac = |v: i64| sat18(round_shift(v as i128, shift) as i64) as i64;
-        let j: [i64; UNKNOWNS] = [jac(cross[0]), jac(cross[1]), jac(cross[2]), n[0], n[1], n[2], jac(dot)];
-        for r in 0..UNKNOWNS {
-            for c in r..UNKNOWNS {
-                sums.a[upper(r, c)] += j[r] * j[c];
-            }
-            sums.b[r] += j[r] * s;
-        }
-        sums.inliers += 1;
+        let (m, n) = (grid.points[nr.index as usize], normals[nr.index as usize]);
+        sums.add_point(signed_residual(q, m, n), tau2, || jacobian(q, pose.t, n));
     }
     sums
 }
@@ -487,7 +504,7 @@ mod tests {
 
     #[test]
     fn a_pivot_below_half_the_damping_stops_the_solve() {
-        let mut sums = PassSums { a: vec![0; 28], ..Default::default() };
+        let mut sums = PassSums::new();
         // A zero system: every pivot is lambda, the step zero.
         assert_eq!(solve(&sums), Some([0; UNKNOWNS]));
         // A negative diagonal entry (no Gram matrix has one): its pivot is below lambda / 2.
@@ -495,7 +512,7 @@ mod tests {
         assert_eq!(solve(&sums), None);
         agree(&sums);
         // The clamp: a huge right-hand side on a unit system gives +-2^27.
-        let mut big = PassSums { a: vec![0; 28], ..Default::default() };
+        let mut big = PassSums::new();
         for i in 0..UNKNOWNS {
             big.a[upper(i, i)] = 1 << 20;
         }

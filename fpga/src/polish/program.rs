@@ -304,15 +304,12 @@ pub fn solve_output(r: &[i128; REGISTERS]) -> [i64; UNKNOWNS] {
 }
 
 /// The normal equations of `rows` (a Jacobian row and its residual each), each row counted
-/// `repeat` times, as [`super::pass`] sums them.
+/// `repeat` times, every one an inlier ([`PassSums::add_point`]).
 pub fn gram(rows: &[([i64; UNKNOWNS], i64)], repeat: i64) -> PassSums {
-    let mut sums = PassSums { a: vec![0; UNKNOWNS * (UNKNOWNS + 1) / 2], ..Default::default() };
-    for (j, s) in rows {
-        for r in 0..UNKNOWNS {
-            for c in r..UNKNOWNS {
-                sums.a[upper(r, c)] += j[r] * j[c] * repeat;
-            }
-            sums.b[r] += j[r] * s * repeat;
+    let mut sums = PassSums::new();
+    for _ in 0..repeat {
+        for &(j, s) in rows {
+            sums.add_point(s, Some(u64::MAX), || j);
         }
     }
     sums
