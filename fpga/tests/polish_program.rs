@@ -2,11 +2,14 @@
 //! the solve's program on Gram systems of up to 4,096 rows (the widest the pass makes), a
 //! system whose pivot stops the program, a zero system and one whose step the clamp bounds.
 //! After each run every one of the 64 registers and the failed flag must equal the model's;
-//! a short program takes every instruction through its edge cases the same way.
+//! a short program takes every instruction through its edge cases the same way, and the
+//! solve also runs on sums accumulated through the `add` port, as the pass will.
 #![cfg(feature = "rtl")]
 
-use pficp_fpga::polish::program::{run, solve_inputs, solve_program, solve_systems, Op, REGISTERS};
+use pficp_fpga::polish::program::{gram, run, solve_inputs, solve_program, solve_systems, Op, REGISTERS, SUM_B};
+use pficp_fpga::polish::{upper, UNKNOWNS};
 use pficp_fpga::rtl::polish::PolishProgram;
+use pficp_fpga::splitmix::SplitMix64;
 use rust_hdl::prelude::*;
 use std::sync::{Arc, Mutex};
 
@@ -87,6 +90,80 @@ fn the_solve_program_matches_the_model_register_for_register() {
     let outcomes: Vec<bool> = inputs.iter().map(|r0| run(&solve_program(), &mut r0.clone()).is_err()).collect();
     assert!(outcomes.contains(&true) && outcomes.contains(&false), "both outcomes are exercised");
     eprintln!("clocks a solve: {:?}", check(solve_program(), inputs));
+}
+
+/// The pass's way in: zero the file, add each row's products (`J_r J_c` to `a`, `J_r s` to
+/// `b`, back to back), then run the solve; the registers must equal the model's solve of
+/// the same rows ([`gram`]).
+#[test]
+fn adds_accumulate_the_sums_the_solve_then_takes() {
+    let mut rng = SplitMix64(0xadd5);
+    let mut entry = |bits: u32| (rng.next_u64() >> (64 - bits)) as i64 - (1 << (bits - 1));
+    let systems: Vec<Vec<([i64; UNKNOWNS], i64)>> =
+        [9, 14].iter().map(|&n| (0..n).map(|_| (std::array::from_fn(|_| entry(18)), entry(13))).collect()).collect();
+    let expected: Vec<([i128; REGISTERS], bool)> = systems
+        .iter()
+        .map(|rows| {
+            let mut r = solve_inputs(&gram(rows, 1));
+            let failed = run(&solve_program(), &mut r).is_err();
+            (r, failed)
+        })
+        .collect();
+    let found = Arc::new(Mutex::new(Vec::<String>::new()));
+    let out = found.clone();
+    let mut uut = PolishProgram::new(&solve_program());
+    uut.connect_all();
+    let mut sim = Simulation::new();
+    sim.add_clock(5, |x: &mut Box<PolishProgram>| x.clock.next = !x.clock.val());
+    sim.add_testbench(move |mut sim: Sim<PolishProgram>| {
+        let mut x = sim.init()?;
+        x.reset.next = false;
+        wait_clock_true!(sim, clock, x);
+        for (case, (rows, (want, want_failed))) in systems.iter().zip(&expected).enumerate() {
+            for addr in 0..REGISTERS {
+                x.load.next = true;
+                x.load_addr.next = (addr as u64).into();
+                x.load_data.next = word(0);
+                wait_clock_cycle!(sim, clock, x);
+            }
+            x.load.next = false;
+            for (j, s) in rows {
+                for r in 0..UNKNOWNS {
+                    let products = (r..UNKNOWNS).map(|c| (upper(r, c), j[r] * j[c]));
+                    for (addr, v) in products.chain([(SUM_B as usize + r, j[r] * s)]) {
+                        x.add.next = true;
+                        x.add_addr.next = (addr as u64).into();
+                        x.add_data.next = Bits::<48>::from(v as u64 & ((1 << 48) - 1));
+                        wait_clock_cycle!(sim, clock, x);
+                    }
+                }
+            }
+            x.add.next = false;
+            wait_clock_cycle!(sim, clock, x);
+            x.go.next = true;
+            wait_clock_cycle!(sim, clock, x);
+            x.go.next = false;
+            while x.busy.val() {
+                wait_clock_cycle!(sim, clock, x);
+            }
+            if x.failed.val() != *want_failed {
+                out.lock().unwrap().push(format!("case {case}: failed {} against {want_failed}", x.failed.val()));
+            }
+            for (addr, &w) in want.iter().enumerate() {
+                x.read_addr.next = (addr as u64).into();
+                wait_clock_cycle!(sim, clock, x);
+                if value(x.read_data.val()) != w {
+                    out.lock()
+                        .unwrap()
+                        .push(format!("case {case}: r{addr} = {}, the model {w}", value(x.read_data.val())));
+                }
+            }
+        }
+        sim.done(x)
+    });
+    sim.run(Box::new(uut), 1_000_000_000).expect("simulation");
+    let errors = found.lock().unwrap();
+    assert!(errors.is_empty(), "{} mismatches, the first: {}", errors.len(), errors[0]);
 }
 
 /// Every kind of instruction on its edge cases: exact quotients (a remainder equal to the

@@ -286,6 +286,12 @@ pub struct ProgramInputs {
     pub load_data: i128,
     /// While idle: the register `read_data` shows after the next clock.
     pub read_addr: u8,
+    /// While idle: add `add_data` to `add_addr` (written on the next clock).
+    pub add: bool,
+    /// Register to add to.
+    pub add_addr: u8,
+    /// Value to add (48-bit two's complement).
+    pub add_data: i64,
     /// Run the program.
     pub go: bool,
 }
@@ -314,7 +320,7 @@ pub(crate) const POLISH_PROGRAM_OUTPUT_WORDS: [&str; 4] = ports::output_words(po
 impl VerilatedPolishProgram {
     /// The datapath after power-up (idle, registers zero).
     pub fn new() -> Self {
-        VerilatedPolishProgram { core: Core::new(POLISH_PROGRAM, 0, 7, &POLISH_PROGRAM_OUTPUT_WORDS) }
+        VerilatedPolishProgram { core: Core::new(POLISH_PROGRAM, 0, 10, &POLISH_PROGRAM_OUTPUT_WORDS) }
     }
 
     /// Drive the input ports (masked to the port widths).
@@ -326,6 +332,9 @@ impl VerilatedPolishProgram {
             i.load_data as u64,
             (i.load_data >> 64) as u64,
             i.read_addr as u64,
+            i.add as u64,
+            i.add_addr as u64,
+            i.add_data as u64,
             i.go as u64,
         ])
     }

@@ -60,6 +60,14 @@ pub struct PolishProgram {
     pub read_addr: Signal<In, Bits<6>>,
     /// The register read.
     pub read_data: Signal<Out, Bits<128>>,
+    /// While idle: add `add_data` to register `add_addr` (read on this clock, written on the
+    /// next; no two adds to one register on consecutive clocks, no `load` on the clock after
+    /// an add, no add with `go`). The pass accumulates its sums so, straight into the solve's inputs.
+    pub add: Signal<In, Bit>,
+    /// Register to add to.
+    pub add_addr: Signal<In, Bits<6>>,
+    /// Value to add (48-bit two's complement).
+    pub add_data: Signal<In, Bits<48>>,
     /// While idle: run the program from its first instruction.
     pub go: Signal<In, Bit>,
     /// Running.
@@ -77,6 +85,8 @@ pub struct PolishProgram {
     cnt: DFF<Bits<8>>,
     fail: DFF<Bit>,
     take: DFF<Bits<2>>,
+    pend: DFF<Bit>,
+    pend_addr: DFF<Bits<6>>,
     rf: RAM<Bits<128>, 6>,
     prog: ROM<Bits<30>, 9>,
     kind: Signal<Local, Bits<4>>,
@@ -107,6 +117,9 @@ impl PolishProgram {
             load_data: Default::default(),
             read_addr: Default::default(),
             read_data: Default::default(),
+            add: Default::default(),
+            add_addr: Default::default(),
+            add_data: Default::default(),
             go: Default::default(),
             busy: Default::default(),
             failed: Default::default(),
@@ -121,6 +134,8 @@ impl PolishProgram {
             cnt: Default::default(),
             fail: Default::default(),
             take: Default::default(),
+            pend: Default::default(),
+            pend_addr: Default::default(),
             rf: RAM::new((0..64u64).map(|a| (Bits::<6>::from(a), Bits::<128>::default())).collect()),
             prog: ROM::new(
                 words
@@ -156,7 +171,7 @@ const _: () = {
 impl Logic for PolishProgram {
     #[hdl_gen]
     fn update(&mut self) {
-        dff_setup!(self, clock, state, pc, ins, x, y, acc, rem, neg, cnt, fail, take);
+        dff_setup!(self, clock, state, pc, ins, x, y, acc, rem, neg, cnt, fail, take, pend, pend_addr);
         self.rf.read_clock.next = self.clock.val();
         self.rf.write_clock.next = self.clock.val();
         self.prog.address.next = self.pc.q.val();
@@ -181,7 +196,12 @@ impl Logic for PolishProgram {
 
         match self.state.q.val() {
             ProgramState::Idle => {
+                // An add: the register's value (read now) plus x (the value, latched now).
+                self.sel_a.next = 0.into();
                 self.rf.read_address.next = self.read_addr.val();
+                if self.add.val() {
+                    self.rf.read_address.next = self.add_addr.val();
+                }
             }
             ProgramState::Fetch => {
                 self.rf.read_address.next = self.prog.data.val().get_bits::<6>(10);
@@ -295,12 +315,26 @@ impl Logic for PolishProgram {
         self.alu_sra.next = self.alu.val().get_bits::<128>(1);
         self.acc_sra.next = (self.acc.q.val() >> 1).replace_bit(127, self.acc.q.val().get_bit(127));
 
+        self.pend.d.next = false;
         match self.state.q.val() {
             ProgramState::Idle => {
                 if self.load.val() {
                     self.rf.write_enable.next = true;
                     self.rf.write_address.next = self.load_addr.val();
                     self.rf.write_data.next = self.load_data.val();
+                }
+                self.pend.d.next = self.add.val();
+                if self.add.val() {
+                    self.pend_addr.d.next = self.add_addr.val();
+                    self.x.d.next = bit_cast::<128, 48>(self.add_data.val());
+                    if self.add_data.val().get_bit(47) {
+                        self.x.d.next = bit_cast::<128, 48>(self.add_data.val()) - (bits::<128>(1) << 48);
+                    }
+                }
+                if self.pend.q.val() {
+                    self.rf.write_enable.next = true;
+                    self.rf.write_address.next = self.pend_addr.q.val();
+                    self.rf.write_data.next = self.alu.val().get_bits::<128>(0);
                 }
                 if self.go.val() {
                     self.pc.d.next = 0.into();
@@ -454,6 +488,7 @@ impl Logic for PolishProgram {
         if self.reset.val() {
             self.state.d.next = ProgramState::Idle;
             self.fail.d.next = false;
+            self.pend.d.next = false;
         }
     }
 }
