@@ -220,6 +220,13 @@ pub fn run(program: &[Op], r: &mut [i128; REGISTERS]) -> Result<(), usize> {
 pub const SUM_A: u8 = 0;
 /// See [`SUM_A`].
 pub const SUM_B: u8 = 28;
+/// The pass's statistics, added beside the sums (`PolishPass`): `sum_r2`, `found`,
+/// `inliers`.
+pub const SUM_R2: u8 = 45;
+/// See [`SUM_R2`].
+pub const FOUND: u8 = 46;
+/// See [`SUM_R2`].
+pub const INLIERS: u8 = 47;
 /// `v_k = rnd_30(L_jk D_k)` of the current column (6).
 const V: u8 = 35;
 /// The damping.
@@ -286,7 +293,8 @@ pub fn solve_program() -> Vec<Op> {
     p
 }
 
-/// The register file with a pass's sums loaded where [`solve_program`] takes them.
+/// The register file with a pass's sums loaded where [`solve_program`] takes them (and its
+/// statistics where the pass adds them).
 pub fn solve_inputs(sums: &PassSums) -> [i128; REGISTERS] {
     let mut r = [0i128; REGISTERS];
     for (k, &v) in sums.a.iter().enumerate() {
@@ -295,6 +303,9 @@ pub fn solve_inputs(sums: &PassSums) -> [i128; REGISTERS] {
     for (i, &v) in sums.b.iter().enumerate() {
         r[SUM_B as usize + i] = v as i128;
     }
+    r[SUM_R2 as usize] = sums.sum_r2 as i128;
+    r[FOUND as usize] = sums.found as i128;
+    r[INLIERS as usize] = sums.inliers as i128;
     r
 }
 

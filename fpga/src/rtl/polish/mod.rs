@@ -1,7 +1,11 @@
 //! The on-board polish's RTL ([`crate::polish`]), one block a file:
 //! - [`program`]: `PolishProgram`, the serial datapath that runs a
-//!   [`crate::polish::program`] program over 64 x 128-bit registers.
+//!   [`crate::polish::program`] program over 64 x 128-bit registers;
+//! - [`pass`]: `PolishPass`, a found point's statistics and Jacobian row as products on a
+//!   borrowed multiplier, added into the program's registers.
 
+pub mod pass;
 pub mod program;
 
+pub use pass::PolishPass;
 pub use program::PolishProgram;
