@@ -87,9 +87,13 @@ pub struct PolishPass {
     n2: Signal<Local, Bits<18>>,
     s18: Signal<Local, Bits<18>>,
     p38: Signal<Local, Bits<38>>,
+    c0_half: Signal<Local, Bits<38>>,
     r0: Signal<Local, Bits<25>>,
+    c1_half: Signal<Local, Bits<38>>,
     r1: Signal<Local, Bits<25>>,
+    c2_half: Signal<Local, Bits<38>>,
     r2: Signal<Local, Bits<25>>,
+    d_half: Signal<Local, Bits<38>>,
     r6: Signal<Local, Bits<25>>,
     i_prod: Signal<Local, Bits<6>>,
     row: Signal<Local, Bits<3>>,
@@ -174,9 +178,13 @@ impl PolishPass {
             n2: Default::default(),
             s18: Default::default(),
             p38: Default::default(),
+            c0_half: Default::default(),
             r0: Default::default(),
+            c1_half: Default::default(),
             r1: Default::default(),
+            c2_half: Default::default(),
             r2: Default::default(),
+            d_half: Default::default(),
             r6: Default::default(),
             i_prod: Default::default(),
             row: Default::default(),
@@ -249,10 +257,14 @@ impl Logic for PolishPass {
         }
         self.p38.next = self.mul_product.val().get_bits::<38>(0);
         // rnd_13 of the cross and dot sums (arithmetic: the top 25 of 38 bits).
-        self.r0.next = (self.c0.q.val() + 4096).get_bits::<25>(13);
-        self.r1.next = (self.c1.q.val() + 4096).get_bits::<25>(13);
-        self.r2.next = (self.c2.q.val() + 4096).get_bits::<25>(13);
-        self.r6.next = (self.d.q.val() + 4096).get_bits::<25>(13);
+        self.c0_half.next = self.c0.q.val() + 4096;
+        self.r0.next = self.c0_half.val().get_bits::<25>(13);
+        self.c1_half.next = self.c1.q.val() + 4096;
+        self.r1.next = self.c1_half.val().get_bits::<25>(13);
+        self.c2_half.next = self.c2.q.val() + 4096;
+        self.r2.next = self.c2_half.val().get_bits::<25>(13);
+        self.d_half.next = self.d.q.val() + 4096;
+        self.r6.next = self.d_half.val().get_bits::<25>(13);
         // The row products: the ROM's row and column of product k - 14.
         self.i_prod.next = self.k.q.val() - 14;
         self.order.address.next = self.i_prod.val();
