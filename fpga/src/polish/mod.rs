@@ -3,8 +3,10 @@
 //! (docs/decisions.md, "Why the board's pose alone misses, and the polish on the board").
 //! This model fixes the arithmetic the RTL must match, and the host's figures
 //! (`host/tests/board_polish_figures.rs`) measure it. The solve runs as a program
-//! ([`program`]) whose datapath is built (`crate::rtl::polish::PolishProgram`); the pass,
-//! the update and the polish's control are not built yet.
+//! ([`program`]) whose datapath is built (`crate::rtl::polish::PolishProgram`), and a
+//! pass's point ([`PassSums::add_point`], [`jacobian`]) has its RTL
+//! (`crate::rtl::polish::PolishPass`); the update and the polish's control are not built
+//! yet.
 //!
 //! **Why.** The filter minimises its cost over 50 particles x 50 iterations; among those
 //! 2,500 poses the lowest cost belongs to a pose a little off the truth (on 30 of the 32

@@ -19,7 +19,8 @@
 //!   ([`crate::weights::WeightModel`]);
 //! - [`particle_weights`]: the two wired together ([`crate::particle_weights`]);
 //! - [`polish`]: the on-board polish's blocks: `PolishProgram`, the datapath of the
-//!   solve's program ([`crate::polish::program`]);
+//!   solve's program ([`crate::polish::program`]), and `PolishPass`, a pass's point
+//!   ([`crate::polish::PassSums::add_point`]); not in the board top yet;
 //! - [`board`]: the board top and its blocks, the sequencer among them
 //!   ([`crate::board::BoardModel`], [`crate::sequencer::SequencerModel`]).
 //!
