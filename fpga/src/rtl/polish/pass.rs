@@ -1,11 +1,10 @@
 //! `PolishPass`: one found point of a polish pass ([`crate::polish::PassSums::add_point`]
 //! with [`crate::polish::jacobian`]) as products on a borrowed pipelined multiplier (the
-//! sequencer's `PipeMul`, idle after the filter: `mul_*`, a product two clocks after its
-//! operands) and adds into `PolishProgram`'s register file (`add*`): `s^2` to
-//! `SUM_R2`, 1 to `FOUND`; for an inlier (`gated` and
-//! `s^2 <= tau2`) the Jacobian row from nine products, then its 28 products `J_r J_c` to
-//! `a` and 7 products `J_r s` to `b`, and 1 to `INLIERS`. Test:
-//! `fpga/tests/polish_program.rs`, against `add_point` on random points.
+//! sequencer's `PipeMul`, idle after the filter: `mul_*`, a product three clocks after the
+//! clock that issues it) and adds into `PolishProgram`'s register file (`add*`): `s^2` to
+//! `SUM_R2`, 1 to `FOUND`; for an inlier (`gated` and `s^2 <= tau2`) the Jacobian row from
+//! nine products, then its 28 products `J_r J_c` to `a` and 7 products `J_r s` to `b`, and
+//! 1 to `INLIERS`. Test: `fpga/tests/polish_pass.rs`, against `add_point` on random points.
 //!
 //! Schedule, clock `k` after the point is taken (a product comes back three clocks after
 //! the clock that issues it): `s s` issued at 0; the nine products of `x = q - t` and `n` at
