@@ -51,6 +51,7 @@ fn every_design_is_verilated() {
             ("neighbour_pipeline", 16, "Vnbr16"),
             ("weight_stage", 0, "Vweights"),
             ("surface_residual", 0, "Vsurf"),
+            ("polish_program", 0, "Vpolish"),
             ("board", 0, "Vboard"),
             ("sequencer", 0, "Vseq"),
             ("board_fast", 0, "Vboardfast"),
