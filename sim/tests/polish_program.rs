@@ -8,7 +8,9 @@
 //! checks the Verilog that synthesis and the board get. A second test accumulates the sums
 //! of up to 4,096 rows through the `add` port, as the pass will, and solves them.
 
-use pficp_fpga::polish::program::{gram, run, solve_inputs, solve_program, solve_systems, REGISTERS, SUM_B};
+use pficp_fpga::polish::program::{
+    gram, run, solve_inputs, solve_program, solve_systems, FOUND, INLIERS, REGISTERS, SUM_B, SUM_R2,
+};
 use pficp_fpga::polish::{upper, UNKNOWNS};
 use pficp_fpga::splitmix::SplitMix64;
 use pficp_sim::{ProgramInputs, VerilatedPolishProgram};
@@ -86,6 +88,10 @@ fn sums_added_row_by_row_solve_as_the_model() {
                     for (addr, v) in products.chain([(SUM_B as usize + r, j[r] * s)]) {
                         rtl.step(&ProgramInputs { add: true, add_addr: addr as u8, add_data: v, ..idle });
                     }
+                }
+                // The statistics, as the pass adds them.
+                for (addr, v) in [(SUM_R2, s * s), (FOUND, 1), (INLIERS, 1)] {
+                    rtl.step(&ProgramInputs { add: true, add_addr: addr, add_data: v, ..idle });
                 }
             }
         }
