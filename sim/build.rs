@@ -12,7 +12,7 @@
 //!   `Vweights`);
 //! - `surface_residual`: `SurfaceResidual` from `pficp_fpga::rtl::surface_residual_verilog()`
 //!   (prefix `Vsurf`);
-//! - `polish_program`: `PolishProgram` with the solve's program, from
+//! - `polish_program`: `PolishProgram` with the polish's programs, from
 //!   `pficp_fpga::rtl::polish_program_verilog()` (prefix `Vpolish`);
 //! - `sequencer`: `PfSequencer` alone, from `pficp_fpga::rtl::sequencer_verilog()`;
 //! - `board` and `board_fast`: the whole board top, `pficp_fpga::rtl::board_verilog` of the

@@ -18,8 +18,8 @@
 //! - [`pf`]: the on-board particle filter's bit-exact functional reference (`pf::run`), its
 //!   formats, CORDIC, pose program and PRNG.
 //! - [`polish`]: the on-board polish's bit-exact reference (point-to-plane Gauss-Newton
-//!   with scale over the board's stores); its solve is a program ([`polish::program`])
-//!   whose datapath is the polish's first RTL block.
+//!   with scale over the board's stores); its arithmetic between passes is a set of
+//!   programs ([`polish::programs`]) for the datapath that is the polish's first RTL block.
 //! - [`sequencer`]: the cycle-accurate model of the filter's RTL (`PfSequencer`) and its
 //!   clock formulas; [`seq_state`]: their one list of states.
 //! - [`protocol`]: the wire protocol (COBS framing, CRC-16, commands, error codes).

@@ -8,7 +8,7 @@
 #![cfg(feature = "rtl")]
 
 use pficp_fpga::format::pack_point;
-use pficp_fpga::polish::program::{solve_inputs, solve_program, FOUND, INLIERS, SUM_R2};
+use pficp_fpga::polish::programs::{solve_inputs, FOUND, INLIERS, SUM_R2};
 use pficp_fpga::polish::{jacobian, PassSums};
 use pficp_fpga::rtl::board::sequencer::PipeMul;
 use pficp_fpga::rtl::polish::{PolishPass, PolishProgram};
@@ -65,6 +65,7 @@ impl Logic for PassBench {
         self.prog.load_data.next = Bits::<128>::default();
         self.prog.read_addr.next = self.read_addr.val();
         self.prog.go.next = false;
+        self.prog.entry.next = Bits::<9>::default();
         self.read_data.next = self.prog.read_data.val();
     }
 
@@ -95,6 +96,7 @@ impl Logic for PassBench {
         self.prog.load_data.connect();
         self.prog.read_addr.connect();
         self.prog.go.connect();
+        self.prog.entry.connect();
         self.read_data.connect();
     }
 }
@@ -173,7 +175,7 @@ fn a_pass_adds_the_models_sums() {
         read_data: Default::default(),
         pass: PolishPass::new(),
         mul: PipeMul::new(),
-        prog: PolishProgram::new(&solve_program()),
+        prog: PolishProgram::polish(),
     };
     uut.connect_all();
     let mut sim = Simulation::new();

@@ -1,13 +1,16 @@
 //! `PolishProgram` in rust_hdl's simulator against [`pficp_fpga::polish::program::run`]:
-//! the solve's program on Gram systems of up to 4,096 rows (the widest the pass makes), a
-//! system whose pivot stops the program, a zero system and one whose step the clamp bounds.
-//! After each run every one of the 64 registers and the failed flag must equal the model's;
-//! a short program takes every instruction through its edge cases the same way, and the
-//! solve also runs on sums accumulated through the `add` port, as the pass will.
+//! each of the polish's programs, started at its entry in the one ROM, on the files of
+//! `polish::programs::program_cases` (noise around each program's inputs; the solve's
+//! edge systems, the update's saturation, the gate without found points, the drift check
+//! on both sides of its bounds). After each run every one of the 64 registers and the failed
+//! flag must equal the model's; a short program takes every instruction through its edge
+//! cases the same way, and the solve also runs on sums accumulated through the `add` port,
+//! as the pass will.
 #![cfg(feature = "rtl")]
 
-use pficp_fpga::polish::program::{gram, run, solve_inputs, solve_program, solve_systems, Op, REGISTERS, SUM_B};
-use pficp_fpga::polish::{upper, UNKNOWNS};
+use pficp_fpga::polish::program::{Op, Rom, REGISTERS};
+use pficp_fpga::polish::programs::{gram, inlier_adds, program_cases, rom, solve_inputs, Entry};
+use pficp_fpga::polish::UNKNOWNS;
 use pficp_fpga::rtl::polish::PolishProgram;
 use pficp_fpga::splitmix::SplitMix64;
 use rust_hdl::prelude::*;
@@ -23,20 +26,22 @@ fn value(b: Bits<128>) -> i128 {
     ((b.get_bits::<64>(64).to_u64() as u128) << 64 | b.get_bits::<64>(0).to_u64() as u128) as i128
 }
 
-/// A run: the register file loaded, then values added through the `add` port.
+/// A run: the register file loaded, then values added through the `add` port, then the
+/// ROM's program `entry`.
 struct Case {
+    entry: usize,
     load: [i128; REGISTERS],
     adds: Vec<(usize, i64)>,
 }
 
-/// A case that loads `r0` and adds nothing.
-fn loaded(r0: [i128; REGISTERS]) -> Case {
-    Case { load: r0, adds: Vec::new() }
+/// A case that loads `r0`, adds nothing and runs `entry`.
+fn loaded(entry: usize, r0: [i128; REGISTERS]) -> Case {
+    Case { entry, load: r0, adds: Vec::new() }
 }
 
-/// Run `program` in `PolishProgram` on each case, and in the model; every register and the
+/// Run each case in `PolishProgram` with `rom`, and in the model; every register and the
 /// failed flag must agree. Returns the clocks of each run.
-fn check(program: Vec<Op>, cases: Vec<Case>) -> Vec<u64> {
+fn check(rom: &Rom, cases: Vec<Case>) -> Vec<u64> {
     let expected: Vec<([i128; REGISTERS], bool)> = cases
         .iter()
         .map(|c| {
@@ -44,14 +49,15 @@ fn check(program: Vec<Op>, cases: Vec<Case>) -> Vec<u64> {
             for &(addr, v) in &c.adds {
                 r[addr] += v as i128;
             }
-            let failed = run(&program, &mut r).is_err();
+            let failed = rom.run(c.entry, &mut r).is_err();
             (r, failed)
         })
         .collect();
+    let entries: Vec<u64> = cases.iter().map(|c| rom.entry(c.entry) as u64).collect();
     let found = Arc::new(Mutex::new(Vec::<String>::new()));
     let clocks = Arc::new(Mutex::new(Vec::<u64>::new()));
     let (out, out_clocks) = (found.clone(), clocks.clone());
-    let mut uut = PolishProgram::new(&program);
+    let mut uut = PolishProgram::new(&rom.words());
     uut.connect_all();
     let mut sim = Simulation::new();
     sim.add_clock(5, |x: &mut Box<PolishProgram>| x.clock.next = !x.clock.val());
@@ -76,6 +82,7 @@ fn check(program: Vec<Op>, cases: Vec<Case>) -> Vec<u64> {
             x.add.next = false;
             wait_clock_cycle!(sim, clock, x);
             x.go.next = true;
+            x.entry.next = entries[case].into();
             wait_clock_cycle!(sim, clock, x);
             x.go.next = false;
             let mut n = 0u64;
@@ -107,16 +114,27 @@ fn check(program: Vec<Op>, cases: Vec<Case>) -> Vec<u64> {
 }
 
 #[test]
-fn the_solve_program_matches_the_model_register_for_register() {
-    let inputs: Vec<_> = solve_systems(0x5eed_0013, 4).iter().map(solve_inputs).collect();
-    let outcomes: Vec<bool> = inputs.iter().map(|r0| run(&solve_program(), &mut r0.clone()).is_err()).collect();
-    assert!(outcomes.contains(&true) && outcomes.contains(&false), "both outcomes are exercised");
-    eprintln!("clocks a solve: {:?}", check(solve_program(), inputs.into_iter().map(loaded).collect()));
+fn every_program_of_the_polish_matches_the_model_register_for_register() {
+    let cases = program_cases(0x5eed_0013, 4);
+    for e in Entry::ALL {
+        let outcomes: Vec<bool> = cases
+            .iter()
+            .filter(|c| c.0 == e)
+            .map(|(_, r)| pficp_fpga::polish::programs::run(e, &mut r.clone()).is_err())
+            .collect();
+        eprintln!("{e:?}: {} cases, {} failed", outcomes.len(), outcomes.iter().filter(|&&f| f).count());
+    }
+    let entries: Vec<Entry> = cases.iter().map(|c| c.0).collect();
+    let clocks = check(rom(), cases.into_iter().map(|(e, r)| loaded(e as usize, r)).collect());
+    for e in Entry::ALL {
+        let of: Vec<u64> = entries.iter().zip(&clocks).filter(|(&c, _)| c == e).map(|(_, &n)| n).collect();
+        eprintln!("{e:?}: clocks {of:?}");
+    }
 }
 
-/// The pass's way in: zero the file, add each row's products (`J_r J_c` to `a`, `J_r s` to
-/// `b`, back to back), then run the solve; the registers must equal the model's solve of
-/// the same rows ([`gram`]).
+/// The pass's way in: zero the file, add each row's products and statistics back to back
+/// ([`inlier_adds`]), then run the solve; the registers must equal the model's solve of
+/// the same rows ([`gram`]), a solve that takes a step.
 #[test]
 fn adds_accumulate_the_sums_the_solve_then_takes() {
     let mut rng = SplitMix64(0xadd5);
@@ -126,24 +144,19 @@ fn adds_accumulate_the_sums_the_solve_then_takes() {
         .map(|&n| {
             let rows: Vec<([i64; UNKNOWNS], i64)> =
                 (0..n).map(|_| (std::array::from_fn(|_| entry(18)), entry(13))).collect();
-            // The adds sum to the model's sums of the rows.
+            let adds: Vec<(usize, i64)> =
+                rows.iter().flat_map(|(j, s)| inlier_adds(j, *s)).map(|(a, v)| (a as usize, v)).collect();
+            // The adds sum to the model's sums of the rows, and those solve.
             let mut sums = solve_inputs(&gram(&rows, 1));
-            let adds: Vec<(usize, i64)> = rows
-                .iter()
-                .flat_map(|(j, s)| {
-                    (0..UNKNOWNS).flat_map(move |r| {
-                        (r..UNKNOWNS).map(move |c| (upper(r, c), j[r] * j[c])).chain([(SUM_B as usize + r, j[r] * s)])
-                    })
-                })
-                .collect();
+            assert!(pficp_fpga::polish::programs::run(Entry::Solve, &mut sums.clone()).is_ok());
             for &(addr, v) in &adds {
                 sums[addr] -= v as i128;
             }
-            assert!(sums[..35].iter().all(|&v| v == 0));
-            Case { load: [0; REGISTERS], adds }
+            assert!(sums.iter().all(|&v| v == 0));
+            Case { entry: Entry::Solve as usize, load: [0; REGISTERS], adds }
         })
         .collect();
-    check(solve_program(), cases);
+    check(rom(), cases);
 }
 
 /// Every kind of instruction on its edge cases: exact quotients (a remainder equal to the
@@ -165,6 +178,7 @@ fn each_instruction_matches_the_model_on_its_edge_cases() {
             program.push(Op::Mul { d: next(), a, b, k: (a + b) % 3 });
             program.push(Op::Div { d: next(), a, b, k: a % 2 });
             program.push(Op::Clamp { d: next(), a, b });
+            program.push(Op::Sat { d: next(), a, b });
         }
         program.push(Op::Shr { d: next(), a, k: 1 + a });
         program.push(Op::StopBelow { a, b: 6 });
@@ -177,6 +191,7 @@ fn each_instruction_matches_the_model_on_its_edge_cases() {
             | Op::Mul { d, .. }
             | Op::Div { d, .. }
             | Op::Clamp { d, .. }
+            | Op::Sat { d, .. }
             | Op::Shr { d, .. } => *d = 7 + *d % 57,
             _ => {}
         }
@@ -202,5 +217,7 @@ fn each_instruction_matches_the_model_on_its_edge_cases() {
         })
     })
     .collect();
-    check(program, files.into_iter().map(loaded).collect());
+    // Behind a one-word program, so that the entry is not zero.
+    let rom = Rom::new(vec![vec![Op::constant(0, 1)], program]);
+    check(&rom, files.into_iter().map(|r| loaded(1, r)).collect());
 }

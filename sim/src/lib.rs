@@ -9,7 +9,7 @@
 //! | `weight_stage_verilog()` (docs/weights.md) | [`VerilatedWeightStage`] | [`WeightModel`](pficp_fpga::weights::WeightModel) | [`WeightLockstep`] |
 //! | `surface_residual_verilog()` (docs/pipeline.md, the surface residual) | [`VerilatedSurfaceResidual`] | [`SurfaceResidualModel`](pficp_fpga::surface_residual::SurfaceResidualModel) | [`SurfaceLockstep`] |
 //! | the sequencer `PfSequencer` alone (docs/sequencer.md) | [`VerilatedSequencer`] | [`SequencerModel`](pficp_fpga::sequencer::SequencerModel) | [`SeqLockstep`] |
-//! | `polish_program_verilog()` (the polish's datapath with the solve's program) | [`VerilatedPolishProgram`] | `pficp_fpga::polish::program::run` (registers after each run; no cycle model) | none: `sim/tests/polish_program.rs` |
+//! | `polish_program_verilog()` (the polish's datapath with the polish's programs) | [`VerilatedPolishProgram`] | `pficp_fpga::polish::program::run` (registers after each run; no cycle model) | none: `sim/tests/polish_program.rs` |
 //! | `board_verilog` (the whole board top, default and fast builds) | [`VerilatedBoard`] | `BoardModel` (byte level) | [`serial::SerialBoard`] |
 //!
 //! - The wrappers run the Verilated RTL one clock at a time, with an optional VCD.

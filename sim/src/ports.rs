@@ -158,6 +158,7 @@ pub const POLISH_PROGRAM_PORTS: &[PortSpec] = &[
     ("add_addr", true, 6),
     ("add_data", true, 48),
     ("go", true, 1),
+    ("entry", true, 9),
     ("read_data", false, 128),
     ("busy", false, 1),
     ("failed", false, 1),

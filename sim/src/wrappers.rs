@@ -292,8 +292,10 @@ pub struct ProgramInputs {
     pub add_addr: u8,
     /// Value to add (48-bit two's complement).
     pub add_data: i64,
-    /// Run the program.
+    /// Run the program at `entry`.
     pub go: bool,
+    /// The first instruction of the program `go` runs.
+    pub entry: u16,
 }
 
 /// The output ports of the polish's datapath.
@@ -307,7 +309,7 @@ pub struct ProgramOutputs {
     pub failed: bool,
 }
 
-/// The Verilated polish datapath with the solve's program (`PolishProgram`).
+/// The Verilated polish datapath with the polish's programs (`PolishProgram::polish`).
 pub struct VerilatedPolishProgram {
     pub(crate) core: Core,
 }
@@ -320,7 +322,7 @@ pub(crate) const POLISH_PROGRAM_OUTPUT_WORDS: [&str; 4] = ports::output_words(po
 impl VerilatedPolishProgram {
     /// The datapath after power-up (idle, registers zero).
     pub fn new() -> Self {
-        VerilatedPolishProgram { core: Core::new(POLISH_PROGRAM, 0, 10, &POLISH_PROGRAM_OUTPUT_WORDS) }
+        VerilatedPolishProgram { core: Core::new(POLISH_PROGRAM, 0, 11, &POLISH_PROGRAM_OUTPUT_WORDS) }
     }
 
     /// Drive the input ports (masked to the port widths).
@@ -336,6 +338,7 @@ impl VerilatedPolishProgram {
             i.add_addr as u64,
             i.add_data as u64,
             i.go as u64,
+            i.entry as u64,
         ])
     }
 

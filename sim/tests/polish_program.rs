@@ -1,17 +1,18 @@
-//! The Verilated polish datapath (`PolishProgram` with the solve's program, the Verilog that
-//! `pficp_fpga::rtl::polish_program_verilog` generates) against
-//! `pficp_fpga::polish::program::run`: after each solve, every one of the 64 registers and
-//! the failed flag equal the model's. The systems are `polish::program::solve_systems`:
-//! random Gram systems (seed `PFICP_COSIM_SEED`, default 1; count `PFICP_POLISH_CASES`,
-//! default 150) and the edge systems. rust_hdl's simulator runs the same block on fewer
-//! systems and on every instruction's edge cases (`fpga/tests/polish_program.rs`); this test
-//! checks the Verilog that synthesis and the board get. A second test accumulates the sums
-//! of up to 4,096 rows through the `add` port, as the pass will, and solves them.
+//! The Verilated polish datapath (`PolishProgram` with the polish's programs in ROM, the
+//! Verilog that `pficp_fpga::rtl::polish_program_verilog` generates) against
+//! `pficp_fpga::polish::program::run`: after each program, every one of the 64 registers
+//! and the failed flag equal the model's. The files are `polish::programs::program_cases`
+//! (seed `PFICP_COSIM_SEED`, default 1; `PFICP_POLISH_CASES` random cases a program,
+//! default 150): noise around each program's inputs, the solve's random Gram systems and
+//! edge systems, the update up to its saturation, the gate, the start, the clear and the
+//! drift check on both sides of its bounds. rust_hdl's simulator runs the same block on
+//! fewer cases and on every instruction's edge cases (`fpga/tests/polish_program.rs`); this
+//! test checks the Verilog that synthesis and the board get. A second test accumulates the
+//! sums of up to 4,096 rows through the `add` port, as the pass will, and solves them.
 
-use pficp_fpga::polish::program::{
-    gram, run, solve_inputs, solve_program, solve_systems, FOUND, INLIERS, REGISTERS, SUM_B, SUM_R2,
-};
-use pficp_fpga::polish::{upper, UNKNOWNS};
+use pficp_fpga::polish::program::REGISTERS;
+use pficp_fpga::polish::programs::{gram, inlier_adds, program_cases, rom, run, solve_inputs, Entry};
+use pficp_fpga::polish::UNKNOWNS;
 use pficp_fpga::splitmix::SplitMix64;
 use pficp_sim::{ProgramInputs, VerilatedPolishProgram};
 
@@ -19,57 +20,70 @@ fn env_or(name: &str, default: u64) -> u64 {
     std::env::var(name).ok().and_then(|v| v.parse().ok()).unwrap_or(default)
 }
 
-#[test]
-fn the_verilated_solve_matches_the_model_register_for_register() {
-    let seed = env_or("PFICP_COSIM_SEED", 1);
-    let systems = solve_systems(seed, env_or("PFICP_POLISH_CASES", 150) as usize);
-    let program = solve_program();
+/// A reset datapath and its idle inputs.
+fn datapath() -> (VerilatedPolishProgram, ProgramInputs) {
     let mut rtl = VerilatedPolishProgram::new();
     let mut idle = ProgramInputs { reset: true, ..Default::default() };
     rtl.step(&idle);
     idle.reset = false;
-    let (mut stops, mut clocks) = (0, Vec::new());
-    for (case, sums) in systems.iter().enumerate() {
-        let inputs = solve_inputs(sums);
-        let mut want = inputs;
-        let want_failed = run(&program, &mut want).is_err();
-        stops += want_failed as usize;
-        for (addr, &v) in inputs.iter().enumerate() {
+    (rtl, idle)
+}
+
+/// Run `entry` and wait for it (at most `limit` clocks); its clocks.
+fn go(rtl: &mut VerilatedPolishProgram, idle: &ProgramInputs, entry: Entry, limit: u64, what: &str) -> u64 {
+    rtl.step(&ProgramInputs { go: true, entry: rom().entry(entry as usize) as u16, ..*idle });
+    let start = rtl.cycle();
+    while rtl.outputs().busy {
+        rtl.step(idle);
+        assert!(rtl.cycle() - start < limit, "{what}: still busy after {limit} clocks");
+    }
+    rtl.cycle() - start
+}
+
+/// Every register and the failed flag against the model's.
+fn compare(rtl: &mut VerilatedPolishProgram, idle: &ProgramInputs, want: &[i128; REGISTERS], failed: bool, what: &str) {
+    assert_eq!(rtl.outputs().failed, failed, "{what}: the failed flag");
+    for (addr, &w) in want.iter().enumerate() {
+        rtl.step(&ProgramInputs { read_addr: addr as u8, ..*idle });
+        assert_eq!(rtl.outputs().read_data, w, "{what}: register {addr}");
+    }
+}
+
+#[test]
+fn the_verilated_programs_match_the_model_register_for_register() {
+    let seed = env_or("PFICP_COSIM_SEED", 1);
+    let cases = program_cases(seed, env_or("PFICP_POLISH_CASES", 150) as usize);
+    let (mut rtl, idle) = datapath();
+    let mut clocks: Vec<(Entry, u64, bool)> = Vec::new();
+    for (case, (entry, file)) in cases.iter().enumerate() {
+        let what = format!("seed {seed}, case {case} ({entry:?})");
+        let mut want = *file;
+        let failed = run(*entry, &mut want).is_err();
+        for (addr, &v) in file.iter().enumerate() {
             rtl.step(&ProgramInputs { load: true, load_addr: addr as u8, load_data: v, ..idle });
         }
-        rtl.step(&ProgramInputs { go: true, ..idle });
-        let start = rtl.cycle();
-        while rtl.outputs().busy {
-            rtl.step(&idle);
-            assert!(rtl.cycle() - start < 100_000, "seed {seed}, case {case}: still busy after 100,000 clocks");
-        }
-        clocks.push(rtl.cycle() - start);
-        assert_eq!(rtl.outputs().failed, want_failed, "seed {seed}, case {case}: the failed flag");
-        for (addr, &w) in want.iter().enumerate().take(REGISTERS) {
-            rtl.step(&ProgramInputs { read_addr: addr as u8, ..idle });
-            assert_eq!(rtl.outputs().read_data, w, "seed {seed}, case {case}: register {addr}");
-        }
+        clocks.push((*entry, go(&mut rtl, &idle, *entry, 100_000, &what), failed));
+        compare(&mut rtl, &idle, &want, failed, &what);
     }
-    assert!(stops > 0 && stops < systems.len(), "both outcomes: {stops} stops of {}", systems.len());
-    clocks.sort_unstable();
-    eprintln!(
-        "{} solves, clocks: min {}, median {}, max {}",
-        clocks.len(),
-        clocks[0],
-        clocks[clocks.len() / 2],
-        clocks[clocks.len() - 1]
-    );
+    for e in Entry::ALL {
+        let mut of: Vec<u64> = clocks.iter().filter(|c| c.0 == e && !c.2).map(|c| c.1).collect();
+        let stops = clocks.iter().filter(|c| c.0 == e && c.2).count();
+        of.sort_unstable();
+        eprintln!(
+            "{e:?}: {} runs ({stops} failed), clocks of the rest: min {}, median {}, max {}",
+            of.len() + stops,
+            of[0],
+            of[of.len() / 2],
+            of[of.len() - 1]
+        );
+    }
 }
 
 #[test]
 fn sums_added_row_by_row_solve_as_the_model() {
     let seed = env_or("PFICP_COSIM_SEED", 1);
     let mut rng = SplitMix64(seed ^ 0xadd5);
-    let program = solve_program();
-    let mut rtl = VerilatedPolishProgram::new();
-    let mut idle = ProgramInputs { reset: true, ..Default::default() };
-    rtl.step(&idle);
-    idle.reset = false;
+    let (mut rtl, idle) = datapath();
     for case in 0..8 {
         let n_rows = 5 + rng.below(16) as usize;
         let repeat = 1 + rng.below(4096 / n_rows as u64) as i64;
@@ -77,37 +91,20 @@ fn sums_added_row_by_row_solve_as_the_model() {
         let rows: Vec<([i64; UNKNOWNS], i64)> =
             (0..n_rows).map(|_| (std::array::from_fn(|_| entry(18)), entry(13))).collect();
         let mut want = solve_inputs(&gram(&rows, repeat));
-        let want_failed = run(&program, &mut want).is_err();
+        let failed = run(Entry::Solve, &mut want).is_err();
         for addr in 0..REGISTERS {
             rtl.step(&ProgramInputs { load: true, load_addr: addr as u8, load_data: 0, ..idle });
         }
         for _ in 0..repeat {
             for (j, s) in &rows {
-                for r in 0..UNKNOWNS {
-                    let products = (r..UNKNOWNS).map(|c| (upper(r, c), j[r] * j[c]));
-                    for (addr, v) in products.chain([(SUM_B as usize + r, j[r] * s)]) {
-                        rtl.step(&ProgramInputs { add: true, add_addr: addr as u8, add_data: v, ..idle });
-                    }
-                }
-                // The statistics, as the pass adds them.
-                for (addr, v) in [(SUM_R2, s * s), (FOUND, 1), (INLIERS, 1)] {
+                for (addr, v) in inlier_adds(j, *s) {
                     rtl.step(&ProgramInputs { add: true, add_addr: addr, add_data: v, ..idle });
                 }
             }
         }
         rtl.step(&idle);
-        rtl.step(&ProgramInputs { go: true, ..idle });
-        while rtl.outputs().busy {
-            rtl.step(&idle);
-        }
-        assert_eq!(rtl.outputs().failed, want_failed, "seed {seed}, case {case}: the failed flag");
-        for (addr, &w) in want.iter().enumerate() {
-            rtl.step(&ProgramInputs { read_addr: addr as u8, ..idle });
-            assert_eq!(
-                rtl.outputs().read_data,
-                w,
-                "seed {seed}, case {case} ({n_rows} rows x {repeat}): register {addr}"
-            );
-        }
+        let what = format!("seed {seed}, case {case} ({n_rows} rows x {repeat})");
+        go(&mut rtl, &idle, Entry::Solve, 100_000, &what);
+        compare(&mut rtl, &idle, &want, failed, &what);
     }
 }

@@ -2,11 +2,12 @@
 //! the bit-exact reference of what the board is to run after its particle filter
 //! (docs/decisions.md, "Why the board's pose alone misses, and the polish on the board").
 //! This model fixes the arithmetic the RTL must match, and the host's figures
-//! (`host/tests/board_polish_figures.rs`) measure it. The solve runs as a program
-//! ([`program`]) whose datapath is built (`crate::rtl::polish::PolishProgram`), and a
-//! pass's point ([`PassSums::add_point`], [`jacobian`]) has its RTL
-//! (`crate::rtl::polish::PolishPass`); the update and the polish's control are not built
-//! yet.
+//! (`host/tests/board_polish_figures.rs`) measure it. The arithmetic between passes (the
+//! gate, the solve, the update, the drift check) runs as programs ([`programs`], in the
+//! instruction set of [`program`]) on a datapath that is built
+//! (`crate::rtl::polish::PolishProgram`), and a pass's point ([`PassSums::add_point`],
+//! [`jacobian`]) has its RTL (`crate::rtl::polish::PolishPass`); the polish's control and
+//! its place in the board top are not built yet.
 //!
 //! **Why.** The filter minimises its cost over 50 particles x 50 iterations; among those
 //! 2,500 poses the lowest cost belongs to a pose a little off the truth (on 30 of the 32
@@ -59,11 +60,13 @@
 //! step, the update. [`polish_best`] chooses among starts.
 
 pub mod program;
+pub mod programs;
 
 use crate::format::{transform, FxPoint, FxPose};
 use crate::grid::{Grid, NONE};
 use crate::pf::sat18;
 use crate::surface::{signed_residual, FxNormal, NORMAL_FRAC};
+use programs::Entry;
 
 /// Unknowns of a step: a small rotation (3), a translation (3), a relative scale.
 pub const UNKNOWNS: usize = 7;
@@ -160,45 +163,32 @@ pub fn pass(grid: &Grid, normals: &[FxNormal], scan: &[FxPoint], pose: &FxPose, 
     sums
 }
 
-/// The gate of the pass after `sums` (module doc); `None` when nothing was found.
+/// The gate of the pass after `sums` (module doc); `None` when nothing was found:
+/// [`programs::gate_program`] as the board runs it.
 pub fn gate(sums: &PassSums) -> Option<u64> {
-    (sums.found > 0).then(|| GATE_MSR * sums.sum_r2 / sums.found as u64)
+    let mut r = programs::solve_inputs(sums);
+    programs::run(Entry::Gate, &mut r).ok()?;
+    Some(r[programs::TAU2 as usize] as u64)
 }
 
-/// The step of the normal equations in Q.30 (module doc), or `None` at a pivot below
-/// `lambda / 2`: [`program::solve_program`] run as the board runs it. `sums` must come
-/// from [`pass`] (module doc: other sums may overflow).
+/// The step of the normal equations in Q.30 (module doc), or `None` with fewer than
+/// [`UNKNOWNS`] inliers or at a pivot below `lambda / 2`: [`programs::solve_program`] as
+/// the board runs it. `sums` must come from [`pass`] (module doc: other sums may overflow).
 pub fn solve(sums: &PassSums) -> Option<[i64; UNKNOWNS]> {
-    let mut r = program::solve_inputs(sums);
-    program::run(&program::solve_program(), &mut r).ok()?;
-    Some(program::solve_output(&r))
+    let mut r = programs::solve_inputs(sums);
+    programs::run(Entry::Solve, &mut r).ok()?;
+    Some(programs::solve_output(&r))
 }
 
-/// The pose after a step (module doc).
+/// The pose after a step (module doc): [`programs::update_program`] as the board runs it.
 pub fn update(pose: &FxPose, step: &[i64; UNKNOWNS]) -> FxPose {
-    let one = 1i128 << STEP_FRAC;
-    let [wx, wy, wz] = [step[0], step[1], step[2]].map(|v| v as i128);
-    let w = [[0, -wz, wy], [wz, 0, -wx], [-wy, wx, 0]];
-    let mut g = [[0i128; 3]; 3];
-    for i in 0..3 {
-        for j in 0..3 {
-            let w2: i128 = (0..3).map(|k| w[i][k] * w[k][j]).sum();
-            let e = if i == j { one } else { 0 } + w[i][j] + round_shift(w2, STEP_FRAC + 1);
-            g[i][j] = round_shift((one + step[6] as i128) * e, STEP_FRAC);
-        }
+    let mut r = [0; program::REGISTERS];
+    programs::load_pose(&mut r, pose);
+    for (i, &v) in step.iter().enumerate() {
+        r[programs::SUM_B as usize + i] = v as i128;
     }
-    let m: [i32; 9] = std::array::from_fn(|k| {
-        let (i, j) = (k / 3, k % 3);
-        let v: i128 = (0..3).map(|c| g[i][c] * pose.m[3 * c + j] as i128).sum();
-        sat18(round_shift(v, STEP_FRAC) as i64)
-    });
-    let t: [i32; 3] = std::array::from_fn(|k| {
-        sat18(
-            pose.t[k] as i64
-                + round_shift(step[3 + k] as i128, STEP_FRAC - crate::format::POSE_TRANSLATION_FRAC) as i64,
-        )
-    });
-    FxPose { m, t }
+    programs::run(Entry::Update, &mut r).expect("the update has no stop");
+    programs::read_pose(&r)
 }
 
 /// What the polish did.
@@ -224,8 +214,7 @@ pub fn polish(grid: &Grid, normals: &[FxNormal], scan: &[FxPoint], start: &FxPos
     for _ in 0..steps {
         let Some(tau2) = gate(&last) else { break };
         let sums = pass(grid, normals, scan, &pose, Some(tau2));
-        let enough = sums.inliers as usize >= UNKNOWNS;
-        let step = if enough { solve(&sums) } else { None };
+        let step = solve(&sums);
         last = sums;
         let Some(step) = step else { break };
         pose = update(&pose, &step);
@@ -240,17 +229,16 @@ pub fn polish(grid: &Grid, normals: &[FxNormal], scan: &[FxPoint], start: &FxPos
 /// every one-sided cost rewards.
 pub const SCALE_DRIFT: (u64, u64) = (4, 5);
 
-/// The sum of the squared entries of `M`: `3 s^2` for a similarity of scale `s`.
-fn frobenius2(p: &FxPose) -> u64 {
-    p.m.iter().map(|&v| (v as i64 * v as i64) as u64).sum()
-}
-
 /// Whether `polished`'s scale is within [`SCALE_DRIFT`] of `start`'s (exact: the squared
-/// ratio of the matrices' Frobenius norms between `(4/5)^2` and `(5/4)^2`).
+/// ratio of the matrices' Frobenius norms between `(4/5)^2` and `(5/4)^2`):
+/// [`programs::start_program`] on `start`, then [`programs::drift_program`] on `polished`,
+/// as the board runs them.
 pub fn within_drift(start: &FxPose, polished: &FxPose) -> bool {
-    let (lo, hi) = (SCALE_DRIFT.0 * SCALE_DRIFT.0, SCALE_DRIFT.1 * SCALE_DRIFT.1);
-    let (f0, f1) = (frobenius2(start) as u128, frobenius2(polished) as u128);
-    f1 * hi as u128 >= f0 * lo as u128 && f1 * lo as u128 <= f0 * hi as u128
+    let mut r = [0; program::REGISTERS];
+    programs::load_pose(&mut r, start);
+    programs::run(Entry::Start, &mut r).expect("the start has no stop");
+    programs::load_pose(&mut r, polished);
+    programs::run(Entry::Drift, &mut r).is_ok()
 }
 
 /// The choice among several starts (the filter's pose first, then the host's hypotheses),
@@ -291,6 +279,9 @@ mod tests {
     /// the oracle of the program.
     #[allow(clippy::needless_range_loop)]
     fn solve_direct(sums: &PassSums) -> Option<[i64; UNKNOWNS]> {
+        if (sums.inliers as usize) < UNKNOWNS {
+            return None;
+        }
         let a = |i: usize, j: usize| sums.a[upper(i, j)] as i128;
         let trace: i128 = (0..UNKNOWNS).map(|i| a(i, i)).sum();
         let lambda = (trace >> 30) + LAMBDA_FLOOR;
@@ -322,6 +313,46 @@ mod tests {
             delta[i] = z - (i + 1..UNKNOWNS).map(|k| round_shift(l[k][i] * delta[k], STEP_FRAC)).sum::<i128>();
         }
         Some(delta.map(|v| v.clamp(-STEP_LIMIT as i128, STEP_LIMIT as i128) as i64))
+    }
+
+    /// The update as the module doc writes it: the oracle of [`programs::update_program`].
+    fn update_direct(pose: &FxPose, step: &[i64; UNKNOWNS]) -> FxPose {
+        let one = 1i128 << STEP_FRAC;
+        let [wx, wy, wz] = [step[0], step[1], step[2]].map(|v| v as i128);
+        let w = [[0, -wz, wy], [wz, 0, -wx], [-wy, wx, 0]];
+        let mut g = [[0i128; 3]; 3];
+        for i in 0..3 {
+            for j in 0..3 {
+                let w2: i128 = (0..3).map(|k| w[i][k] * w[k][j]).sum();
+                let e = if i == j { one } else { 0 } + w[i][j] + round_shift(w2, STEP_FRAC + 1);
+                g[i][j] = round_shift((one + step[6] as i128) * e, STEP_FRAC);
+            }
+        }
+        let m: [i32; 9] = std::array::from_fn(|k| {
+            let (i, j) = (k / 3, k % 3);
+            let v: i128 = (0..3).map(|c| g[i][c] * pose.m[3 * c + j] as i128).sum();
+            sat18(round_shift(v, STEP_FRAC) as i64)
+        });
+        let t: [i32; 3] = std::array::from_fn(|k| {
+            sat18(
+                pose.t[k] as i64
+                    + round_shift(step[3 + k] as i128, STEP_FRAC - crate::format::POSE_TRANSLATION_FRAC) as i64,
+            )
+        });
+        FxPose { m, t }
+    }
+
+    /// The gate as the module doc writes it.
+    fn gate_direct(sums: &PassSums) -> Option<u64> {
+        (sums.found > 0).then(|| GATE_MSR * sums.sum_r2 / sums.found as u64)
+    }
+
+    /// The drift check as its doc writes it.
+    fn within_drift_direct(start: &FxPose, polished: &FxPose) -> bool {
+        let frobenius2 = |p: &FxPose| p.m.iter().map(|&v| (v as i64 * v as i64) as u128).sum::<u128>();
+        let (lo, hi) = (SCALE_DRIFT.0 as u128 * SCALE_DRIFT.0 as u128, SCALE_DRIFT.1 as u128 * SCALE_DRIFT.1 as u128);
+        let (f0, f1) = (frobenius2(start), frobenius2(polished));
+        f1 * hi >= f0 * lo && f1 * lo <= f0 * hi
     }
 
     /// `n / d` truncated toward zero (`d > 0`).
@@ -484,6 +515,11 @@ mod tests {
     #[test]
     fn the_update_rounds_as_specified() {
         let p = pose(1.0, 0.2, [0.1, -0.2, 0.3]);
+        // Saturation at both ends of 18 bits.
+        let big = FxPose { m: [(1 << 17) - 1, 0, 0, 0, -(1 << 17), 0, 0, 0, 1], t: [(1 << 17) - 1, -(1 << 17), 0] };
+        let out = update(&big, &[0, 0, 0, 1 << 27, -(1 << 27), 0, 1 << 26]);
+        assert_eq!(out, update_direct(&big, &[0, 0, 0, 1 << 27, -(1 << 27), 0, 1 << 26]));
+        assert_eq!((out.m[0], out.m[4], out.t[0], out.t[1]), ((1 << 17) - 1, -(1 << 17), (1 << 17) - 1, -(1 << 17)));
         assert_eq!(update(&p, &[0; UNKNOWNS]), p);
         // A translation of exactly half an LSB rounds up; minus half rounds to zero.
         let half = 1i64 << (STEP_FRAC - crate::format::POSE_TRANSLATION_FRAC - 1);
@@ -507,14 +543,19 @@ mod tests {
     #[test]
     fn a_pivot_below_half_the_damping_stops_the_solve() {
         let mut sums = PassSums::new();
+        // Too few inliers.
+        sums.inliers = UNKNOWNS as u32 - 1;
+        assert_eq!(solve(&sums), None);
+        agree(&sums);
         // A zero system: every pivot is lambda, the step zero.
+        sums.inliers = UNKNOWNS as u32;
         assert_eq!(solve(&sums), Some([0; UNKNOWNS]));
         // A negative diagonal entry (no Gram matrix has one): its pivot is below lambda / 2.
         sums.a[upper(2, 2)] = -100;
         assert_eq!(solve(&sums), None);
         agree(&sums);
         // The clamp: a huge right-hand side on a unit system gives +-2^27.
-        let mut big = PassSums::new();
+        let mut big = PassSums { inliers: UNKNOWNS as u32, ..PassSums::new() };
         for i in 0..UNKNOWNS {
             big.a[upper(i, i)] = 1 << 20;
         }
@@ -591,8 +632,38 @@ mod tests {
             rows in proptest::collection::vec((proptest::array::uniform7(-(1i64 << 17)..(1 << 17)), -(1i64 << 12)..(1 << 12)), 1..12),
             repeat in 1i64..=341,
         ) {
-            let sums = program::gram(&rows, repeat);
+            let sums = programs::gram(&rows, repeat);
             proptest::prop_assert_eq!(solve(&sums), solve_direct(&sums));
+        }
+
+        /// The update program is the update's formula, on any pose the format holds and any
+        /// step the solve's clamp lets through.
+        #[test]
+        fn the_update_program_is_the_formula(
+            m in proptest::array::uniform9(-(1i32 << 17)..(1 << 17)),
+            t in proptest::array::uniform3(-(1i32 << 17)..(1 << 17)),
+            step in proptest::array::uniform7(-STEP_LIMIT..=STEP_LIMIT),
+        ) {
+            let pose = FxPose { m, t };
+            proptest::prop_assert_eq!(update(&pose, &step), update_direct(&pose, &step));
+        }
+
+        /// The gate and drift programs are their formulas.
+        #[test]
+        fn the_gate_and_drift_programs_are_their_formulas(
+            sum_r2 in 0u64..(1 << 36),
+            found in 0u32..=4096,
+            m0 in proptest::array::uniform9(-(1i32 << 17)..(1 << 17)),
+            m1 in proptest::array::uniform9(-(1i32 << 17)..(1 << 17)),
+            near in 0.7f64..1.4,
+        ) {
+            let sums = PassSums { sum_r2, found, ..PassSums::new() };
+            proptest::prop_assert_eq!(gate(&sums), gate_direct(&sums));
+            let (p0, p1) = (FxPose { m: m0, t: [0; 3] }, FxPose { m: m1, t: [0; 3] });
+            proptest::prop_assert_eq!(within_drift(&p0, &p1), within_drift_direct(&p0, &p1));
+            // A scaled copy, so that both outcomes come up near the bounds.
+            let scaled = FxPose { m: m0.map(|v| (v as f64 * near).round() as i32), t: [0; 3] };
+            proptest::prop_assert_eq!(within_drift(&p0, &scaled), within_drift_direct(&p0, &scaled));
         }
 
         /// Any pose the format holds (a matrix of 18-bit entries, any translation): no

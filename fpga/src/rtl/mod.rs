@@ -19,7 +19,7 @@
 //!   ([`crate::weights::WeightModel`]);
 //! - [`particle_weights`]: the two wired together ([`crate::particle_weights`]);
 //! - [`polish`]: the on-board polish's blocks: `PolishProgram`, the datapath of the
-//!   solve's program ([`crate::polish::program`]), and `PolishPass`, a pass's point
+//!   polish's programs ([`crate::polish::programs`]), and `PolishPass`, a pass's point
 //!   ([`crate::polish::PassSums::add_point`]); not in the board top yet;
 //! - [`board`]: the board top and its blocks, the sequencer among them
 //!   ([`crate::board::BoardModel`], [`crate::sequencer::SequencerModel`]).
@@ -148,11 +148,12 @@ pub fn surface_residual_verilog() -> String {
     dedup_modules(&generate_verilog(&uut))
 }
 
-/// The Verilog of the polish's datapath alone with the solve's program in ROM
-/// (`PolishProgram`, docs/decisions.md "The solve on the board"), top module `top`; the
-/// register file marked `ram_style = "distributed"` ([`distributed_register_files`]).
+/// The Verilog of the polish's datapath alone with the polish's programs in ROM
+/// (`PolishProgram::polish`, docs/decisions.md "The solve on the board"), top module
+/// `top`; the register file marked `ram_style = "distributed"`
+/// ([`distributed_register_files`]).
 pub fn polish_program_verilog() -> String {
-    let mut uut = PolishProgram::new(&crate::polish::program::solve_program());
+    let mut uut = PolishProgram::polish();
     uut.connect_all();
     distributed_register_files(&dedup_modules(&generate_verilog(&uut)))
 }

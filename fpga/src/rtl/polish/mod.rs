@@ -1,6 +1,6 @@
 //! The on-board polish's RTL ([`crate::polish`]), one block a file:
-//! - [`program`]: `PolishProgram`, the serial datapath that runs a
-//!   [`crate::polish::program`] program over 64 x 128-bit registers;
+//! - [`program`]: `PolishProgram`, the serial datapath that runs the polish's programs
+//!   ([`crate::polish::programs`]) over 64 x 128-bit registers;
 //! - [`pass`]: `PolishPass`, a found point's statistics and Jacobian row as products on a
 //!   borrowed multiplier, added into the program's registers.
 

@@ -13,7 +13,7 @@
 //! 15; the 35 products issued at 14 to 48 and added at 17 to 51. An inlier takes 52 clocks,
 //! an outlier 5, and `ready` the clock after.
 
-use crate::polish::program::{FOUND, INLIERS, SUM_B, SUM_R2};
+use crate::polish::programs::{FOUND, INLIERS, SUM_B, SUM_R2};
 use crate::polish::{upper, UNKNOWNS};
 use rust_hdl::prelude::*;
 

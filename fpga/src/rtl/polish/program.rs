@@ -1,13 +1,16 @@
-//! `PolishProgram`: the datapath that runs a [`crate::polish::program`] program (in ROM)
-//! over 64 x 128-bit registers, the RTL twin of [`crate::polish::program::run`] (test:
-//! `fpga/tests/polish_program.rs`, against the model on the solve's inputs). No DSP48A1
+//! `PolishProgram`: the datapath that runs [`crate::polish::program`] programs (a ROM of
+//! several, [`crate::polish::program::Rom`], each started at its entry) over 64 x 128-bit
+//! registers, the RTL twin of [`crate::polish::program::run`] (test:
+//! `fpga/tests/polish_program.rs`, against the model on each of the polish's programs). The
+//! ROM is synchronous (block RAM): its address is the next program counter, so the word
+//! at the program counter is there when `fetch` needs it. No DSP48A1
 //! and one 129-bit adder for every unit, `alu = A + (B ^ inv) + cin` with `A` one of
 //! `x`, `acc`, `rem2`, 0 and `B` one of the second operand, `x`, `y`, 1: a shift-and-add
 //! multiplier over the multiplier's magnitude (a clock a bit; a negative multiplier
 //! subtracts), a restoring divider (128 clocks), shifts a bit a clock. An instruction takes
 //! `fetch`, `operand`, `exec` and `write` (4 clocks for an add) plus its unit's clocks.
 
-use crate::polish::program::{rom_words, Op, FIELD_A, FIELD_B, FIELD_D, FIELD_K, FIELD_LAST};
+use crate::polish::program::{FIELD_A, FIELD_B, FIELD_D, FIELD_K, FIELD_LAST, PROGRAM_WORDS};
 use rust_hdl::prelude::*;
 
 /// Where the datapath is in an instruction.
@@ -31,7 +34,7 @@ pub enum ProgramState {
     DivAbs,
     /// Restoring division, a quotient bit a clock; then the quotient's sign.
     Div,
-    /// A clamp below its bound: `y = -bound`.
+    /// A clamp below its bound: `y = -bound` (a saturation's `-bound - 1`).
     ClampNeg,
     /// A clamp: the operand against `-bound`.
     ClampLow,
@@ -68,8 +71,10 @@ pub struct PolishProgram {
     pub add_addr: Signal<In, Bits<6>>,
     /// Value to add (48-bit two's complement).
     pub add_data: Signal<In, Bits<48>>,
-    /// While idle: run the program from its first instruction.
+    /// While idle: run the program whose first instruction is at `entry`.
     pub go: Signal<In, Bit>,
+    /// The program `go` starts ([`crate::polish::program::Rom::entry`]).
+    pub entry: Signal<In, Bits<9>>,
     /// Running.
     pub busy: Signal<Out, Bit>,
     /// The last run stopped at a `StopBelow` (until the next `go`).
@@ -88,7 +93,7 @@ pub struct PolishProgram {
     pend: DFF<Bit>,
     pend_addr: DFF<Bits<6>>,
     rf: RAM<Bits<128>, 6>,
-    prog: ROM<Bits<30>, 9>,
+    prog: SyncROM<Bits<30>, 9>,
     kind: Signal<Local, Bits<4>>,
     opb: Signal<Local, Bits<128>>,
     // The adder: its sources' selects, the operands (sign-extended to 129 bits; `y` is
@@ -106,9 +111,14 @@ pub struct PolishProgram {
 }
 
 impl PolishProgram {
-    /// `program` in ROM, the registers cleared.
-    pub fn new(program: &[Op]) -> Self {
-        let words = rom_words(program);
+    /// The polish's ROM ([`crate::polish::programs::rom`]), the registers cleared.
+    pub fn polish() -> Self {
+        Self::new(&crate::polish::programs::rom().words())
+    }
+
+    /// `words` in ROM ([`crate::polish::program::Rom::words`]), the registers cleared.
+    pub fn new(words: &[u32]) -> Self {
+        assert!(words.len() <= PROGRAM_WORDS);
         PolishProgram {
             clock: Default::default(),
             reset: Default::default(),
@@ -121,6 +131,7 @@ impl PolishProgram {
             add_addr: Default::default(),
             add_data: Default::default(),
             go: Default::default(),
+            entry: Default::default(),
             busy: Default::default(),
             failed: Default::default(),
             state: Default::default(),
@@ -137,7 +148,7 @@ impl PolishProgram {
             pend: Default::default(),
             pend_addr: Default::default(),
             rf: RAM::new((0..64u64).map(|a| (Bits::<6>::from(a), Bits::<128>::default())).collect()),
-            prog: ROM::new(
+            prog: SyncROM::new(
                 words
                     .iter()
                     .enumerate()
@@ -165,7 +176,17 @@ impl PolishProgram {
 const _: () = assert!(FIELD_D == 4 && FIELD_A == 10 && FIELD_B == 16 && FIELD_K == 22 && FIELD_LAST == 29);
 const _: () = {
     use crate::polish::program::kind::*;
-    assert!(ADD == 0 && SUB == 1 && MUL == 2 && DIV == 3 && SHR == 4 && CONST == 5 && CLAMP == 6 && STOP_BELOW == 7);
+    assert!(
+        ADD == 0
+            && SUB == 1
+            && MUL == 2
+            && DIV == 3
+            && SHR == 4
+            && CONST == 5
+            && CLAMP == 6
+            && STOP_BELOW == 7
+            && SAT == 8
+    );
 };
 
 impl Logic for PolishProgram {
@@ -174,7 +195,7 @@ impl Logic for PolishProgram {
         dff_setup!(self, clock, state, pc, ins, x, y, acc, rem, neg, cnt, fail, take, pend, pend_addr);
         self.rf.read_clock.next = self.clock.val();
         self.rf.write_clock.next = self.clock.val();
-        self.prog.address.next = self.pc.q.val();
+        self.prog.clock.next = self.clock.val();
         self.kind.next = self.ins.q.val().get_bits::<4>(0);
         self.opb.next = self.rf.read_data.val();
         self.read_data.next = self.rf.read_data.val();
@@ -222,7 +243,7 @@ impl Logic for PolishProgram {
                 if self.kind.val() == 4 {
                     self.sel_b.next = 1.into();
                 }
-                if self.kind.val() == 6 {
+                if (self.kind.val() == 6) || (self.kind.val() == 8) {
                     self.sel_a.next = 0.into();
                     self.inv.next = true;
                 }
@@ -259,8 +280,9 @@ impl Logic for PolishProgram {
                 }
             }
             ProgramState::ClampNeg => {
+                // -B, or a saturation's ~B = -B - 1.
                 self.inv.next = true;
-                self.cin.next = true;
+                self.cin.next = self.kind.val() != 8;
             }
             ProgramState::ClampLow => {
                 self.sel_a.next = 0.into();
@@ -337,7 +359,7 @@ impl Logic for PolishProgram {
                     self.rf.write_data.next = self.alu.val().get_bits::<128>(0);
                 }
                 if self.go.val() {
-                    self.pc.d.next = 0.into();
+                    self.pc.d.next = self.entry.val();
                     self.fail.d.next = false;
                     self.state.d.next = ProgramState::Fetch;
                 }
@@ -378,7 +400,7 @@ impl Logic for PolishProgram {
                     self.x.d.next = bit_cast::<128, 6>(self.ins.q.val().get_bits::<6>(10));
                     self.state.d.next = ProgramState::ShiftLeft;
                 }
-                if self.kind.val() == 6 {
+                if (self.kind.val() == 6) || (self.kind.val() == 8) {
                     // x + ~B = x - B - 1 is not negative: x > B, the result is B.
                     self.take.d.next = 0.into();
                     self.state.d.next = ProgramState::Take;
@@ -490,5 +512,7 @@ impl Logic for PolishProgram {
             self.fail.d.next = false;
             self.pend.d.next = false;
         }
+        // The ROM reads at the next program counter: the word at `pc` is there in `fetch`.
+        self.prog.address.next = self.pc.d.val();
     }
 }
