@@ -14,6 +14,8 @@
 //!   (prefix `Vsurf`);
 //! - `polish_program`: `PolishProgram` with the polish's programs, from
 //!   `pficp_fpga::rtl::polish_program_verilog()` (prefix `Vpolish`);
+//! - `polish_bench`: `PolishBench`, the pass, a multiplier and the program's datapath, from
+//!   `pficp_fpga::rtl::polish_bench_verilog()` (prefix `Vpbench`);
 //! - `sequencer`: `PfSequencer` alone, from `pficp_fpga::rtl::sequencer_verilog()`;
 //! - `board` and `board_fast`: the whole board top, `pficp_fpga::rtl::board_verilog` of the
 //!   default and of the fast-UART configuration;
@@ -71,7 +73,7 @@ struct Design {
 }
 
 /// Every design that is verilated.
-const DESIGNS: [Design; 10] = [
+const DESIGNS: [Design; 11] = [
     Design {
         name: "pipeline",
         prefix: "Vpipe",
@@ -127,6 +129,14 @@ const DESIGNS: [Design; 10] = [
         verilog: |_| pficp_fpga::rtl::polish_program_verilog(),
         ports: &[POLISH_PROGRAM_PORTS],
         spec: "fpga/src/rtl/polish/program.rs (sim/src/ports.rs POLISH_PROGRAM_PORTS)",
+    },
+    Design {
+        name: "polish_bench",
+        prefix: "Vpbench",
+        per_lane: false,
+        verilog: |_| pficp_fpga::rtl::polish_bench_verilog(),
+        ports: &[POLISH_BENCH_PORTS],
+        spec: "fpga/src/rtl/polish/bench.rs (sim/src/ports.rs POLISH_BENCH_PORTS)",
     },
     Design {
         name: "board",

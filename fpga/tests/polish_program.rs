@@ -1,6 +1,6 @@
 //! `PolishProgram` in rust_hdl's simulator against [`pficp_fpga::polish::program::run`]:
 //! each of the polish's programs, started at its entry in the one ROM, on the files of
-//! `polish::programs::program_cases` (noise around each program's inputs; the solve's
+//! `polish::cases::program_cases` (noise around each program's inputs; the solve's
 //! edge systems, the update's saturation, the gate without found points, the drift check
 //! on both sides of its bounds). After each run every one of the 64 registers and the failed
 //! flag must equal the model's; a short program takes every instruction through its edge
@@ -8,8 +8,9 @@
 //! as the pass will.
 #![cfg(feature = "rtl")]
 
+use pficp_fpga::polish::cases::{gram, program_cases};
 use pficp_fpga::polish::program::{Op, Rom, REGISTERS};
-use pficp_fpga::polish::programs::{gram, inlier_adds, program_cases, rom, solve_inputs, Entry};
+use pficp_fpga::polish::programs::{inlier_adds, rom, solve_inputs, Entry};
 use pficp_fpga::polish::UNKNOWNS;
 use pficp_fpga::rtl::polish::PolishProgram;
 use pficp_fpga::splitmix::SplitMix64;

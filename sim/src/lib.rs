@@ -10,6 +10,7 @@
 //! | `surface_residual_verilog()` (docs/pipeline.md, the surface residual) | [`VerilatedSurfaceResidual`] | [`SurfaceResidualModel`](pficp_fpga::surface_residual::SurfaceResidualModel) | [`SurfaceLockstep`] |
 //! | the sequencer `PfSequencer` alone (docs/sequencer.md) | [`VerilatedSequencer`] | [`SequencerModel`](pficp_fpga::sequencer::SequencerModel) | [`SeqLockstep`] |
 //! | `polish_program_verilog()` (the polish's datapath with the polish's programs) | [`VerilatedPolishProgram`] | `pficp_fpga::polish::program::run` (registers after each run; no cycle model) | none: `sim/tests/polish_program.rs` |
+//! | `polish_bench_verilog()` (the pass, a multiplier and the polish's datapath) | [`VerilatedPolishBench`] | `PassSums::add_point` and the programs (registers after each pass and solve; no cycle model) | none: `sim/tests/polish_pass.rs` |
 //! | `board_verilog` (the whole board top, default and fast builds) | [`VerilatedBoard`] | `BoardModel` (byte level) | [`serial::SerialBoard`] |
 //!
 //! - The wrappers run the Verilated RTL one clock at a time, with an optional VCD.

@@ -164,6 +164,29 @@ pub const POLISH_PROGRAM_PORTS: &[PortSpec] = &[
     ("failed", false, 1),
 ];
 
+/// The ports of the polish's blocks with their multiplier (`fpga/src/rtl/polish/bench.rs`).
+pub const POLISH_BENCH_PORTS: &[PortSpec] = &[
+    ("clock", true, 1),
+    ("reset", true, 1),
+    ("gated", true, 1),
+    ("tau2", true, 32),
+    ("t", true, 54),
+    ("in_valid", true, 1),
+    ("in_q", true, 48),
+    ("in_n", true, 48),
+    ("in_s", true, 13),
+    ("ready", false, 1),
+    ("load", true, 1),
+    ("load_addr", true, 6),
+    ("load_data", true, 128),
+    ("read_addr", true, 6),
+    ("read_data", false, 128),
+    ("go", true, 1),
+    ("entry", true, 9),
+    ("busy", false, 1),
+    ("failed", false, 1),
+];
+
 /// The names of the output ports of `lists` (concatenated), in order; `N` must be their
 /// count (checked at compile time).
 pub const fn outputs<const N: usize>(lists: &[&[PortSpec]]) -> [&'static str; N] {

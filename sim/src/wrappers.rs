@@ -355,6 +355,108 @@ impl Default for VerilatedPolishProgram {
     }
 }
 
+/// The input ports of the polish's blocks with their multiplier (`PolishBench`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BenchInputs {
+    /// Synchronous reset.
+    pub reset: bool,
+    /// The pass's gate on.
+    pub gated: bool,
+    /// The pass's gate.
+    pub tau2: u32,
+    /// The pose's translation.
+    pub t: [i32; 3],
+    /// Take a point (while `ready`).
+    pub in_valid: bool,
+    /// Its image.
+    pub in_q: [i16; 3],
+    /// Its nearest stored point's normal.
+    pub in_n: [i16; 3],
+    /// Its signed residual (13 bits).
+    pub in_s: i64,
+    /// While the program is idle: write `load_data` to `load_addr`.
+    pub load: bool,
+    /// Register to load.
+    pub load_addr: u8,
+    /// Value to load.
+    pub load_data: i128,
+    /// While idle: the register `read_data` shows after the next clock.
+    pub read_addr: u8,
+    /// Run the program at `entry`.
+    pub go: bool,
+    /// The first instruction of the program `go` runs.
+    pub entry: u16,
+}
+
+/// The output ports of the polish's blocks.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BenchOutputs {
+    /// The pass takes a point.
+    pub ready: bool,
+    /// The register read.
+    pub read_data: i128,
+    /// The program is running.
+    pub busy: bool,
+    /// The last program failed.
+    pub failed: bool,
+}
+
+/// The Verilated polish blocks with their multiplier (`PolishBench`).
+pub struct VerilatedPolishBench {
+    pub(crate) core: Core,
+}
+
+verilated_common!(VerilatedPolishBench, BenchInputs);
+
+/// Output words of the polish bench, one name per `u64` (wide ports repeat).
+pub(crate) const POLISH_BENCH_OUTPUT_WORDS: [&str; 5] = ports::output_words(ports::POLISH_BENCH_PORTS);
+
+impl VerilatedPolishBench {
+    /// The blocks after power-up (idle, registers zero).
+    pub fn new() -> Self {
+        VerilatedPolishBench { core: Core::new(POLISH_BENCH, 0, 15, &POLISH_BENCH_OUTPUT_WORDS) }
+    }
+
+    /// Drive the input ports (masked to the port widths).
+    pub fn set_inputs(&mut self, i: &BenchInputs) {
+        let t = i.t.iter().enumerate().fold(0u64, |w, (k, &c)| w | ((c as u64) & 0x3_ffff) << (18 * k));
+        self.core.set_inputs(&[
+            i.reset as u64,
+            i.gated as u64,
+            i.tau2 as u64,
+            t,
+            i.in_valid as u64,
+            pficp_fpga::format::pack_point(i.in_q),
+            pficp_fpga::format::pack_point(i.in_n),
+            i.in_s as u64,
+            i.load as u64,
+            i.load_addr as u64,
+            i.load_data as u64,
+            (i.load_data >> 64) as u64,
+            i.read_addr as u64,
+            i.go as u64,
+            i.entry as u64,
+        ])
+    }
+
+    /// The output ports now.
+    pub fn outputs(&self) -> BenchOutputs {
+        let o = self.core.outputs::<5>();
+        BenchOutputs {
+            ready: o[0] != 0,
+            read_data: (o[1] as u128 | (o[2] as u128) << 64) as i128,
+            busy: o[3] != 0,
+            failed: o[4] != 0,
+        }
+    }
+}
+
+impl Default for VerilatedPolishBench {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 /// The Verilated particle-filter sequencer alone (`PfSequencer`, docs/sequencer.md).
 pub struct VerilatedSequencer {
     pub(crate) core: Core,

@@ -52,6 +52,7 @@ fn every_design_is_verilated() {
             ("weight_stage", 0, "Vweights"),
             ("surface_residual", 0, "Vsurf"),
             ("polish_program", 0, "Vpolish"),
+            ("polish_bench", 0, "Vpbench"),
             ("board", 0, "Vboard"),
             ("sequencer", 0, "Vseq"),
             ("board_fast", 0, "Vboardfast"),

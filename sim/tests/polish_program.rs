@@ -1,7 +1,7 @@
 //! The Verilated polish datapath (`PolishProgram` with the polish's programs in ROM, the
 //! Verilog that `pficp_fpga::rtl::polish_program_verilog` generates) against
 //! `pficp_fpga::polish::program::run`: after each program, every one of the 64 registers
-//! and the failed flag equal the model's. The files are `polish::programs::program_cases`
+//! and the failed flag equal the model's. The files are `polish::cases::program_cases`
 //! (seed `PFICP_COSIM_SEED`, default 1; `PFICP_POLISH_CASES` random cases a program,
 //! default 150): noise around each program's inputs, the solve's random Gram systems and
 //! edge systems, the update up to its saturation, the gate, the start, the clear and the
@@ -10,8 +10,9 @@
 //! test checks the Verilog that synthesis and the board get. A second test accumulates the
 //! sums of up to 4,096 rows through the `add` port, as the pass will, and solves them.
 
+use pficp_fpga::polish::cases::{gram, program_cases};
 use pficp_fpga::polish::program::REGISTERS;
-use pficp_fpga::polish::programs::{gram, inlier_adds, program_cases, rom, run, solve_inputs, Entry};
+use pficp_fpga::polish::programs::{inlier_adds, rom, run, solve_inputs, Entry};
 use pficp_fpga::polish::UNKNOWNS;
 use pficp_fpga::splitmix::SplitMix64;
 use pficp_sim::{ProgramInputs, VerilatedPolishProgram};

@@ -1,6 +1,6 @@
 //! The on-board polish: point-to-plane Gauss-Newton with scale over the board's own stores,
 //! the bit-exact reference of what the board is to run after its particle filter
-//! (docs/decisions.md, "Why the board's pose alone misses, and the polish on the board").
+//! (docs/polish.md).
 //! This model fixes the arithmetic the RTL must match, and the host's figures
 //! (`host/tests/board_polish_figures.rs`) measure it. The arithmetic between passes (the
 //! gate, the solve, the update, the drift check) runs as programs ([`programs`], in the
@@ -59,6 +59,7 @@
 //! a pass gated by the previous one, and if at least 7 points passed and the solve gives a
 //! step, the update. [`polish_best`] chooses among starts.
 
+pub mod cases;
 pub mod program;
 pub mod programs;
 
@@ -632,7 +633,7 @@ mod tests {
             rows in proptest::collection::vec((proptest::array::uniform7(-(1i64 << 17)..(1 << 17)), -(1i64 << 12)..(1 << 12)), 1..12),
             repeat in 1i64..=341,
         ) {
-            let sums = programs::gram(&rows, repeat);
+            let sums = cases::gram(&rows, repeat);
             proptest::prop_assert_eq!(solve(&sums), solve_direct(&sums));
         }
 

@@ -13,8 +13,7 @@
 
 use super::program::{Op, Rom, REGISTERS};
 use super::{upper, PassSums, GATE_MSR, LAMBDA_FLOOR, SCALE_DRIFT, STEP_FRAC, STEP_LIMIT, UNKNOWNS};
-use crate::format::{FxPose, MATRIX_FRAC, POSE_TRANSLATION_FRAC};
-use crate::splitmix::SplitMix64;
+use crate::format::{FxPose, POSE_TRANSLATION_FRAC};
 use std::sync::OnceLock;
 
 /// The programs of the polish's ROM, in ROM order (`Entry as usize` is the index for
@@ -216,58 +215,6 @@ pub fn inlier_adds(j: &[i64; UNKNOWNS], s: i64) -> Vec<(u8, i64)> {
     adds
 }
 
-/// The normal equations of `rows` (a Jacobian row and its residual each), each row counted
-/// `repeat` times, every one an inlier ([`PassSums::add_point`]).
-pub fn gram(rows: &[([i64; UNKNOWNS], i64)], repeat: i64) -> PassSums {
-    let mut sums = PassSums::new();
-    for _ in 0..repeat {
-        for &(j, s) in rows {
-            sums.add_point(s, Some(u64::MAX), || j);
-        }
-    }
-    sums
-}
-
-/// The systems the RTL's tests solve: `random` Gram systems of 5 to 20 random rows (18-bit
-/// entries, 13-bit residuals) repeated up to 4,096 rows in all, some of them rank-deficient,
-/// from `seed`; then the widest (4,096 rows at full scale), a zero system, one with a
-/// negative pivot (the program stops), one whose step the clamp bounds and one of six
-/// rows (too few inliers: the program stops).
-pub fn solve_systems(seed: u64, random: usize) -> Vec<PassSums> {
-    let mut rng = crate::splitmix::SplitMix64(seed);
-    let mut out = Vec::new();
-    for _ in 0..random {
-        let n_rows = 5 + rng.below(16) as usize;
-        let repeat = 1 + rng.below(4096 / n_rows as u64) as i64;
-        let mut entry = |bits: u32| (rng.next_u64() >> (64 - bits)) as i64 - (1 << (bits - 1));
-        let rows: Vec<_> = (0..n_rows).map(|_| (std::array::from_fn(|_| entry(18)), entry(13))).collect();
-        out.push(gram(&rows, repeat));
-    }
-    let wide: Vec<_> = (0..8)
-        .map(|r| {
-            (
-                std::array::from_fn(|c| if (r + c) % 3 == 0 { -(1 << 17) } else { (1 << 17) - 1 }),
-                (1 << 12) - 1 - r as i64,
-            )
-        })
-        .collect();
-    out.push(gram(&wide, 512));
-    let mut degenerate = gram(&[], 1);
-    degenerate.inliers = UNKNOWNS as u32;
-    out.push(degenerate.clone());
-    degenerate.a[upper(2, 2)] = -100;
-    out.push(degenerate);
-    let mut big = gram(&[], 1);
-    big.inliers = UNKNOWNS as u32;
-    for i in 0..UNKNOWNS {
-        big.a[upper(i, i)] = 1 << 20;
-    }
-    big.b = [1 << 40, -(1 << 40), 0, 0, 0, 0, 1];
-    out.push(big);
-    out.push(gram(&wide[..UNKNOWNS - 1], 1));
-    out
-}
-
 /// `r[d] = sum of the squares of M` (the pose at [`POSE`]), with `TEMP`.
 fn frobenius(d: u8) -> Vec<Op> {
     let m = |i: usize| POSE + i as u8;
@@ -404,101 +351,12 @@ pub fn read_pose(r: &[i128; REGISTERS]) -> FxPose {
     FxPose { m: std::array::from_fn(at), t: std::array::from_fn(|k| at(9 + k)) }
 }
 
-/// A file of noise (any 128-bit values) with `set`'s inputs in place.
-fn noise_with(rng: &mut SplitMix64, set: impl FnOnce(&mut [i128; REGISTERS])) -> [i128; REGISTERS] {
-    let mut r: [i128; REGISTERS] =
-        std::array::from_fn(|_| (rng.next_u64() as u128 | (rng.next_u64() as u128) << 64) as i128);
-    set(&mut r);
-    r
-}
-
-/// A pose from `rng`: with `scale = 0` any 18-bit entries, else a matrix of `scale` on the
-/// diagonal and small random entries off it.
-fn random_pose(rng: &mut SplitMix64, scale: f64) -> FxPose {
-    let mut e18 = || (rng.next_u64() >> 46) as i32 - (1 << 17);
-    let mut m: [i32; 9] = std::array::from_fn(|_| e18());
-    if scale > 0.0 {
-        for (k, v) in m.iter_mut().enumerate() {
-            *v = if k % 4 == 0 { (scale * (1 << MATRIX_FRAC) as f64) as i32 } else { *v / 64 };
-        }
-    }
-    FxPose { m, t: std::array::from_fn(|_| e18()) }
-}
-
-/// The files the RTL's tests run each program on, from `seed`: noise around the program's
-/// inputs (so that a program reading what it did not write would differ), `random` cases
-/// a program plus the edges: the solve on [`solve_systems`]; the update on any pose and on
-/// near-identity ones, steps up to the clamp, and a pose that saturates at both ends of 18
-/// bits; the gate with found points (up to the widest `sum_r2`) and without; the start and
-/// the clear; the drift check on both sides of both bounds.
-pub fn program_cases(seed: u64, random: usize) -> Vec<(Entry, [i128; REGISTERS])> {
-    let mut rng = SplitMix64(seed ^ 0x9e37_79b9_7f4a_7c15);
-    let mut out = Vec::new();
-    let inputs_of = |e: Entry, from: &[i128; REGISTERS], r: &mut [i128; REGISTERS]| {
-        for a in e.inputs() {
-            r[a as usize] = from[a as usize];
-        }
-    };
-    for sums in solve_systems(seed, random) {
-        let from = solve_inputs(&sums);
-        out.push((Entry::Solve, noise_with(&mut rng, |r| inputs_of(Entry::Solve, &from, r))));
-    }
-    let (hi, lo) = ((1 << 17) - 1, -(1 << 17));
-    let saturating = FxPose { m: [hi, 0, 0, 0, lo, 0, 0, 0, 1000], t: [hi, lo, 0] };
-    for k in 0..random + 2 {
-        let (pose, step): (FxPose, [i64; UNKNOWNS]) = match k {
-            0 => (random_pose(&mut rng, 3.9), std::array::from_fn(|i| [STEP_LIMIT, -STEP_LIMIT][i % 2])),
-            1 => (saturating, [0, 0, 0, STEP_LIMIT, -STEP_LIMIT, 0, STEP_LIMIT / 2]),
-            _ => {
-                let scale = [0.0, 1.0, 0.5, 2.0][k % 4];
-                (random_pose(&mut rng, scale), std::array::from_fn(|_| (rng.next_u64() >> 36) as i64 - (1 << 27)))
-            }
-        };
-        out.push((
-            Entry::Update,
-            noise_with(&mut rng, |r| {
-                load_pose(r, &pose);
-                for (i, &v) in step.iter().enumerate() {
-                    r[SUM_B as usize + i] = v as i128;
-                }
-            }),
-        ));
-    }
-    let mut stats = vec![(1u64 << 36) - 1, 1, 5, 0];
-    stats.extend((0..random).flat_map(|_| [rng.next_u64() >> 28, 1 + rng.below(4096)]));
-    for pair in stats.chunks(2) {
-        let (sum_r2, found) = (pair[0], pair[1]);
-        out.push((
-            Entry::Gate,
-            noise_with(&mut rng, |r| {
-                r[SUM_R2 as usize] = sum_r2 as i128;
-                r[FOUND as usize] = found as i128;
-            }),
-        ));
-    }
-    out.push((Entry::Clear, noise_with(&mut rng, |_| {})));
-    for k in 0..random.max(1) {
-        let start = random_pose(&mut rng, [1.0, 0.3, 3.0][k % 3]);
-        out.push((Entry::Start, noise_with(&mut rng, |r| load_pose(r, &start))));
-        let f0: i128 = start.m.iter().map(|&v| v as i128 * v as i128).sum();
-        for scale in [0.79, 0.81, 1.0, 1.24, 1.26] {
-            let polished = FxPose { m: start.m.map(|v| (v as f64 * scale).round() as i32), t: start.t };
-            out.push((
-                Entry::Drift,
-                noise_with(&mut rng, |r| {
-                    load_pose(r, &polished);
-                    r[F0 as usize] = f0;
-                }),
-            ));
-        }
-    }
-    out
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::polish::cases::{gram, program_cases};
     use crate::polish::program::{FIELD_A, FIELD_B, FIELD_D, FIELD_LAST, PROGRAM_WORDS, WORD_BITS};
+    use crate::splitmix::SplitMix64;
 
     #[test]
     fn the_rom_fits_and_its_fields_hold_the_registers() {

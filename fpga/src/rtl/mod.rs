@@ -149,11 +149,20 @@ pub fn surface_residual_verilog() -> String {
 }
 
 /// The Verilog of the polish's datapath alone with the polish's programs in ROM
-/// (`PolishProgram::polish`, docs/decisions.md "The solve on the board"), top module
+/// (`PolishProgram::polish`, docs/polish.md), top module
 /// `top`; the register file marked `ram_style = "distributed"`
 /// ([`distributed_register_files`]).
 pub fn polish_program_verilog() -> String {
     let mut uut = PolishProgram::polish();
+    uut.connect_all();
+    distributed_register_files(&dedup_modules(&generate_verilog(&uut)))
+}
+
+/// The Verilog of the polish's blocks with a multiplier of their own (`PolishBench`: the
+/// pass, a `PipeMul` and the program's datapath), top module `top`; the register file
+/// marked as in [`polish_program_verilog`].
+pub fn polish_bench_verilog() -> String {
+    let mut uut = polish::PolishBench::new();
     uut.connect_all();
     distributed_register_files(&dedup_modules(&generate_verilog(&uut)))
 }
