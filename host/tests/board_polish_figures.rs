@@ -15,8 +15,9 @@
 //! Slow (a minute or two): ignored by default. Run it with
 //! `cargo test --release -p pficp-host --test board_polish_figures -- --ignored --nocapture`
 //! (`PFICP_SPLIT=test` for the test split, default dev; `PFICP_POLISH_STEPS` and
-//! `PFICP_POLISH_STARTS` for fewer steps and starts). The tables are in
-//! docs/decisions.md, "Why the board's pose alone misses, and the polish on the board".
+//! `PFICP_POLISH_STARTS` for fewer steps and starts; `PFICP_CASES` cases a family, default
+//! 8). The tables are in
+//! docs/polish.md.
 
 use pficp::board::fixed::{normalised_pose, original_pose, quantise_pose, restore_pose};
 use pficp::board::on_board::{self, plan, OnBoardPlan};
@@ -31,6 +32,11 @@ use pficp::registration::methods::Tolerance;
 use pficp_fpga::messages::ResultReply;
 use rayon::prelude::*;
 use std::time::Duration;
+
+/// Cases a family of the realistic set (`PFICP_CASES`, default 8: the quick set).
+fn cases_a_family() -> usize {
+    std::env::var("PFICP_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(8)
+}
 
 /// Gauss-Newton steps of the on-board polish (`PFICP_POLISH_STEPS`, default 10).
 fn steps() -> u32 {
@@ -104,7 +110,7 @@ fn row(name: &str, ok: &[[bool; 6]]) -> [usize; 6] {
 }
 
 #[test]
-#[ignore = "a minute or two in release; prints the tables of docs/decisions.md"]
+#[ignore = "a minute or two in release; prints the tables of docs/polish.md"]
 fn the_polish_on_the_board() {
     let split = if std::env::var("PFICP_SPLIT").is_ok_and(|v| v == "test") { Split::Test } else { Split::Dev };
     println!(
@@ -120,7 +126,7 @@ fn the_polish_on_the_board() {
     let mut starts = Vec::new();
     let mut cases = 0;
     for family in Family::ALL {
-        let rows: Vec<([bool; 6], bool, String, usize)> = (0..8)
+        let rows: Vec<([bool; 6], bool, String, usize)> = (0..cases_a_family())
             .into_par_iter()
             .map(|i| {
                 let c = case(family, i, split, 1);
