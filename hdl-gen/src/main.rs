@@ -27,7 +27,7 @@ struct Cli {
     lanes: usize,
     /// Which design to generate: the whole board (pins, UART, protocol engine, pipeline), the
     /// particle-weight pipeline (nearest-neighbour pipeline and weight stage), the
-    /// nearest-neighbour pipeline alone, the grid pipeline alone, the neighbour pipeline alone, the weight stage alone, the surface residual stage alone, or the polish's datapath alone. Only the board has pins,
+    /// nearest-neighbour pipeline alone, the grid pipeline alone, the neighbour pipeline alone, the weight stage alone, the surface residual stage alone, the polish's datapath alone, or the polish's blocks with a multiplier. Only the board has pins,
     /// so only the board gets a UCF and an ISE script.
     #[arg(long, value_enum, default_value_t = Design::Board, conflicts_with = "verilog")]
     design: Design,
@@ -121,6 +121,9 @@ enum Design {
     /// `PolishProgram`: the polish's datapath with its programs in ROM (no DSP48A1; not in
     /// the board top yet).
     PolishProgram,
+    /// `PolishBench`: the polish's pass, a multiplier and the datapath (on the board the
+    /// multiplier is the sequencer's).
+    PolishBench,
 }
 
 /// The design's name on the command line.
@@ -133,9 +136,11 @@ fn design_name(design: Design) -> String {
 fn generated_verilog(design: Design, lanes: usize, board: &BoardConfig) -> Result<(String, String)> {
     use pficp_fpga::rtl::{
         board_verilog, grid_pipeline_verilog, neighbour_pipeline_verilog, particle_weights_verilog, pipeline_verilog,
-        polish_program_verilog, surface_residual_verilog, weight_stage_verilog, BOARD_LANES, SUPPORTED_LANES,
+        polish_bench_verilog, polish_program_verilog, surface_residual_verilog, weight_stage_verilog, BOARD_LANES,
+        SUPPORTED_LANES,
     };
-    let lane_free = matches!(design, Design::Weights | Design::SurfaceResidual | Design::PolishProgram);
+    let lane_free =
+        matches!(design, Design::Weights | Design::SurfaceResidual | Design::PolishProgram | Design::PolishBench);
     if !lane_free && !SUPPORTED_LANES.contains(&lanes) {
         bail!("--lanes {lanes} is not supported by the RTL; use one of {SUPPORTED_LANES:?}");
     }
@@ -165,6 +170,7 @@ fn generated_verilog(design: Design, lanes: usize, board: &BoardConfig) -> Resul
             (surface_residual_verilog(), "pficp_fpga::rtl::surface_residual_verilog()".to_string())
         }
         Design::PolishProgram => (polish_program_verilog(), "pficp_fpga::rtl::polish_program_verilog()".to_string()),
+        Design::PolishBench => (polish_bench_verilog(), "pficp_fpga::rtl::polish_bench_verilog()".to_string()),
     })
 }
 

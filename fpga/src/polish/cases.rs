@@ -180,7 +180,8 @@ impl PassCase {
 /// 2^12 on residuals of 8 bits (some in, some out); a gate of 2^24 - 1 (every point in);
 /// a gate of 2^20 with images and translations near the formats' extremes (`x = q - t`
 /// reaches 19 bits and the Jacobian saturates). Normals of any 16-bit size, residuals of
-/// 13 bits but in the second.
+/// 13 bits but in the second; the second and third passes also hold a point whose row
+/// rounds on ties (one more point).
 pub fn pass_cases(seed: u64, points: usize) -> Vec<PassCase> {
     let mut rng = SplitMix64(seed);
     let mut out = Vec::new();
@@ -188,7 +189,7 @@ pub fn pass_cases(seed: u64, points: usize) -> Vec<PassCase> {
         let mut pick = |bits: u32| (rng.next_u64() >> (64 - bits)) as i64 - (1 << (bits - 1));
         let wide = case == 3;
         let t: [i32; 3] = std::array::from_fn(|_| if wide { pick(18) as i32 } else { pick(14) as i32 });
-        let points = (0..points)
+        let points: Vec<_> = (0..points)
             .map(|_| {
                 let q = std::array::from_fn(|_| if wide { pick(16) as i16 } else { pick(14) as i16 });
                 let n = std::array::from_fn(|_| pick(16) as i16);
@@ -196,6 +197,12 @@ pub fn pass_cases(seed: u64, points: usize) -> Vec<PassCase> {
             })
             .collect();
         let tau2 = [None, Some(1 << 12), Some(u64::MAX >> 40), Some(1 << 20)][case];
+        let mut points: Vec<(FxPoint, FxNormal, i64)> = points;
+        if case == 1 || case == 2 {
+            // Rounding ties: x = (1, 1, 1) and n = (0, 0, 2^12) give the cross product
+            // (2^12, -2^12, 0) and the dot product 2^12, each half an LSB of the row.
+            points.insert(points.len() / 2, (t.map(|c| c as i16 + 1), [0, 0, 1 << 12], 1));
+        }
         out.push(PassCase { t, tau2, points });
     }
     out

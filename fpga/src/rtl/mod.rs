@@ -160,11 +160,13 @@ pub fn polish_program_verilog() -> String {
 
 /// The Verilog of the polish's blocks with a multiplier of their own (`PolishBench`: the
 /// pass, a `PipeMul` and the program's datapath), top module `top`; the register file
-/// marked as in [`polish_program_verilog`].
+/// marked as in [`polish_program_verilog`]; the multiplier's `busy` and `valid`, which the
+/// pass does not need (it counts the clocks), waived as unused.
 pub fn polish_bench_verilog() -> String {
     let mut uut = polish::PolishBench::new();
     uut.connect_all();
-    distributed_register_files(&dedup_modules(&generate_verilog(&uut)))
+    let v = distributed_register_files(&dedup_modules(&generate_verilog(&uut)));
+    waive_unused_wires(&v, &["mul$busy", "mul$valid"])
 }
 
 /// The 64 x 128-bit register files marked for distributed RAM: without the attribute Yosys
@@ -240,14 +242,19 @@ fn board_of<const P: usize>(config: &crate::board::BoardConfig) -> String {
 /// co-simulation of the sequencer alone; the engine leaves it unconnected (Yosys removes
 /// it). The pipeline's `cost` (its sum of squared distances) is not the board's cost: the
 /// residual stage after it sums the residuals. Their wire declarations get a targeted
-/// `UNUSEDSIGNAL` waiver, nothing else.
+/// `UNUSEDSIGNAL` waiver ([`waive_unused_wires`]), nothing else.
 pub fn waive_probe_ports(v: &str) -> String {
+    waive_unused_wires(v, &["filter$p_we", "filter$p_waddr", "filter$p_wdata", "nn$cost"])
+}
+
+/// `v` with an `UNUSEDSIGNAL` waiver around the declaration of each wire named in `names`
+/// (instance outputs a design leaves unconnected on purpose), nothing else.
+pub fn waive_unused_wires(v: &str, names: &[&str]) -> String {
     let mut out = String::with_capacity(v.len() + 256);
     for line in v.lines() {
         let t = line.trim_start();
-        let probe = t.starts_with("wire")
-            && ["filter$p_we;", "filter$p_waddr;", "filter$p_wdata;", "nn$cost;"].iter().any(|n| t.ends_with(n));
-        if probe {
+        let unused = t.starts_with("wire") && names.iter().any(|n| t.ends_with(&format!("{n};")));
+        if unused {
             out.push_str("/* verilator lint_off UNUSEDSIGNAL */\n");
             out.push_str(line);
             out.push_str("\n/* verilator lint_on UNUSEDSIGNAL */\n");

@@ -56,14 +56,14 @@ pub struct PolishPass {
     pub add_data: Signal<Out, Bits<48>>,
     run: DFF<Bit>,
     k: DFF<Bits<6>>,
-    q: DFF<Bits<48>>,
+    img: DFF<Bits<48>>,
     n: DFF<Bits<48>>,
     s: DFF<Bits<13>>,
     inlier: DFF<Bit>,
     c0: DFF<Bits<38>>,
     c1: DFF<Bits<38>>,
     c2: DFF<Bits<38>>,
-    d: DFF<Bits<38>>,
+    dot: DFF<Bits<38>>,
     j0: DFF<Bits<18>>,
     j1: DFF<Bits<18>>,
     j2: DFF<Bits<18>>,
@@ -86,13 +86,9 @@ pub struct PolishPass {
     n2: Signal<Local, Bits<18>>,
     s18: Signal<Local, Bits<18>>,
     p38: Signal<Local, Bits<38>>,
-    c0_half: Signal<Local, Bits<38>>,
     r0: Signal<Local, Bits<25>>,
-    c1_half: Signal<Local, Bits<38>>,
     r1: Signal<Local, Bits<25>>,
-    c2_half: Signal<Local, Bits<38>>,
     r2: Signal<Local, Bits<25>>,
-    d_half: Signal<Local, Bits<38>>,
     r6: Signal<Local, Bits<25>>,
     i_prod: Signal<Local, Bits<6>>,
     row: Signal<Local, Bits<3>>,
@@ -145,14 +141,14 @@ impl PolishPass {
             add_data: Default::default(),
             run: Default::default(),
             k: Default::default(),
-            q: Default::default(),
+            img: Default::default(),
             n: Default::default(),
             s: Default::default(),
             inlier: Default::default(),
             c0: Default::default(),
             c1: Default::default(),
             c2: Default::default(),
-            d: Default::default(),
+            dot: Default::default(),
             j0: Default::default(),
             j1: Default::default(),
             j2: Default::default(),
@@ -177,13 +173,9 @@ impl PolishPass {
             n2: Default::default(),
             s18: Default::default(),
             p38: Default::default(),
-            c0_half: Default::default(),
             r0: Default::default(),
-            c1_half: Default::default(),
             r1: Default::default(),
-            c2_half: Default::default(),
             r2: Default::default(),
-            d_half: Default::default(),
             r6: Default::default(),
             i_prod: Default::default(),
             row: Default::default(),
@@ -202,20 +194,20 @@ const _: () = assert!(crate::format::COORD_FRAC == 13 && crate::format::POSE_TRA
 impl Logic for PolishPass {
     #[hdl_gen]
     fn update(&mut self) {
-        dff_setup!(self, clock, run, k, q, n, s, inlier, c0, c1, c2, d, j0, j1, j2, j6);
+        dff_setup!(self, clock, run, k, img, n, s, inlier, c0, c1, c2, dot, j0, j1, j2, j6);
         self.ready.next = !self.run.q.val();
         // Sign extensions (a mux on the sign bit); x = q - t (19 bits, in the multiplicand's 26).
-        self.q0e.next = bit_cast::<26, 16>(self.q.q.val().get_bits::<16>(0));
-        if self.q.q.val().get_bit(15) {
-            self.q0e.next = bit_cast::<26, 16>(self.q.q.val().get_bits::<16>(0)) | !bits::<26>(0xffff);
+        self.q0e.next = bit_cast::<26, 16>(self.img.q.val().get_bits::<16>(0));
+        if self.img.q.val().get_bit(15) {
+            self.q0e.next = bit_cast::<26, 16>(self.img.q.val().get_bits::<16>(0)) | !bits::<26>(0xffff);
         }
-        self.q1e.next = bit_cast::<26, 16>(self.q.q.val().get_bits::<16>(16));
-        if self.q.q.val().get_bit(31) {
-            self.q1e.next = bit_cast::<26, 16>(self.q.q.val().get_bits::<16>(16)) | !bits::<26>(0xffff);
+        self.q1e.next = bit_cast::<26, 16>(self.img.q.val().get_bits::<16>(16));
+        if self.img.q.val().get_bit(31) {
+            self.q1e.next = bit_cast::<26, 16>(self.img.q.val().get_bits::<16>(16)) | !bits::<26>(0xffff);
         }
-        self.q2e.next = bit_cast::<26, 16>(self.q.q.val().get_bits::<16>(32));
-        if self.q.q.val().get_bit(47) {
-            self.q2e.next = bit_cast::<26, 16>(self.q.q.val().get_bits::<16>(32)) | !bits::<26>(0xffff);
+        self.q2e.next = bit_cast::<26, 16>(self.img.q.val().get_bits::<16>(32));
+        if self.img.q.val().get_bit(47) {
+            self.q2e.next = bit_cast::<26, 16>(self.img.q.val().get_bits::<16>(32)) | !bits::<26>(0xffff);
         }
         self.t0e.next = bit_cast::<26, 18>(self.t.val().get_bits::<18>(0));
         if self.t.val().get_bit(17) {
@@ -255,15 +247,12 @@ impl Logic for PolishPass {
             self.p48.next = bit_cast::<48, 44>(self.mul_product.val()) | !bits::<48>(0xfff_ffff_ffff_u64);
         }
         self.p38.next = self.mul_product.val().get_bits::<38>(0);
-        // rnd_13 of the cross and dot sums (arithmetic: the top 25 of 38 bits).
-        self.c0_half.next = self.c0.q.val() + 4096;
-        self.r0.next = self.c0_half.val().get_bits::<25>(13);
-        self.c1_half.next = self.c1.q.val() + 4096;
-        self.r1.next = self.c1_half.val().get_bits::<25>(13);
-        self.c2_half.next = self.c2.q.val() + 4096;
-        self.r2.next = self.c2_half.val().get_bits::<25>(13);
-        self.d_half.next = self.d.q.val() + 4096;
-        self.r6.next = self.d_half.val().get_bits::<25>(13);
+        // rnd_13 of the cross and dot sums: the sums start at 2^12 (the rounding
+        // constant), so it is their top 25 of 38 bits (arithmetic).
+        self.r0.next = self.c0.q.val().get_bits::<25>(13);
+        self.r1.next = self.c1.q.val().get_bits::<25>(13);
+        self.r2.next = self.c2.q.val().get_bits::<25>(13);
+        self.r6.next = self.dot.q.val().get_bits::<25>(13);
         // The row products: the ROM's row and column of product k - 14.
         self.i_prod.next = self.k.q.val() - 14;
         self.order.address.next = self.i_prod.val();
@@ -326,7 +315,7 @@ impl Logic for PolishPass {
             if self.in_valid.val() {
                 self.run.d.next = true;
                 self.k.d.next = 0.into();
-                self.q.d.next = self.in_q.val();
+                self.img.d.next = self.in_q.val();
                 self.n.d.next = self.in_n.val();
                 self.s.d.next = self.in_s.val();
             }
@@ -398,7 +387,7 @@ impl Logic for PolishPass {
                 self.add.next = true;
                 self.add_addr.next = 46.into();
                 self.add_data.next = 1.into();
-                self.c0.d.next = self.p38.val();
+                self.c0.d.next = self.p38.val() + 4096;
                 if !self.inlier.q.val() {
                     self.run.d.next = false;
                 }
@@ -407,22 +396,22 @@ impl Logic for PolishPass {
                 self.c0.d.next = self.c0.q.val() - self.p38.val();
             }
             if self.k.q.val() == 6 {
-                self.c1.d.next = self.p38.val();
+                self.c1.d.next = self.p38.val() + 4096;
             }
             if self.k.q.val() == 7 {
                 self.c1.d.next = self.c1.q.val() - self.p38.val();
             }
             if self.k.q.val() == 8 {
-                self.c2.d.next = self.p38.val();
+                self.c2.d.next = self.p38.val() + 4096;
             }
             if self.k.q.val() == 9 {
                 self.c2.d.next = self.c2.q.val() - self.p38.val();
             }
             if self.k.q.val() == 10 {
-                self.d.d.next = self.p38.val();
+                self.dot.d.next = self.p38.val() + 4096;
             }
             if (self.k.q.val() == 11) || (self.k.q.val() == 12) {
-                self.d.d.next = self.d.q.val() + self.p38.val();
+                self.dot.d.next = self.dot.q.val() + self.p38.val();
             }
             if self.k.q.val() == 13 {
                 // sat18: the top 8 of 25 bits all equal, else the bound of the sign.
