@@ -117,6 +117,14 @@ impl FxPose {
     }
 }
 
+/// Pack a translation as the pose word holds it (18-bit two's complement fields, `t[0]` in
+/// bits 0..18): the 54-bit `t` port of the polish's pass.
+pub fn pack_translation(t: [i32; 3]) -> u64 {
+    t.iter()
+        .enumerate()
+        .fold(0, |w, (k, &v)| w | ((v as i64 as u64) & ((1 << POSE_BITS) - 1)) << (k as u32 * POSE_BITS))
+}
+
 /// Bits of a packed point (the model and scan memory word).
 pub const POINT_WORD_BITS: u32 = 48;
 

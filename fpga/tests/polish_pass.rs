@@ -6,7 +6,7 @@
 //! (the program run on `go`) every register and the failed flag equal the model's.
 #![cfg(feature = "rtl")]
 
-use pficp_fpga::format::pack_point;
+use pficp_fpga::format::{pack_point, pack_translation};
 use pficp_fpga::polish::cases::{pass_cases, PassCase};
 use pficp_fpga::polish::programs::{rom, run, solve_inputs, Entry, FOUND, INLIERS, SUM_R2};
 use pficp_fpga::rtl::polish::PolishBench;
@@ -16,11 +16,6 @@ use std::sync::{Arc, Mutex};
 /// A 128-bit word as a signed value.
 fn value(b: Bits<128>) -> i128 {
     ((b.get_bits::<64>(64).to_u64() as u128) << 64 | b.get_bits::<64>(0).to_u64() as u128) as i128
-}
-
-/// The translation as the port takes it (3 x 18 bits, x low).
-fn t_word(t: [i32; 3]) -> u64 {
-    t.iter().enumerate().fold(0u64, |w, (k, &c)| w | ((c as u64) & 0x3_ffff) << (18 * k))
 }
 
 #[test]
@@ -55,7 +50,7 @@ fn a_pass_adds_the_models_sums_and_the_solve_takes_them() {
             x.load.next = false;
             x.gated.next = pass.tau2.is_some();
             x.tau2.next = Bits::<32>::from(pass.tau2.unwrap_or(0).min(u32::MAX as u64));
-            x.t.next = Bits::<54>::from(t_word(pass.t));
+            x.t.next = Bits::<54>::from(pack_translation(pass.t));
             for (i, &(q, n, s)) in pass.points.iter().enumerate() {
                 while !x.ready.val() {
                     wait_clock_cycle!(sim, clock, x);

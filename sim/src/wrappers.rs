@@ -419,12 +419,11 @@ impl VerilatedPolishBench {
 
     /// Drive the input ports (masked to the port widths).
     pub fn set_inputs(&mut self, i: &BenchInputs) {
-        let t = i.t.iter().enumerate().fold(0u64, |w, (k, &c)| w | ((c as u64) & 0x3_ffff) << (18 * k));
         self.core.set_inputs(&[
             i.reset as u64,
             i.gated as u64,
             i.tau2 as u64,
-            t,
+            pficp_fpga::format::pack_translation(i.t),
             i.in_valid as u64,
             pficp_fpga::format::pack_point(i.in_q),
             pficp_fpga::format::pack_point(i.in_n),
