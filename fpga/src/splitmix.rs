@@ -16,6 +16,12 @@ impl SplitMix64 {
         z ^ (z >> 31)
     }
 
+    /// A `bits`-bit two's complement number (`0 < bits < 64`), from the top bits of the next
+    /// draw.
+    pub fn signed(&mut self, bits: u32) -> i64 {
+        (self.next_u64() >> (64 - bits)) as i64 - (1 << (bits - 1))
+    }
+
     /// A number below `n` (`n` > 0).
     pub fn below(&mut self, n: u64) -> u64 {
         self.next_u64() % n

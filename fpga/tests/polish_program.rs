@@ -8,10 +8,9 @@
 //! as the pass will.
 #![cfg(feature = "rtl")]
 
-use pficp_fpga::polish::cases::{gram, program_cases};
+use pficp_fpga::polish::cases::{gram, program_cases, random_rows};
 use pficp_fpga::polish::program::{Op, Rom, REGISTERS};
 use pficp_fpga::polish::programs::{inlier_adds, rom, solve_inputs, Entry};
-use pficp_fpga::polish::UNKNOWNS;
 use pficp_fpga::rtl::polish::PolishProgram;
 use pficp_fpga::splitmix::SplitMix64;
 use rust_hdl::prelude::*;
@@ -139,12 +138,10 @@ fn every_program_of_the_polish_matches_the_model_register_for_register() {
 #[test]
 fn adds_accumulate_the_sums_the_solve_then_takes() {
     let mut rng = SplitMix64(0xadd5);
-    let mut entry = |bits: u32| (rng.next_u64() >> (64 - bits)) as i64 - (1 << (bits - 1));
     let cases: Vec<Case> = [9, 14]
         .iter()
         .map(|&n| {
-            let rows: Vec<([i64; UNKNOWNS], i64)> =
-                (0..n).map(|_| (std::array::from_fn(|_| entry(18)), entry(13))).collect();
+            let rows = random_rows(&mut rng, n);
             let adds: Vec<(usize, i64)> =
                 rows.iter().flat_map(|(j, s)| inlier_adds(j, *s)).map(|(a, v)| (a as usize, v)).collect();
             // The adds sum to the model's sums of the rows, and those solve.

@@ -10,10 +10,9 @@
 //! test checks the Verilog that synthesis and the board get. A second test accumulates the
 //! sums of up to 4,096 rows through the `add` port, as the pass will, and solves them.
 
-use pficp_fpga::polish::cases::{gram, program_cases};
+use pficp_fpga::polish::cases::{gram, program_cases, random_rows};
 use pficp_fpga::polish::program::REGISTERS;
 use pficp_fpga::polish::programs::{inlier_adds, rom, run, solve_inputs, Entry};
-use pficp_fpga::polish::UNKNOWNS;
 use pficp_fpga::splitmix::SplitMix64;
 use pficp_sim::{ProgramInputs, VerilatedPolishProgram};
 
@@ -88,9 +87,7 @@ fn sums_added_row_by_row_solve_as_the_model() {
     for case in 0..8 {
         let n_rows = 5 + rng.below(16) as usize;
         let repeat = 1 + rng.below(4096 / n_rows as u64) as i64;
-        let mut entry = |bits: u32| (rng.next_u64() >> (64 - bits)) as i64 - (1 << (bits - 1));
-        let rows: Vec<([i64; UNKNOWNS], i64)> =
-            (0..n_rows).map(|_| (std::array::from_fn(|_| entry(18)), entry(13))).collect();
+        let rows = random_rows(&mut rng, n_rows);
         let mut want = solve_inputs(&gram(&rows, repeat));
         let failed = run(Entry::Solve, &mut want).is_err();
         for addr in 0..REGISTERS {

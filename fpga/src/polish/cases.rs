@@ -22,20 +22,23 @@ pub fn gram(rows: &[([i64; UNKNOWNS], i64)], repeat: i64) -> PassSums {
     sums
 }
 
+/// `n` random rows, each a Jacobian row of 18-bit entries and a 13-bit residual.
+pub fn random_rows(rng: &mut SplitMix64, n: usize) -> Vec<([i64; UNKNOWNS], i64)> {
+    (0..n).map(|_| (std::array::from_fn(|_| rng.signed(18)), rng.signed(13))).collect()
+}
+
 /// The systems the RTL's tests solve: `random` Gram systems of 5 to 20 random rows (18-bit
 /// entries, 13-bit residuals) repeated up to 4,096 rows in all, some of them rank-deficient,
 /// from `seed`; then the widest (4,096 rows at full scale), a zero system, one with a
 /// negative pivot (the program stops), one whose step the clamp bounds and one of six
 /// rows (too few inliers: the program stops).
 pub fn solve_systems(seed: u64, random: usize) -> Vec<PassSums> {
-    let mut rng = crate::splitmix::SplitMix64(seed);
+    let mut rng = SplitMix64(seed);
     let mut out = Vec::new();
     for _ in 0..random {
         let n_rows = 5 + rng.below(16) as usize;
         let repeat = 1 + rng.below(4096 / n_rows as u64) as i64;
-        let mut entry = |bits: u32| (rng.next_u64() >> (64 - bits)) as i64 - (1 << (bits - 1));
-        let rows: Vec<_> = (0..n_rows).map(|_| (std::array::from_fn(|_| entry(18)), entry(13))).collect();
-        out.push(gram(&rows, repeat));
+        out.push(gram(&random_rows(&mut rng, n_rows), repeat));
     }
     let wide: Vec<_> = (0..8)
         .map(|r| {
@@ -73,14 +76,13 @@ fn noise_with(rng: &mut SplitMix64, set: impl FnOnce(&mut [i128; REGISTERS])) ->
 /// A pose from `rng`: with `scale = 0` any 18-bit entries, else a matrix of `scale` on the
 /// diagonal and small random entries off it.
 fn random_pose(rng: &mut SplitMix64, scale: f64) -> FxPose {
-    let mut e18 = || (rng.next_u64() >> 46) as i32 - (1 << 17);
-    let mut m: [i32; 9] = std::array::from_fn(|_| e18());
+    let mut m: [i32; 9] = std::array::from_fn(|_| rng.signed(18) as i32);
     if scale > 0.0 {
         for (k, v) in m.iter_mut().enumerate() {
             *v = if k % 4 == 0 { (scale * (1 << MATRIX_FRAC) as f64) as i32 } else { *v / 64 };
         }
     }
-    FxPose { m, t: std::array::from_fn(|_| e18()) }
+    FxPose { m, t: std::array::from_fn(|_| rng.signed(18) as i32) }
 }
 
 /// The files the RTL's tests run each program on, from `seed`: noise around the program's
@@ -186,18 +188,16 @@ pub fn pass_cases(seed: u64, points: usize) -> Vec<PassCase> {
     let mut rng = SplitMix64(seed);
     let mut out = Vec::new();
     for case in 0..4 {
-        let mut pick = |bits: u32| (rng.next_u64() >> (64 - bits)) as i64 - (1 << (bits - 1));
         let wide = case == 3;
-        let t: [i32; 3] = std::array::from_fn(|_| if wide { pick(18) as i32 } else { pick(14) as i32 });
-        let points: Vec<_> = (0..points)
+        let t: [i32; 3] = std::array::from_fn(|_| if wide { rng.signed(18) as i32 } else { rng.signed(14) as i32 });
+        let mut points: Vec<(FxPoint, FxNormal, i64)> = (0..points)
             .map(|_| {
-                let q = std::array::from_fn(|_| if wide { pick(16) as i16 } else { pick(14) as i16 });
-                let n = std::array::from_fn(|_| pick(16) as i16);
-                (q, n, pick(if case == 1 { 8 } else { 13 }))
+                let q = std::array::from_fn(|_| if wide { rng.signed(16) as i16 } else { rng.signed(14) as i16 });
+                let n = std::array::from_fn(|_| rng.signed(16) as i16);
+                (q, n, rng.signed(if case == 1 { 8 } else { 13 }))
             })
             .collect();
         let tau2 = [None, Some(1 << 12), Some(u64::MAX >> 40), Some(1 << 20)][case];
-        let mut points: Vec<(FxPoint, FxNormal, i64)> = points;
         if case == 1 || case == 2 {
             // Rounding ties: x = (1, 1, 1) and n = (0, 0, 2^12) give the cross product
             // (2^12, -2^12, 0) and the dot product 2^12, each half an LSB of the row.
