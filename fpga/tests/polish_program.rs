@@ -9,7 +9,7 @@
 #![cfg(feature = "rtl")]
 
 use pficp_fpga::polish::cases::{gram, program_cases, random_rows};
-use pficp_fpga::polish::program::{Op, Rom, REGISTERS};
+use pficp_fpga::polish::program::{add_port, Op, Rom, REGISTERS};
 use pficp_fpga::polish::programs::{inlier_adds, rom, solve_inputs, Entry};
 use pficp_fpga::rtl::polish::PolishProgram;
 use pficp_fpga::splitmix::SplitMix64;
@@ -47,7 +47,7 @@ fn check(rom: &Rom, cases: Vec<Case>) -> Vec<u64> {
         .map(|c| {
             let mut r = c.load;
             for &(addr, v) in &c.adds {
-                r[addr] += v as i128;
+                r[addr] = add_port(r[addr], v);
             }
             let failed = rom.run(c.entry, &mut r).is_err();
             (r, failed)
@@ -159,7 +159,7 @@ fn adds_accumulate_the_sums_the_solve_then_takes() {
 
 /// Every kind of instruction on its edge cases: exact quotients (a remainder equal to the
 /// divisor), negative dividends and products, the most negative value, wrapping, a zero
-/// divisor, rounding ties either side of zero, both sides of a clamp and a stop that does
+/// divisor, divisors of 64 bits and wider, rounding ties either side of zero, both sides of a clamp and a stop that does
 /// and does not fire.
 #[test]
 fn each_instruction_matches_the_model_on_its_edge_cases() {
@@ -203,6 +203,8 @@ fn each_instruction_matches_the_model_on_its_edge_cases() {
         [i128::MIN, -1, i128::MAX, 2, 7, -7],
         [-6, 4, 6, -4, 10, 5],
         [1 << 100, 3 << 98, -(1 << 64), 1 << 63, 99, -100],
+        // Divisors at the divider's 64-bit limit and just over it, remainders of 64 bits.
+        [(1 << 64) - 1, -(1 << 120) + 7, 1 << 64, (1 << 64) - 3, i128::MAX - 5, 3 << 62],
     ]
     .iter()
     .flat_map(|six| {

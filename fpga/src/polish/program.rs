@@ -18,6 +18,19 @@ pub const REGISTERS: usize = 64;
 pub const REG_BITS: u32 = 128;
 /// Instructions the program ROM holds.
 pub const PROGRAM_WORDS: usize = 512;
+/// Bits of a divisor the divider takes (the programs' divisors are below 2^48: a pivot
+/// `D_j` below 2^47, a count of found points below 2^13); the remainder then fits 65 bits.
+pub const DIVISOR_BITS: u32 = 64;
+/// Bits of the `add` port's arithmetic: `r = sext(r + v)` over the low [`ADD_BITS`] bits
+/// ([`add_port`]); a pass's sums never leave them (`|a| <= 2^46` for 4,096 points).
+pub const ADD_BITS: u32 = 48;
+
+/// The `add` port: `r + v` over the low [`ADD_BITS`] bits, sign-extended (the pass adds
+/// its terms so to zeroed sums, which stay within those bits).
+pub fn add_port(r: i128, v: i64) -> i128 {
+    let s = r.wrapping_add(v as i128);
+    (s << (128 - ADD_BITS)) >> (128 - ADD_BITS)
+}
 
 /// One instruction. Register operands are indices below [`REGISTERS`]; shifts are below 128.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -53,7 +66,8 @@ pub enum Op {
         k: u8,
     },
     /// `r[d] = (r[a] << k) / r[b]`, truncated toward zero, `r[b]` taken as unsigned (a
-    /// restoring divider; a zero divisor gives a quotient of all ones).
+    /// restoring divider over a divisor of at most [`DIVISOR_BITS`] bits: a zero divisor
+    /// or a wider one gives a quotient of all ones).
     Div {
         /// Destination.
         d: u8,
@@ -255,7 +269,11 @@ pub fn run(program: &[Op], r: &mut [i128; REGISTERS]) -> Result<(), usize> {
             Op::Div { d, a, b, k } => {
                 let n = r[a as usize] << k;
                 let divisor = r[b as usize] as u128;
-                let q = n.unsigned_abs().checked_div(divisor).unwrap_or(u128::MAX) as i128;
+                let q = if divisor >> DIVISOR_BITS != 0 {
+                    u128::MAX
+                } else {
+                    n.unsigned_abs().checked_div(divisor).unwrap_or(u128::MAX)
+                } as i128;
                 r[d as usize] = if n < 0 { q.wrapping_neg() } else { q };
             }
             Op::Shr { d, a, k } => r[d as usize] = r[a as usize] >> k,
@@ -296,8 +314,11 @@ mod tests {
             Op::Clamp { d: 14, a: 2, b: 12 },
             Op::Add { d: 15, a: 3, b: 3 },       // wraps
             Op::Div { d: 16, a: 2, b: 0, k: 0 }, // zero divisor: all ones
-            Op::Sat { d: 17, a: 1, b: 2 },       // -7 below -3 - 1
-            Op::Sat { d: 18, a: 2, b: 2 },       // 3 is the bound
+            Op::constant(23, 1 << 64),
+            Op::Div { d: 24, a: 2, b: 23, k: 0 }, // a divisor over 64 bits: all ones
+            Op::Div { d: 25, a: 1, b: 23, k: 0 }, // negated: 1
+            Op::Sat { d: 17, a: 1, b: 2 },        // -7 below -3 - 1
+            Op::Sat { d: 18, a: 2, b: 2 },        // 3 is the bound
             Op::constant(19, 4),
             Op::Sat { d: 20, a: 19, b: 2 }, // 4 above 3
             Op::Sub { d: 21, a: 1, b: 1 },
@@ -309,6 +330,8 @@ mod tests {
         assert_eq!(r[15], -2);
         assert_eq!(r[16], -1);
         assert_eq!([r[17], r[18], r[20], r[22]], [-4, 3, 3, -3]);
+        assert_eq!([r[24], r[25]], [-1, 1]);
+        assert_eq!([add_port(5, -7), add_port((1 << 47) - 1, 1), add_port(1 << 60, 3)], [-2, -(1 << 47), 3]);
         assert_eq!(run(&[Op::StopBelow { a: 1, b: 2 }], &mut r), Err(0));
         assert_eq!(run(&[Op::StopBelow { a: 2, b: 2 }], &mut r), Ok(()));
         assert_eq!(Op::constant(0, 0), Op::Const { d: 0, v: 0, k: 0 });

@@ -3,45 +3,68 @@
 //! registers, the RTL twin of [`crate::polish::program::run`] (test:
 //! `fpga/tests/polish_program.rs`, against the model on each of the polish's programs). The
 //! ROM is synchronous (block RAM): its address is the next program counter, so the word
-//! at the program counter is there when `fetch` needs it. No DSP48A1
-//! and one 129-bit adder for every unit, `alu = A + (B ^ inv) + cin` with `A` one of
-//! `x`, `acc`, `rem2`, 0 and `B` one of the second operand, `x`, `y`, 1: a shift-and-add
-//! multiplier over the multiplier's magnitude (a clock a bit; a negative multiplier
-//! subtracts), a restoring divider (128 clocks), shifts a bit a clock. An instruction takes
-//! `fetch`, `operand`, `exec` and `write` (4 clocks for an add) plus its unit's clocks.
+//! at the program counter is there when `fetch` needs it.
+//!
+//! No DSP48A1, and no carry chain longer than 48 bits, so that the block stays within the
+//! board's 20 logic levels (docs/polish.md):
+//! - **a segmented adder**: 32 bits a clock over four clocks, the operands in registers
+//!   `oa`, `ob` shifting down and the sum shifting into `acc`, the carry registered; the
+//!   129-bit result's sign in `sign`. Adds, subtracts, compares, a product's resolve and
+//!   its rounding, a dividend's magnitude and a quotient's sign take it;
+//! - **a carry-save multiplier**: the product accumulates in `acc` (sums) and `cv`
+//!   (carries), a multiplier bit a clock with no carry chain, over the signed multiplier's
+//!   bits until the rest is all zeros or all ones (then one subtract); one resolve at the
+//!   end;
+//! - **a restoring divider** over a divisor of at most 64 bits
+//!   ([`crate::polish::program::DIVISOR_BITS`]): the 65-bit trial subtract in two 33-bit
+//!   halves, two clocks a quotient bit;
+//! - **the add port's own 48-bit adder** ([`crate::polish::program::add_port`]), one add a
+//!   clock.
+//!
+//! An instruction takes `fetch`, `operand`, `exec` and `write` plus its unit's clocks (an
+//! add 8 clocks).
 
-use crate::polish::program::{FIELD_A, FIELD_B, FIELD_D, FIELD_K, FIELD_LAST, PROGRAM_WORDS};
+use crate::polish::program::{
+    ADD_BITS, DIVISOR_BITS, FIELD_A, FIELD_B, FIELD_D, FIELD_K, FIELD_LAST, PROGRAM_WORDS, REG_BITS,
+};
 use rust_hdl::prelude::*;
 
 /// Where the datapath is in an instruction.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, LogicState)]
 pub enum ProgramState {
-    /// Not running: `load` writes registers, `read_addr` reads them.
+    /// Not running: `load` writes registers, `read_addr` reads them, `add` adds to them.
     Idle,
     /// Latch the instruction at the program counter; read its first operand.
     Fetch,
     /// Latch the first operand; read the second (held until the instruction ends).
     Operand,
-    /// Execute: an add or subtract ends here; the others start their unit.
+    /// Execute: an add of the operands, or start the instruction's unit.
     Exec,
-    /// Shift-and-add over the multiplier's magnitude.
+    /// The adder on the operands set by the state before; then `Flush`.
+    Alu,
+    /// Add the pending segment carries into `acc` until none is left; then the state in
+    /// `ret`.
+    Flush,
+    /// Multiply, a multiplier bit a clock into `acc` with the segment carries pending.
     Mul,
     /// Arithmetic right shifts (a multiply's rounding, a shift).
     Round,
     /// Left shifts (a dividend's, a constant's).
     ShiftLeft,
-    /// The dividend's magnitude.
-    DivAbs,
-    /// Restoring division, a quotient bit a clock; then the quotient's sign.
-    Div,
-    /// A clamp below its bound: `y = -bound` (a saturation's `-bound - 1`).
-    ClampNeg,
-    /// A clamp: the operand against `-bound`.
+    /// The dividend's magnitude is in `acc`: start the division (the quotient shifts into
+    /// `acc` as the dividend shifts out).
+    DivStart,
+    /// A quotient bit's trial subtract, the low half.
+    DivLo,
+    /// The high half; the quotient bit.
+    DivHi,
+    /// `x - B - 1` is done: above the bound (the result is `B`), or test the low bound.
+    ClampTest,
+    /// `x + B` (a saturation's `x + B + 1`) is done: below the low bound (the result is
+    /// `-B`, a saturation's `-B - 1`), or the result is `x`.
     ClampLow,
-    /// A stop test: `2 r[a]` (in `acc`) against the bound.
+    /// `2 r[a] - r[b]` is done: fail below.
     StopTest,
-    /// `acc = 0 + B` for the `B` source in `take` (a clamp's or a constant's result).
-    Take,
     /// Write the result; the next instruction or the end.
     Write,
 }
@@ -63,9 +86,10 @@ pub struct PolishProgram {
     pub read_addr: Signal<In, Bits<6>>,
     /// The register read.
     pub read_data: Signal<Out, Bits<128>>,
-    /// While idle: add `add_data` to register `add_addr` (read on this clock, written on the
-    /// next; no two adds to one register on consecutive clocks, no `load` on the clock after
-    /// an add, no add with `go`). The pass accumulates its sums so, straight into the solve's inputs.
+    /// While idle: add `add_data` to register `add_addr` over its low 48 bits, sign-extended
+    /// ([`crate::polish::program::add_port`]; read on this clock, written on the next; no
+    /// two adds to one register on consecutive clocks, no `load` on the clock after an add,
+    /// no add with `go`). The pass accumulates its sums so, straight into the solve's inputs.
     pub add: Signal<In, Bit>,
     /// Register to add to.
     pub add_addr: Signal<In, Bits<6>>,
@@ -80,34 +104,70 @@ pub struct PolishProgram {
     /// The last run stopped at a `StopBelow` (until the next `go`).
     pub failed: Signal<Out, Bit>,
     state: DFF<ProgramState>,
+    ret: DFF<ProgramState>,
     pc: DFF<Bits<9>>,
     ins: DFF<Bits<30>>,
     x: DFF<Bits<128>>,
     y: DFF<Bits<128>>,
     acc: DFF<Bits<128>>,
-    rem: DFF<Bits<129>>,
+    car: DFF<Bits<3>>,
+    sign: DFF<Bit>,
+    sa: DFF<Bits<2>>,
+    sb: DFF<Bits<2>>,
+    ia: DFF<Bit>,
+    ib: DFF<Bit>,
+    ci: DFF<Bit>,
+    mdone: DFF<Bit>,
+    rem: DFF<Bits<65>>,
+    lo: DFF<Bits<33>>,
+    lo_c: DFF<Bit>,
     neg: DFF<Bit>,
     cnt: DFF<Bits<8>>,
     fail: DFF<Bit>,
-    take: DFF<Bits<2>>,
     pend: DFF<Bit>,
     pend_addr: DFF<Bits<6>>,
+    add_v: DFF<Bits<48>>,
     rf: RAM<Bits<128>, 6>,
     prog: SyncROM<Bits<30>, 9>,
     kind: Signal<Local, Bits<4>>,
     opb: Signal<Local, Bits<128>>,
-    // The adder: its sources' selects, the operands (sign-extended to 129 bits; `y` is
-    // zero-extended for a divisor), the sum and the sum shifted right.
+    // The adder, `alu = (A ^ ia) + (B ^ ib) + ci` in four 32-bit segments, each segment's
+    // carry in from `car` (none from the top), its controls in registers: A (`sa`) is x
+    // (0), x << 1 (1), acc (2) or 0 (3); B (`sb`) is the second operand (0), x (1) or 0 (2).
+    // A state that `issue`s an add sets them from `sel_a` .. `cin`; `Alu` takes its result
+    // into `acc`, `Flush` adds the pending carries, then the state goes on to `then`.
     sel_a: Signal<Local, Bits<2>>,
     sel_b: Signal<Local, Bits<2>>,
-    inv: Signal<Local, Bit>,
+    inva: Signal<Local, Bit>,
+    invb: Signal<Local, Bit>,
     cin: Signal<Local, Bit>,
-    alu_a: Signal<Local, Bits<129>>,
-    alu_b: Signal<Local, Bits<129>>,
-    alu: Signal<Local, Bits<129>>,
-    alu_sra: Signal<Local, Bits<128>>,
+    issue: Signal<Local, Bit>,
+    then: Signal<Local, ProgramState>,
+    alu_a: Signal<Local, Bits<128>>,
+    alu_b: Signal<Local, Bits<128>>,
+    s0: Signal<Local, Bits<33>>,
+    s1: Signal<Local, Bits<33>>,
+    s2: Signal<Local, Bits<33>>,
+    s3: Signal<Local, Bits<33>>,
+    sum: Signal<Local, Bits<128>>,
+    carries: Signal<Local, Bits<3>>,
     acc_sra: Signal<Local, Bits<128>>,
-    rem2: Signal<Local, Bits<129>>,
+    // The multiplier: the rest all ones (subtract x, the last step); the next clock's
+    // multiplier and its tests.
+    all_ones: Signal<Local, Bit>,
+    ny: Signal<Local, Bits<128>>,
+    my: Signal<Local, Bits<128>>,
+    my_ones: Signal<Local, Bit>,
+    // The divider: the shifted remainder, the halves of the trial subtract, a divisor
+    // wider than 64 bits.
+    rem2: Signal<Local, Bits<65>>,
+    not_y_lo: Signal<Local, Bits<33>>,
+    not_y_hi: Signal<Local, Bits<32>>,
+    div_lo: Signal<Local, Bits<34>>,
+    div_hi: Signal<Local, Bits<33>>,
+    wide: Signal<Local, Bit>,
+    // The add port's sum.
+    add_sum: Signal<Local, Bits<48>>,
 }
 
 impl PolishProgram {
@@ -135,18 +195,29 @@ impl PolishProgram {
             busy: Default::default(),
             failed: Default::default(),
             state: Default::default(),
+            ret: Default::default(),
             pc: Default::default(),
             ins: Default::default(),
             x: Default::default(),
             y: Default::default(),
             acc: Default::default(),
+            car: Default::default(),
+            sign: Default::default(),
+            sa: Default::default(),
+            sb: Default::default(),
+            ia: Default::default(),
+            ib: Default::default(),
+            ci: Default::default(),
+            mdone: Default::default(),
             rem: Default::default(),
+            lo: Default::default(),
+            lo_c: Default::default(),
             neg: Default::default(),
             cnt: Default::default(),
             fail: Default::default(),
-            take: Default::default(),
             pend: Default::default(),
             pend_addr: Default::default(),
+            add_v: Default::default(),
             rf: RAM::new((0..64u64).map(|a| (Bits::<6>::from(a), Bits::<128>::default())).collect()),
             prog: SyncROM::new(
                 words
@@ -159,21 +230,39 @@ impl PolishProgram {
             opb: Default::default(),
             sel_a: Default::default(),
             sel_b: Default::default(),
-            inv: Default::default(),
+            inva: Default::default(),
+            invb: Default::default(),
             cin: Default::default(),
+            issue: Default::default(),
+            then: Default::default(),
             alu_a: Default::default(),
             alu_b: Default::default(),
-            alu: Default::default(),
-            alu_sra: Default::default(),
+            s0: Default::default(),
+            s1: Default::default(),
+            s2: Default::default(),
+            s3: Default::default(),
+            sum: Default::default(),
+            carries: Default::default(),
             acc_sra: Default::default(),
+            all_ones: Default::default(),
+            ny: Default::default(),
+            my: Default::default(),
+            my_ones: Default::default(),
             rem2: Default::default(),
+            not_y_lo: Default::default(),
+            not_y_hi: Default::default(),
+            div_lo: Default::default(),
+            div_hi: Default::default(),
+            wide: Default::default(),
+            add_sum: Default::default(),
         }
     }
 }
 
-// Literals in the kernel (`#[hdl_gen]` takes no paths): the fields' positions and the
-// kinds' codes (`crate::polish::program::kind`).
+// Literals in the kernel (`#[hdl_gen]` takes no paths): the fields' positions, the kinds'
+// codes (`crate::polish::program::kind`) and the units' widths.
 const _: () = assert!(FIELD_D == 4 && FIELD_A == 10 && FIELD_B == 16 && FIELD_K == 22 && FIELD_LAST == 29);
+const _: () = assert!(DIVISOR_BITS == 64 && ADD_BITS == 48 && REG_BITS == 128);
 const _: () = {
     use crate::polish::program::kind::*;
     assert!(
@@ -192,7 +281,10 @@ const _: () = {
 impl Logic for PolishProgram {
     #[hdl_gen]
     fn update(&mut self) {
-        dff_setup!(self, clock, state, pc, ins, x, y, acc, rem, neg, cnt, fail, take, pend, pend_addr);
+        dff_setup!(
+            self, clock, state, ret, pc, ins, x, y, acc, car, sign, sa, sb, ia, ib, ci, mdone, rem, lo, lo_c, neg, cnt,
+            fail, pend, pend_addr, add_v
+        );
         self.rf.read_clock.next = self.clock.val();
         self.rf.write_clock.next = self.clock.val();
         self.prog.clock.next = self.clock.val();
@@ -201,145 +293,99 @@ impl Logic for PolishProgram {
         self.read_data.next = self.rf.read_data.val();
         self.busy.next = self.state.q.val() != ProgramState::Idle;
         self.failed.next = self.fail.q.val();
+        self.acc_sra.next = (self.acc.q.val() >> 1).replace_bit(127, self.acc.q.val().get_bit(127));
 
-        // The adder: A is x (0), acc (1), rem2 (2) or 0 (3); B is the second operand (0),
-        // x (1), y (2) or 1 (3); each state below picks them.
-        self.sel_a.next = 3.into();
-        self.sel_b.next = 0.into();
-        self.inv.next = false;
-        self.cin.next = false;
-        self.rem2.next = (self.rem.q.val() << 1) | bit_cast::<129, 1>(self.x.q.val().get_bits::<1>(127));
+        // The adder, from registers only.
+        self.alu_a.next = 0.into();
+        if self.sa.q.val() == 0 {
+            self.alu_a.next = self.x.q.val();
+        }
+        if self.sa.q.val() == 1 {
+            self.alu_a.next = self.x.q.val() << 1;
+        }
+        if self.sa.q.val() == 2 {
+            self.alu_a.next = self.acc.q.val();
+        }
+        if self.ia.q.val() {
+            self.alu_a.next = !self.alu_a.val();
+        }
+        self.alu_b.next = 0.into();
+        if self.sb.q.val() == 0 {
+            self.alu_b.next = self.opb.val();
+        }
+        if self.sb.q.val() == 1 {
+            self.alu_b.next = self.x.q.val();
+        }
+        if self.ib.q.val() {
+            self.alu_b.next = !self.alu_b.val();
+        }
+        self.s0.next = bit_cast::<33, 32>(self.alu_a.val().get_bits::<32>(0))
+            + bit_cast::<33, 32>(self.alu_b.val().get_bits::<32>(0))
+            + bit_cast::<33, 1>(self.ci.q.val().into());
+        self.s1.next = bit_cast::<33, 32>(self.alu_a.val().get_bits::<32>(32))
+            + bit_cast::<33, 32>(self.alu_b.val().get_bits::<32>(32))
+            + bit_cast::<33, 1>(self.car.q.val().get_bits::<1>(0));
+        self.s2.next = bit_cast::<33, 32>(self.alu_a.val().get_bits::<32>(64))
+            + bit_cast::<33, 32>(self.alu_b.val().get_bits::<32>(64))
+            + bit_cast::<33, 1>(self.car.q.val().get_bits::<1>(1));
+        self.s3.next = bit_cast::<33, 32>(self.alu_a.val().get_bits::<32>(96))
+            + bit_cast::<33, 32>(self.alu_b.val().get_bits::<32>(96))
+            + bit_cast::<33, 1>(self.car.q.val().get_bits::<1>(2));
+        self.sum.next = bit_cast::<128, 32>(self.s0.val().get_bits::<32>(0))
+            | (bit_cast::<128, 32>(self.s1.val().get_bits::<32>(0)) << 32)
+            | (bit_cast::<128, 32>(self.s2.val().get_bits::<32>(0)) << 64)
+            | (bit_cast::<128, 32>(self.s3.val().get_bits::<32>(0)) << 96);
+        self.carries.next = bit_cast::<3, 1>(self.s0.val().get_bits::<1>(32))
+            | (bit_cast::<3, 1>(self.s1.val().get_bits::<1>(32)) << 1)
+            | (bit_cast::<3, 1>(self.s2.val().get_bits::<1>(32)) << 2);
+
+        // The multiplier for the next clock: the second operand entering, else y shifted
+        // (zero after the all-ones step).
+        self.all_ones.next = !(!self.y.q.val()).any();
+        self.ny.next = (self.y.q.val() >> 1).replace_bit(127, self.y.q.val().get_bit(127));
+        if self.all_ones.val() {
+            self.ny.next = 0.into();
+        }
+        self.my.next = self.ny.val();
+        if self.state.q.val() == ProgramState::Exec {
+            self.my.next = self.opb.val();
+        }
+        self.my_ones.next = !(!self.my.val()).any();
+
+        // The divider: the remainder shifted, the dividend's next bit in (the dividend
+        // shifts out of `acc`).
+        self.rem2.next = (self.rem.q.val() << 1) | bit_cast::<65, 1>(self.acc.q.val().get_bits::<1>(127));
+        // (The complements in signals of their own width: Verilog would widen the operand
+        // of `~` to the sum's width first.)
+        self.not_y_lo.next = !self.y.q.val().get_bits::<33>(0);
+        self.not_y_hi.next = !bit_cast::<32, 31>(self.y.q.val().get_bits::<31>(33));
+        self.div_lo.next =
+            bit_cast::<34, 33>(self.rem2.val().get_bits::<33>(0)) + bit_cast::<34, 33>(self.not_y_lo.val()) + 1;
+        self.div_hi.next = bit_cast::<33, 32>(self.rem2.val().get_bits::<32>(33))
+            + bit_cast::<33, 32>(self.not_y_hi.val())
+            + bit_cast::<33, 1>(self.lo_c.q.val().into());
+        self.wide.next = self.y.q.val().get_bits::<64>(64).any();
+        self.add_sum.next = self.rf.read_data.val().get_bits::<48>(0) + self.add_v.q.val();
 
         self.rf.read_address.next = self.ins.q.val().get_bits::<6>(16);
         self.rf.write_enable.next = false;
         self.rf.write_address.next = self.ins.q.val().get_bits::<6>(4);
         self.rf.write_data.next = self.acc.q.val();
 
+        self.sel_a.next = 0.into();
+        self.sel_b.next = 2.into();
+        self.inva.next = false;
+        self.invb.next = false;
+        self.cin.next = false;
+        self.issue.next = false;
+        self.then.next = ProgramState::Write;
+        self.pend.d.next = false;
         match self.state.q.val() {
             ProgramState::Idle => {
-                // An add: the register's value (read now) plus x (the value, latched now).
-                self.sel_a.next = 0.into();
                 self.rf.read_address.next = self.read_addr.val();
                 if self.add.val() {
                     self.rf.read_address.next = self.add_addr.val();
                 }
-            }
-            ProgramState::Fetch => {
-                self.rf.read_address.next = self.prog.data.val().get_bits::<6>(10);
-            }
-            ProgramState::Exec => {
-                if self.kind.val() == 0 {
-                    self.sel_a.next = 0.into();
-                }
-                if self.kind.val() == 1 {
-                    self.sel_a.next = 0.into();
-                    self.inv.next = true;
-                    self.cin.next = true;
-                }
-                if self.kind.val() == 2 {
-                    self.inv.next = true;
-                    self.cin.next = true;
-                }
-                if self.kind.val() == 4 {
-                    self.sel_b.next = 1.into();
-                }
-                if (self.kind.val() == 6) || (self.kind.val() == 8) {
-                    self.sel_a.next = 0.into();
-                    self.inv.next = true;
-                }
-                if self.kind.val() == 7 {
-                    self.sel_a.next = 0.into();
-                    self.sel_b.next = 1.into();
-                }
-            }
-            ProgramState::Mul => {
-                self.sel_a.next = 1.into();
-                self.sel_b.next = 1.into();
-                self.inv.next = self.neg.q.val();
-                self.cin.next = self.neg.q.val();
-            }
-            ProgramState::Round => {
-                self.sel_a.next = 1.into();
-                self.sel_b.next = 3.into();
-            }
-            ProgramState::DivAbs => {
-                self.sel_b.next = 1.into();
-                self.inv.next = true;
-                self.cin.next = true;
-            }
-            ProgramState::Div => {
-                if self.cnt.q.val().any() {
-                    self.sel_a.next = 2.into();
-                    self.sel_b.next = 2.into();
-                    self.inv.next = true;
-                    self.cin.next = true;
-                } else {
-                    self.sel_b.next = 1.into();
-                    self.inv.next = self.neg.q.val();
-                    self.cin.next = self.neg.q.val();
-                }
-            }
-            ProgramState::ClampNeg => {
-                // -B, or a saturation's ~B = -B - 1.
-                self.inv.next = true;
-                self.cin.next = self.kind.val() != 8;
-            }
-            ProgramState::ClampLow => {
-                self.sel_a.next = 0.into();
-                self.sel_b.next = 2.into();
-                self.inv.next = true;
-                self.cin.next = true;
-            }
-            ProgramState::StopTest => {
-                self.sel_a.next = 1.into();
-                self.inv.next = true;
-                self.cin.next = true;
-            }
-            ProgramState::Take => {
-                self.sel_b.next = self.take.q.val();
-            }
-            _ => {}
-        }
-
-        self.alu_a.next = 0.into();
-        if self.sel_a.val() == 0 {
-            self.alu_a.next =
-                bit_cast::<129, 128>(self.x.q.val()) | (bit_cast::<129, 1>(self.x.q.val().get_bits::<1>(127)) << 128);
-        }
-        if self.sel_a.val() == 1 {
-            self.alu_a.next = bit_cast::<129, 128>(self.acc.q.val())
-                | (bit_cast::<129, 1>(self.acc.q.val().get_bits::<1>(127)) << 128);
-        }
-        if self.sel_a.val() == 2 {
-            self.alu_a.next = self.rem2.val();
-        }
-        self.alu_b.next = 1.into();
-        if self.sel_b.val() == 0 {
-            self.alu_b.next =
-                bit_cast::<129, 128>(self.opb.val()) | (bit_cast::<129, 1>(self.opb.val().get_bits::<1>(127)) << 128);
-        }
-        if self.sel_b.val() == 1 {
-            self.alu_b.next =
-                bit_cast::<129, 128>(self.x.q.val()) | (bit_cast::<129, 1>(self.x.q.val().get_bits::<1>(127)) << 128);
-        }
-        if self.sel_b.val() == 2 {
-            // A divisor is unsigned; a clamp's `-bound` is not.
-            self.alu_b.next = bit_cast::<129, 128>(self.y.q.val());
-            if self.kind.val() != 3 {
-                self.alu_b.next = bit_cast::<129, 128>(self.y.q.val())
-                    | (bit_cast::<129, 1>(self.y.q.val().get_bits::<1>(127)) << 128);
-            }
-        }
-        if self.inv.val() {
-            self.alu_b.next = !self.alu_b.val();
-        }
-        self.alu.next = self.alu_a.val() + self.alu_b.val() + bit_cast::<129, 1>(self.cin.val().into());
-        self.alu_sra.next = self.alu.val().get_bits::<128>(1);
-        self.acc_sra.next = (self.acc.q.val() >> 1).replace_bit(127, self.acc.q.val().get_bit(127));
-
-        self.pend.d.next = false;
-        match self.state.q.val() {
-            ProgramState::Idle => {
                 if self.load.val() {
                     self.rf.write_enable.next = true;
                     self.rf.write_address.next = self.load_addr.val();
@@ -348,15 +394,15 @@ impl Logic for PolishProgram {
                 self.pend.d.next = self.add.val();
                 if self.add.val() {
                     self.pend_addr.d.next = self.add_addr.val();
-                    self.x.d.next = bit_cast::<128, 48>(self.add_data.val());
-                    if self.add_data.val().get_bit(47) {
-                        self.x.d.next = bit_cast::<128, 48>(self.add_data.val()) - (bits::<128>(1) << 48);
-                    }
+                    self.add_v.d.next = self.add_data.val();
                 }
                 if self.pend.q.val() {
                     self.rf.write_enable.next = true;
                     self.rf.write_address.next = self.pend_addr.q.val();
-                    self.rf.write_data.next = self.alu.val().get_bits::<128>(0);
+                    self.rf.write_data.next = bit_cast::<128, 48>(self.add_sum.val());
+                    if self.add_sum.val().get_bit(47) {
+                        self.rf.write_data.next = bit_cast::<128, 48>(self.add_sum.val()) | ((!bits::<128>(0)) << 48);
+                    }
                 }
                 if self.go.val() {
                     self.pc.d.next = self.entry.val();
@@ -365,6 +411,7 @@ impl Logic for PolishProgram {
                 }
             }
             ProgramState::Fetch => {
+                self.rf.read_address.next = self.prog.data.val().get_bits::<6>(10);
                 self.ins.d.next = self.prog.data.val();
                 self.state.d.next = ProgramState::Operand;
             }
@@ -374,63 +421,99 @@ impl Logic for PolishProgram {
             }
             ProgramState::Exec => {
                 self.cnt.d.next = bit_cast::<8, 7>(self.ins.q.val().get_bits::<7>(22));
-                self.state.d.next = ProgramState::Write;
-                if self.kind.val() < 2 {
-                    self.acc.d.next = self.alu.val().get_bits::<128>(0);
+                // x + B: an add; a subtract's x + ~B + 1; a clamp's and a saturation's test
+                // x + ~B = x - B - 1; a stop's 2 x + ~B + 1; a shift's x + 0.
+                self.sel_b.next = 0.into();
+                self.issue.next = true;
+                if self.kind.val() == 1 {
+                    self.invb.next = true;
+                    self.cin.next = true;
                 }
                 if self.kind.val() == 2 {
-                    // x times |B|, subtracting when B is negative.
-                    self.neg.d.next = self.opb.val().get_bit(127);
-                    self.y.d.next = self.opb.val();
-                    if self.opb.val().get_bit(127) {
-                        self.y.d.next = self.alu.val().get_bits::<128>(0);
-                    }
+                    // A product: acc = 0, the multiplier's first bit.
+                    self.issue.next = false;
                     self.acc.d.next = 0.into();
+                    self.car.d.next = 0.into();
+                    self.y.d.next = self.opb.val();
                     self.state.d.next = ProgramState::Mul;
                 }
                 if self.kind.val() == 3 {
+                    self.issue.next = false;
                     self.y.d.next = self.opb.val();
                     self.state.d.next = ProgramState::ShiftLeft;
                 }
                 if self.kind.val() == 4 {
-                    self.acc.d.next = self.alu.val().get_bits::<128>(0);
-                    self.state.d.next = ProgramState::Round;
+                    self.sel_b.next = 2.into();
+                    self.then.next = ProgramState::Round;
                 }
                 if self.kind.val() == 5 {
+                    self.issue.next = false;
                     self.x.d.next = bit_cast::<128, 6>(self.ins.q.val().get_bits::<6>(10));
                     self.state.d.next = ProgramState::ShiftLeft;
                 }
                 if (self.kind.val() == 6) || (self.kind.val() == 8) {
-                    // x + ~B = x - B - 1 is not negative: x > B, the result is B.
-                    self.take.d.next = 0.into();
-                    self.state.d.next = ProgramState::Take;
-                    if self.alu.val().get_bit(128) {
-                        self.state.d.next = ProgramState::ClampNeg;
-                    }
+                    self.invb.next = true;
+                    self.then.next = ProgramState::ClampTest;
                 }
                 if self.kind.val() == 7 {
-                    self.acc.d.next = self.alu.val().get_bits::<128>(0);
-                    self.state.d.next = ProgramState::StopTest;
+                    self.sel_a.next = 1.into();
+                    self.invb.next = true;
+                    self.cin.next = true;
+                    self.then.next = ProgramState::StopTest;
+                }
+            }
+            ProgramState::Alu => {
+                // The result, its pending carries, and the 129-bit result's sign from the
+                // operands' and the carry out of the top (at most one carry leaves the top
+                // over the add and its flush).
+                self.acc.d.next = self.sum.val();
+                self.car.d.next = self.carries.val();
+                self.sign.d.next =
+                    self.alu_a.val().get_bit(127) ^ self.alu_b.val().get_bit(127) ^ self.s3.val().get_bit(32);
+                self.sa.d.next = 2.into();
+                self.sb.d.next = 2.into();
+                self.ia.d.next = false;
+                self.ib.d.next = false;
+                self.ci.d.next = false;
+                self.state.d.next = ProgramState::Flush;
+            }
+            ProgramState::Flush => {
+                // acc + 0 with the pending carries, until none is left.
+                if self.car.q.val().any() {
+                    self.acc.d.next = self.sum.val();
+                    self.car.d.next = self.carries.val();
+                    self.sign.d.next = self.sign.q.val() ^ self.s3.val().get_bit(32);
+                } else {
+                    self.state.d.next = self.ret.q.val();
                 }
             }
             ProgramState::Mul => {
-                if self.y.q.val().any() {
-                    if self.y.q.val().get_bit(0) {
-                        self.acc.d.next = self.alu.val().get_bits::<128>(0);
-                    }
-                    self.x.d.next = self.x.q.val() << 1;
-                    self.y.d.next = self.y.q.val() >> 1;
+                // This clock's bit (set by the clock before): acc + x, acc + ~x + 1 (the
+                // rest all ones) or acc + 0, the segment carries pending.
+                if self.mdone.q.val() {
+                    self.sa.d.next = 2.into();
+                    self.sb.d.next = 2.into();
+                    self.ib.d.next = false;
+                    self.ci.d.next = false;
+                    self.ret.d.next = ProgramState::Round;
+                    self.state.d.next = ProgramState::Flush;
                 } else {
-                    self.state.d.next = ProgramState::Round;
+                    self.acc.d.next = self.sum.val();
+                    self.car.d.next = self.carries.val();
+                    self.x.d.next = self.x.q.val() << 1;
+                    self.y.d.next = self.ny.val();
                 }
             }
             ProgramState::Round => {
-                if self.cnt.q.val().any() {
+                if (self.cnt.q.val() == 1) && (self.kind.val() == 2) {
+                    // A product's last step, u = acc: (u >> 1) + (u & 1).
+                    self.acc.d.next = self.acc_sra.val();
+                    self.sel_a.next = 2.into();
+                    self.cin.next = self.acc.q.val().get_bit(0);
+                    self.issue.next = true;
+                } else if self.cnt.q.val().any() {
                     self.cnt.d.next = self.cnt.q.val() - 1;
                     self.acc.d.next = self.acc_sra.val();
-                    if (self.cnt.q.val() == 1) && (self.kind.val() == 2) {
-                        self.acc.d.next = self.alu_sra.val();
-                    }
                 } else {
                     self.state.d.next = ProgramState::Write;
                 }
@@ -439,51 +522,74 @@ impl Logic for PolishProgram {
                 if self.cnt.q.val().any() {
                     self.cnt.d.next = self.cnt.q.val() - 1;
                     self.x.d.next = self.x.q.val() << 1;
-                } else if self.kind.val() == 3 {
-                    self.state.d.next = ProgramState::DivAbs;
                 } else {
-                    self.take.d.next = 1.into();
-                    self.state.d.next = ProgramState::Take;
+                    // A constant: x + 0; a dividend's magnitude: x or ~x + 1.
+                    self.issue.next = true;
+                    if self.kind.val() == 3 {
+                        self.neg.d.next = self.x.q.val().get_bit(127);
+                        self.inva.next = self.x.q.val().get_bit(127);
+                        self.cin.next = self.x.q.val().get_bit(127);
+                        self.then.next = ProgramState::DivStart;
+                    }
                 }
             }
-            ProgramState::DivAbs => {
-                self.neg.d.next = self.x.q.val().get_bit(127);
-                if self.x.q.val().get_bit(127) {
-                    self.x.d.next = self.alu.val().get_bits::<128>(0);
-                }
+            ProgramState::DivStart => {
                 self.rem.d.next = 0.into();
                 self.cnt.d.next = 128.into();
-                self.state.d.next = ProgramState::Div;
+                self.state.d.next = ProgramState::DivLo;
             }
-            ProgramState::Div => {
-                if self.cnt.q.val().any() {
-                    self.cnt.d.next = self.cnt.q.val() - 1;
-                    if self.alu.val().get_bit(128) {
-                        self.rem.d.next = self.rem2.val();
-                        self.x.d.next = self.x.q.val() << 1;
-                    } else {
-                        self.rem.d.next = self.alu.val();
-                        self.x.d.next = (self.x.q.val() << 1) | bits::<128>(1);
-                    }
-                } else {
-                    self.acc.d.next = self.alu.val().get_bits::<128>(0);
-                    self.state.d.next = ProgramState::Write;
+            ProgramState::DivLo => {
+                self.lo.d.next = self.div_lo.val().get_bits::<33>(0);
+                self.lo_c.d.next = self.div_lo.val().get_bit(33);
+                self.state.d.next = ProgramState::DivHi;
+            }
+            ProgramState::DivHi => {
+                // No borrow: the divisor goes, the quotient bit is 1 (always, for a divisor
+                // wider than 64 bits: a quotient of all ones, as for zero). After the last
+                // bit, the quotient's sign: acc or ~acc + 1.
+                self.cnt.d.next = self.cnt.q.val() - 1;
+                self.state.d.next = ProgramState::DivLo;
+                if self.cnt.q.val() == 1 {
+                    self.sel_a.next = 2.into();
+                    self.inva.next = self.neg.q.val();
+                    self.cin.next = self.neg.q.val();
+                    self.issue.next = true;
+                }
+                self.rem.d.next = self.rem2.val();
+                self.acc.d.next = self.acc.q.val() << 1;
+                if self.div_hi.val().get_bit(32) || self.wide.val() {
+                    self.acc.d.next = (self.acc.q.val() << 1) | bits::<128>(1);
+                }
+                if self.div_hi.val().get_bit(32) && !self.wide.val() {
+                    self.rem.d.next = (bit_cast::<65, 32>(self.div_hi.val().get_bits::<32>(0)) << 33)
+                        | bit_cast::<65, 33>(self.lo.q.val());
                 }
             }
-            ProgramState::ClampNeg => {
-                self.y.d.next = self.alu.val().get_bits::<128>(0);
-                self.state.d.next = ProgramState::ClampLow;
+            ProgramState::ClampTest => {
+                // x - B - 1 is not negative: x > B, the result is 0 + B. Else the low bound's
+                // test: x + B (a saturation's x + B + 1) below zero.
+                self.issue.next = true;
+                self.sel_a.next = 3.into();
+                self.sel_b.next = 0.into();
+                if self.sign.q.val() {
+                    self.sel_a.next = 0.into();
+                    self.cin.next = self.kind.val() == 8;
+                    self.then.next = ProgramState::ClampLow;
+                }
             }
             ProgramState::ClampLow => {
-                // x - (-B) < 0: the result is -B, else x.
-                self.take.d.next = 1.into();
-                if self.alu.val().get_bit(128) {
-                    self.take.d.next = 2.into();
+                // Below the low bound: the result is 0 + ~B + 1 = -B (a saturation's ~B);
+                // else x + 0.
+                self.issue.next = true;
+                if self.sign.q.val() {
+                    self.sel_a.next = 3.into();
+                    self.sel_b.next = 0.into();
+                    self.invb.next = true;
+                    self.cin.next = self.kind.val() != 8;
                 }
-                self.state.d.next = ProgramState::Take;
             }
             ProgramState::StopTest => {
-                if self.alu.val().get_bit(128) {
+                if self.sign.q.val() {
                     self.fail.d.next = true;
                     self.state.d.next = ProgramState::Idle;
                 } else if self.ins.q.val().get_bit(29) {
@@ -492,10 +598,6 @@ impl Logic for PolishProgram {
                     self.pc.d.next = self.pc.q.val() + 1;
                     self.state.d.next = ProgramState::Fetch;
                 }
-            }
-            ProgramState::Take => {
-                self.acc.d.next = self.alu.val().get_bits::<128>(0);
-                self.state.d.next = ProgramState::Write;
             }
             ProgramState::Write => {
                 self.rf.write_enable.next = true;
@@ -507,8 +609,33 @@ impl Logic for PolishProgram {
                 }
             }
         }
+        // An issued add: its controls for the next clock's `Alu`.
+        if self.issue.val() {
+            self.sa.d.next = self.sel_a.val();
+            self.sb.d.next = self.sel_b.val();
+            self.ia.d.next = self.inva.val();
+            self.ib.d.next = self.invb.val();
+            self.ci.d.next = self.cin.val();
+            self.ret.d.next = self.then.val();
+            self.state.d.next = ProgramState::Alu;
+        }
+        // Entering or in a product: the next clock's multiplier bit.
+        if ((self.state.q.val() == ProgramState::Exec) && (self.kind.val() == 2))
+            || ((self.state.q.val() == ProgramState::Mul) && !self.mdone.q.val())
+        {
+            self.mdone.d.next = !self.my.val().any();
+            self.sa.d.next = 2.into();
+            self.sb.d.next = 2.into();
+            if self.my.val().get_bit(0) || self.my_ones.val() {
+                self.sb.d.next = 1.into();
+            }
+            self.ia.d.next = false;
+            self.ib.d.next = self.my_ones.val();
+            self.ci.d.next = self.my_ones.val();
+        }
         if self.reset.val() {
             self.state.d.next = ProgramState::Idle;
+            self.car.d.next = 0.into();
             self.fail.d.next = false;
             self.pend.d.next = false;
         }
