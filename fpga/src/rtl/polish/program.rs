@@ -7,22 +7,23 @@
 //!
 //! No DSP48A1, and no carry chain longer than 48 bits, so that the block stays within the
 //! board's 20 logic levels (docs/polish.md):
-//! - **a segmented adder**: 32 bits a clock over four clocks, the operands in registers
-//!   `oa`, `ob` shifting down and the sum shifting into `acc`, the carry registered; the
-//!   129-bit result's sign in `sign`. Adds, subtracts, compares, a product's resolve and
-//!   its rounding, a dividend's magnitude and a quotient's sign take it;
-//! - **a carry-save multiplier**: the product accumulates in `acc` (sums) and `cv`
-//!   (carries), a multiplier bit a clock with no carry chain, over the signed multiplier's
-//!   bits until the rest is all zeros or all ones (then one subtract); one resolve at the
-//!   end;
+//! - **one 128-bit adder in four 32-bit segments**, each segment's carry in from a
+//!   register (`car`): `Alu` adds the operands, `Flush` adds the pending carries until none
+//!   is left; the 129-bit result's sign in `sign`. The operand selects and inversions are
+//!   registers (`sa`, `sb`, `ia`, `ib`, `ci`) set by the state before, so no decode sits in
+//!   front of the chain;
+//! - **the multiply on the same adder**, a multiplier bit a clock with the segment carries
+//!   left pending, over the signed multiplier's bits until the rest is all zeros or all
+//!   ones (then one subtract), one flush at the end;
 //! - **a restoring divider** over a divisor of at most 64 bits
 //!   ([`crate::polish::program::DIVISOR_BITS`]): the 65-bit trial subtract in two 33-bit
-//!   halves, two clocks a quotient bit;
+//!   halves, two clocks a quotient bit, the dividend shifting out of `acc` as the quotient
+//!   shifts in;
 //! - **the add port's own 48-bit adder** ([`crate::polish::program::add_port`]), one add a
 //!   clock.
 //!
-//! An instruction takes `fetch`, `operand`, `exec` and `write` plus its unit's clocks (an
-//! add 8 clocks).
+//! An add instruction takes `fetch`, `operand`, `exec`, `alu`, `flush` and `write` (a clock
+//! more for each segment a carry still has to cross); the others add their unit's clocks.
 
 use crate::polish::program::{
     ADD_BITS, DIVISOR_BITS, FIELD_A, FIELD_B, FIELD_D, FIELD_K, FIELD_LAST, PROGRAM_WORDS, REG_BITS,
