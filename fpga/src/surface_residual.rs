@@ -18,6 +18,9 @@
 //! `|q_k - p_k| >= 2^10` (impossible when `in_dist` is the squared distance of `q` to `p`
 //! and below `CAP_D2`) also gives `CAP_D2`: the block keeps 10-bit magnitudes.
 //!
+//! **For the polish.** Beside each residual: the signed residual before squaring
+//! ([`block_signed_residual`]), the transformed point and the normal stored at the index.
+//!
 //! **Cost.** An accumulator adds `nn_resid` at every edge that presents `nn_valid`; at an
 //! edge that presents `cost_valid`, `cost` is the accumulator's sum including a result
 //! presented at the same edge (mod 2^48), and the accumulator restarts from 0. `cost`
@@ -94,6 +97,13 @@ pub struct SurfaceOutputs {
     pub nn_dist: u64,
     /// Its residual (21 bits, at most `CAP_D2`).
     pub nn_resid: u32,
+    /// Its signed residual before squaring ([`block_signed_residual`], 14 bits two's
+    /// complement).
+    pub nn_s: u16,
+    /// Its transformed scan point (`in_point`, 48 bits).
+    pub nn_point: u64,
+    /// The normal stored at its index (48 bits).
+    pub nn_normal: u64,
     /// End of a particle: `cost` is its sum of residuals.
     pub cost_valid: bool,
     /// The last particle's cost (48 bits).
@@ -107,7 +117,25 @@ struct Slot {
     index: u16,
     dist: u64,
     resid: u32,
+    s: u16,
+    point: u64,
+    normal: u64,
     cost_valid: bool,
+}
+
+/// The block's signed residual before squaring: `rnd_14(sum_k n_k (q_k - p_k))` with each
+/// difference's magnitude taken modulo `2^10` (the block keeps 10-bit magnitudes), as 14
+/// bits two's complement. For a result below `CAP_D2` it is
+/// [`crate::surface::signed_residual`], the polish's `s`.
+pub fn block_signed_residual(q: FxPoint, p: FxPoint, n: FxNormal) -> u16 {
+    let t: i64 = (0..3)
+        .map(|k| {
+            let d = q[k] as i64 - p[k] as i64;
+            d.signum() * (d.abs() & 0x3ff) * n[k] as i64
+        })
+        .sum::<i64>()
+        + (1 << 13);
+    ((t >> 14) & 0x3fff) as u16
 }
 
 /// The block's residual of `q` against the stored `p` and `n` (see the module doc): the
@@ -179,6 +207,9 @@ impl SurfaceResidualModel {
             index,
             dist,
             resid: block_residual(q, p, n, dist) as u32,
+            s: block_signed_residual(q, p, n),
+            point: i.in_point & W48,
+            normal: self.normals[index as usize],
             cost_valid: i.in_cost_valid,
         };
         if i.point_we {
@@ -193,6 +224,9 @@ impl SurfaceResidualModel {
         self.out.nn_index = s.index;
         self.out.nn_dist = s.dist;
         self.out.nn_resid = s.resid;
+        self.out.nn_s = s.s;
+        self.out.nn_point = s.point;
+        self.out.nn_normal = s.normal;
         self.out.cost_valid = s.cost_valid;
         if s.valid {
             self.acc = (self.acc + s.resid as u64) & COST_MASK;
@@ -244,6 +278,13 @@ mod tests {
         }
         let r: Vec<u32> = outs.iter().filter(|o| o.nn_valid).map(|o| o.nn_resid).collect();
         assert_eq!(r, vec![900, 400, CAP_D2 as u32]);
+        // Beside each residual, its signed s, its point and the stored normal.
+        let valid: Vec<&SurfaceOutputs> = outs.iter().filter(|o| o.nn_valid).collect();
+        let s: Vec<u16> = valid.iter().map(|o| o.nn_s).collect();
+        assert_eq!(s[..2], [30, (-20i16 as u16) & 0x3fff]);
+        for (o, q) in valid.iter().zip(qs) {
+            assert_eq!((o.nn_point, o.nn_normal), (pack_point(q), pack_point([0, 0, ONE])));
+        }
         let last = outs.last().unwrap();
         assert_eq!(last.cost, 1300 + CAP_D2);
     }
@@ -302,6 +343,10 @@ mod tests {
             let n: FxNormal = [0; 3].map(|_| r.next_u64() as i16);
             let d2 = dist2(q, p);
             assert_eq!(block_residual(q, p, n, d2), residual(q, p, n, d2));
+            if d2 < CAP_D2 {
+                let s = crate::surface::signed_residual(q, p, n);
+                assert_eq!(block_signed_residual(q, p, n), (s as u16) & 0x3fff, "{q:?} {p:?} {n:?}");
+            }
         }
     }
 }

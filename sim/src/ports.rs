@@ -112,6 +112,9 @@ pub const SURFACE_RESIDUAL_PORTS: &[PortSpec] = &[
     ("nn_index", false, 12),
     ("nn_dist", false, 34),
     ("nn_resid", false, 21),
+    ("nn_s", false, 14),
+    ("nn_point", false, 48),
+    ("nn_normal", false, 48),
     ("cost_valid", false, 1),
     ("cost", false, 48),
 ];

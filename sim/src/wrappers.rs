@@ -595,14 +595,17 @@ impl VerilatedSurfaceResidual {
 
     /// The output ports now.
     pub fn outputs(&self) -> SurfaceOutputs {
-        let o = self.core.outputs::<6>();
+        let o = self.core.outputs::<9>();
         SurfaceOutputs {
             nn_valid: o[0] != 0,
             nn_index: o[1] as u16,
             nn_dist: o[2],
             nn_resid: o[3] as u32,
-            cost_valid: o[4] != 0,
-            cost: o[5],
+            nn_s: o[4] as u16,
+            nn_point: o[5],
+            nn_normal: o[6],
+            cost_valid: o[7] != 0,
+            cost: o[8],
         }
     }
 }
@@ -615,7 +618,7 @@ impl Default for VerilatedSurfaceResidual {
 
 /// Output port names of the surface residual stage in the order
 /// [`SurfaceLockstep`](crate::SurfaceLockstep) compares them.
-pub const SURFACE_OUTPUT_PORTS: [&str; 6] = ports::outputs(&[ports::SURFACE_RESIDUAL_PORTS]);
+pub const SURFACE_OUTPUT_PORTS: [&str; 9] = ports::outputs(&[ports::SURFACE_RESIDUAL_PORTS]);
 
 /// Output port names of the pipeline in the order [`Lockstep`](crate::Lockstep) compares them.
 pub const OUTPUT_PORTS: [&str; 7] = ports::outputs(&[ports::PIPELINE_PORTS]);
@@ -861,7 +864,17 @@ impl Rtl for VerilatedSurfaceResidual {
     type Reference = SurfaceResidualModel;
     const OUTPUT_PORTS: &'static [&'static str] = &SURFACE_OUTPUT_PORTS;
     fn port_values(o: &SurfaceOutputs) -> Vec<u64> {
-        vec![o.nn_valid as u64, o.nn_index as u64, o.nn_dist, o.nn_resid as u64, o.cost_valid as u64, o.cost]
+        vec![
+            o.nn_valid as u64,
+            o.nn_index as u64,
+            o.nn_dist,
+            o.nn_resid as u64,
+            o.nn_s as u64,
+            o.nn_point,
+            o.nn_normal,
+            o.cost_valid as u64,
+            o.cost,
+        ]
     }
     fn new_reference(&self) -> SurfaceResidualModel {
         SurfaceResidualModel::new()

@@ -21,6 +21,9 @@
 //!    24-bit halves with a pending carry) adds it if valid, and on `cost_valid` hands its
 //!    sum to a snapshot and restarts;
 //! 10. out: the ports; `cost` = the snapshot's halves joined (on `cost_valid`).
+//!
+//! Beside the residual, for the polish's pass: the signed `s` (from H), the scan point `q`
+//! and the stored normal `n` (from A and B, carried along), each with its result.
 
 use super::neighbour_lane::BankRam;
 use super::signed_bit_cast_safe;
@@ -110,6 +113,13 @@ pub struct SurfaceResidual {
     pub nn_dist: Signal<Out, Bits<34>>,
     /// Its residual.
     pub nn_resid: Signal<Out, Bits<21>>,
+    /// Its signed residual `s` before squaring (14 bits,
+    /// [`crate::surface_residual::block_signed_residual`]), for the polish's pass.
+    pub nn_s: Signal<Out, Bits<14>>,
+    /// Its transformed scan point `q` (`in_point` delayed), for the polish's pass.
+    pub nn_point: Signal<Out, Bits<48>>,
+    /// The normal stored at its index, for the polish's pass.
+    pub nn_normal: Signal<Out, Bits<48>>,
     /// `in_cost_valid`, `SURFACE_LATENCY` edges later.
     pub cost_valid: Signal<Out, Bit>,
     /// The sum of the residuals since the previous `cost_valid` (48 bits, wrapping).
@@ -129,6 +139,9 @@ pub struct SurfaceResidual {
     pcv: [DFF<Bit>; 9],
     // Stages B (index 0) to H (index 6).
     pcap: [DFF<Bit>; 7],
+    // The scan point and the normal, stages B (index 0) to I (index 7).
+    pq: [DFF<Bits<48>>; 8],
+    pn: [DFF<Bits<48>>; 8],
     a_q: DFF<Bits<48>>,
     b_mag: [DFF<Bits<10>>; 3],
     b_m: [DFF<Bits<17>>; 3],
@@ -138,7 +151,9 @@ pub struct SurfaceResidual {
     f_sum: [DFF<Bits<28>>; 2],
     g_t: DFF<Bits<28>>,
     h_lsb: DFF<Bit>,
+    h_s: DFF<Bits<14>>,
     i_r: DFF<Bits<21>>,
+    i_s: DFF<Bits<14>>,
     acc_lo: DFF<Bits<24>>,
     acc_hi: DFF<Bits<24>>,
     acc_c: DFF<Bit>,
@@ -149,6 +164,9 @@ pub struct SurfaceResidual {
     o_idx: DFF<Bits<12>>,
     o_dist: DFF<Bits<34>>,
     o_r: DFF<Bits<21>>,
+    o_s: DFF<Bits<14>>,
+    o_q: DFF<Bits<48>>,
+    o_n: DFF<Bits<48>>,
     o_cv: DFF<Bit>,
     o_cost: DFF<Bits<48>>,
     qq: [Signal<Local, Signed<16>>; 3],
@@ -199,6 +217,9 @@ impl SurfaceResidual {
             nn_index: Default::default(),
             nn_dist: Default::default(),
             nn_resid: Default::default(),
+            nn_s: Default::default(),
+            nn_point: Default::default(),
+            nn_normal: Default::default(),
             cost_valid: Default::default(),
             cost: Default::default(),
             cap_d2: Constant::new(CAP_D2.into()),
@@ -214,6 +235,8 @@ impl SurfaceResidual {
             pdist: Default::default(),
             pcv: Default::default(),
             pcap: Default::default(),
+            pq: Default::default(),
+            pn: Default::default(),
             a_q: Default::default(),
             b_mag: Default::default(),
             b_m: Default::default(),
@@ -223,7 +246,9 @@ impl SurfaceResidual {
             f_sum: Default::default(),
             g_t: Default::default(),
             h_lsb: Default::default(),
+            h_s: Default::default(),
             i_r: Default::default(),
+            i_s: Default::default(),
             acc_lo: Default::default(),
             acc_hi: Default::default(),
             acc_c: Default::default(),
@@ -234,6 +259,9 @@ impl SurfaceResidual {
             o_idx: Default::default(),
             o_dist: Default::default(),
             o_r: Default::default(),
+            o_s: Default::default(),
+            o_q: Default::default(),
+            o_n: Default::default(),
             o_cv: Default::default(),
             o_cost: Default::default(),
             qq: Default::default(),
@@ -264,8 +292,8 @@ impl Logic for SurfaceResidual {
     #[hdl_gen]
     fn update(&mut self) {
         dff_setup!(
-            self, clock, a_q, g_t, h_lsb, i_r, acc_lo, acc_hi, acc_c, snap_lo, snap_hi, snap_c, o_v, o_idx, o_dist,
-            o_r, o_cv, o_cost
+            self, clock, a_q, g_t, h_lsb, h_s, i_r, i_s, acc_lo, acc_hi, acc_c, snap_lo, snap_hi, snap_c, o_v, o_idx,
+            o_dist, o_r, o_s, o_q, o_n, o_cv, o_cost
         );
         for s in 0..9 {
             self.pv[s].clock.next = self.clock.val();
@@ -275,6 +303,10 @@ impl Logic for SurfaceResidual {
         }
         for s in 0..7 {
             self.pcap[s].clock.next = self.clock.val();
+        }
+        for s in 0..8 {
+            self.pq[s].clock.next = self.clock.val();
+            self.pn[s].clock.next = self.clock.val();
         }
         for k in 0..3 {
             self.b_mag[k].clock.next = self.clock.val();
@@ -300,6 +332,9 @@ impl Logic for SurfaceResidual {
         self.nn_index.next = self.o_idx.q.val();
         self.nn_dist.next = self.o_dist.q.val();
         self.nn_resid.next = self.o_r.q.val();
+        self.nn_s.next = self.o_s.q.val();
+        self.nn_point.next = self.o_q.q.val();
+        self.nn_normal.next = self.o_n.q.val();
         self.cost_valid.next = self.o_cv.q.val();
         self.cost.next = self.o_cost.q.val();
         // The control fields, stage to stage.
@@ -315,6 +350,13 @@ impl Logic for SurfaceResidual {
         }
         for s in 1..6 {
             self.pcap[s].d.next = self.pcap[s - 1].q.val();
+        }
+        // The scan point and the normal, for the polish's pass.
+        self.pq[0].d.next = self.a_q.q.val();
+        self.pn[0].d.next = self.nstore.read_data.val();
+        for s in 1..8 {
+            self.pq[s].d.next = self.pq[s - 1].q.val();
+            self.pn[s].d.next = self.pn[s - 1].q.val();
         }
         // A: the stores (read-first) and the scan point.
         self.pstore.read_address.next = self.in_index.val();
@@ -394,6 +436,7 @@ impl Logic for SurfaceResidual {
         }
         self.squares.addr.next = self.smag.val().get_bits::<10>(0);
         self.h_lsb.d.next = self.smag.val().get_bit(0);
+        self.h_s.d.next = self.s14.val();
         self.pcap[6].d.next = self.pcap[5].q.val() || self.smag.val().get_bits::<4>(10).any();
         // I: the residual; the accumulator.
         self.r.next = (bit_cast::<21, 18>(self.squares.data.val()) << 2) | self.one21.val();
@@ -404,6 +447,7 @@ impl Logic for SurfaceResidual {
             self.r.next = self.cap_d2.val();
         }
         self.i_r.d.next = self.r.val();
+        self.i_s.d.next = self.h_s.q.val();
         self.gx.next = 0.into();
         if self.pv[7].q.val() {
             self.gx.next = self.r.val();
@@ -430,6 +474,9 @@ impl Logic for SurfaceResidual {
         self.o_idx.d.next = self.pidx[8].q.val();
         self.o_dist.d.next = self.pdist[8].q.val();
         self.o_r.d.next = self.i_r.q.val();
+        self.o_s.d.next = self.i_s.q.val();
+        self.o_q.d.next = self.pq[7].q.val();
+        self.o_n.d.next = self.pn[7].q.val();
         self.o_cv.d.next = self.pcv[8].q.val();
         self.snap_sum.next = self.snap_hi.q.val();
         if self.snap_c.q.val() {
