@@ -1,14 +1,17 @@
 //! The inputs the polish's RTL tests run on, from a seed, shared by the rust_hdl tests
 //! (`fpga/tests/polish_*.rs`) and the Verilated ones (`sim/tests/polish_*.rs`): Gram
 //! systems for the solve ([`solve_systems`]), files for every program
-//! ([`program_cases`]) and passes of found points ([`pass_cases`]).
+//! ([`program_cases`]) and passes of found points ([`pass_cases`]); and a surface to
+//! polish on ([`surface`], [`pose`], [`window_scan`]) for the model's and the control's
+//! tests.
 
 use super::program::REGISTERS;
 use super::programs::{load_pose, solve_inputs, Entry, F0, FOUND, SUM_B, SUM_R2};
 use super::{upper, PassSums, STEP_LIMIT, UNKNOWNS};
-use crate::format::{FxPoint, FxPose, MATRIX_FRAC};
+use crate::format::{coord_to_f64, point, FxPoint, FxPose, COORD_FRAC, MATRIX_FRAC};
+use crate::grid::Grid;
 use crate::splitmix::SplitMix64;
-use crate::surface::FxNormal;
+use crate::surface::{FxNormal, NORMAL_FRAC};
 
 /// The normal equations of `rows` (a Jacobian row and its residual each), each row counted
 /// `repeat` times, every one an inlier ([`PassSums::add_point`]).
@@ -224,4 +227,47 @@ mod tests {
             cases.iter().flat_map(|c| c.points.iter().map(|&(q, n, _)| super::super::jacobian(q, c.t, n))).collect();
         assert!(rows.iter().any(|j| j.contains(&((1 << 17) - 1))) && rows.iter().any(|j| j.contains(&-(1 << 17))));
     }
+}
+
+/// A bumpy height field's grid (41 x 41 points over `[-0.6, 0.6]^2`) and its unit normals
+/// (by finite differences of the field): a surface the polish converges on.
+pub fn surface() -> (Grid, Vec<FxNormal>) {
+    let field = |x: f64, y: f64| 0.08 * (6.0 * x).sin() * (5.0 * y + 0.3).cos() + 0.1 * x * y;
+    let mut pts = Vec::new();
+    for i in -20..=20 {
+        for j in -20..=20 {
+            let (x, y) = (i as f64 * 0.03, j as f64 * 0.03);
+            pts.push(point([x, y, field(x, y)]));
+        }
+    }
+    let grid = Grid::build(&pts).expect("a grid of the surface");
+    let normals = grid
+        .points
+        .iter()
+        .map(|p| {
+            let (x, y) = (coord_to_f64(p[0]), coord_to_f64(p[1]));
+            let h = 1e-5;
+            let (fx, fy) =
+                ((field(x + h, y) - field(x - h, y)) / (2.0 * h), (field(x, y + h) - field(x, y - h)) / (2.0 * h));
+            let len = (fx * fx + fy * fy + 1.0).sqrt();
+            [-fx / len, -fy / len, 1.0 / len].map(|v| (v * (1 << NORMAL_FRAC) as f64).round() as i16)
+        })
+        .collect();
+    (grid, normals)
+}
+
+/// A pose: `scale` times a rotation by `angle_z` about z, then `t` (model units).
+pub fn pose(scale: f64, angle_z: f64, t: [f64; 3]) -> FxPose {
+    let (c, s) = (angle_z.cos(), angle_z.sin());
+    let r = [c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0];
+    FxPose {
+        m: r.map(|v| (v * scale * (1 << MATRIX_FRAC) as f64).round() as i32),
+        t: t.map(|v| (v * (1 << COORD_FRAC) as f64).round() as i32),
+    }
+}
+
+/// A scan of the surface: its own points in a window, every third (the identity is the
+/// truth).
+pub fn window_scan(grid: &Grid) -> Vec<FxPoint> {
+    grid.points.iter().copied().filter(|p| p[0].abs() < 4000 && p[1].abs() < 4000).step_by(3).collect()
 }

@@ -371,47 +371,8 @@ mod tests {
         assert_eq!(solve(sums), solve_direct(sums), "{sums:?}");
     }
 
-    use crate::format::{point, MATRIX_FRAC};
-
-    /// A bumpy height field's grid and unit normals (by finite differences of the field).
-    fn surface() -> (Grid, Vec<FxNormal>) {
-        let field = |x: f64, y: f64| 0.08 * (6.0 * x).sin() * (5.0 * y + 0.3).cos() + 0.1 * x * y;
-        let mut pts = Vec::new();
-        for i in -20..=20 {
-            for j in -20..=20 {
-                let (x, y) = (i as f64 * 0.03, j as f64 * 0.03);
-                pts.push(point([x, y, field(x, y)]));
-            }
-        }
-        let grid = Grid::build(&pts).unwrap();
-        let normals = grid
-            .points
-            .iter()
-            .map(|p| {
-                let (x, y) = (crate::format::coord_to_f64(p[0]), crate::format::coord_to_f64(p[1]));
-                let h = 1e-5;
-                let (fx, fy) =
-                    ((field(x + h, y) - field(x - h, y)) / (2.0 * h), (field(x, y + h) - field(x, y - h)) / (2.0 * h));
-                let len = (fx * fx + fy * fy + 1.0).sqrt();
-                [-fx / len, -fy / len, 1.0 / len].map(|v| (v * (1 << NORMAL_FRAC) as f64).round() as i16)
-            })
-            .collect();
-        (grid, normals)
-    }
-
-    fn pose(scale: f64, angle_z: f64, t: [f64; 3]) -> FxPose {
-        let (c, s) = (angle_z.cos(), angle_z.sin());
-        let r = [c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0];
-        FxPose {
-            m: r.map(|v| (v * scale * (1 << MATRIX_FRAC) as f64).round() as i32),
-            t: t.map(|v| (v * (1 << crate::format::COORD_FRAC) as f64).round() as i32),
-        }
-    }
-
-    /// The scan: the model's own points in a window (the identity is the truth).
-    fn scan(grid: &Grid) -> Vec<FxPoint> {
-        grid.points.iter().copied().filter(|p| p[0].abs() < 4000 && p[1].abs() < 4000).step_by(3).collect()
-    }
+    use crate::format::MATRIX_FRAC;
+    use cases::{pose, surface, window_scan as scan};
 
     fn error(p: &FxPose) -> (f64, f64) {
         let one = (1 << MATRIX_FRAC) as f64;

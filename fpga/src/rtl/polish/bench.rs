@@ -6,7 +6,7 @@
 //! Verilator (`sim/tests/polish_pass.rs`, from [`crate::rtl::polish_bench_verilog`]).
 //! A pass's points go in at `in_*`; the programs run on `go` at `entry`.
 
-use super::{PolishPass, PolishProgram};
+use super::{PolishPass, PolishProgram, PolishUnit};
 use crate::rtl::board::sequencer::PipeMul;
 use rust_hdl::prelude::*;
 
@@ -125,5 +125,126 @@ impl Logic for PolishBench {
         self.prog.entry.next = self.entry.val();
         self.busy.next = self.prog.busy.val();
         self.failed.next = self.prog.failed.val();
+    }
+}
+
+/// The whole polish ([`PolishUnit`]) with a multiplier of its own: the test top of the
+/// control (`fpga/tests/polish_control.rs`), the pass service and the start poses played by
+/// the test.
+#[derive(LogicBlock)]
+pub struct PolishUnitBench {
+    /// Clock.
+    pub clock: Signal<In, Clock>,
+    /// Synchronous reset.
+    pub reset: Signal<In, Bit>,
+    /// While idle: polish.
+    pub go: Signal<In, Bit>,
+    /// Starts (1 to 3).
+    pub starts: Signal<In, Bits<2>>,
+    /// Steps a start.
+    pub steps: Signal<In, Bits<4>>,
+    /// The start taken next.
+    pub start_index: Signal<Out, Bits<2>>,
+    /// Its pose.
+    pub start_pose: Signal<In, Bits<216>>,
+    /// Ask for a pass at `pose`.
+    pub pass_go: Signal<Out, Bit>,
+    /// The pass's pose.
+    pub pose: Signal<Out, Bits<216>>,
+    /// The pass is over.
+    pub pass_done: Signal<In, Bit>,
+    /// Its cost.
+    pub pass_cost: Signal<In, Bits<48>>,
+    /// A found point (while `ready`).
+    pub in_valid: Signal<In, Bit>,
+    /// Its image.
+    pub in_q: Signal<In, Bits<48>>,
+    /// Its normal.
+    pub in_n: Signal<In, Bits<48>>,
+    /// Its signed residual.
+    pub in_s: Signal<In, Bits<13>>,
+    /// The pass takes a point.
+    pub ready: Signal<Out, Bit>,
+    /// Polishing.
+    pub busy: Signal<Out, Bit>,
+    /// A result is held.
+    pub done: Signal<Out, Bit>,
+    /// The winning start.
+    pub best_index: Signal<Out, Bits<2>>,
+    /// Its pose.
+    pub best_pose: Signal<Out, Bits<216>>,
+    /// Its cost.
+    pub best_cost: Signal<Out, Bits<48>>,
+    unit: PolishUnit,
+    mul: PipeMul,
+}
+
+impl PolishUnitBench {
+    /// The unit and a multiplier.
+    pub fn new() -> Self {
+        PolishUnitBench {
+            clock: Default::default(),
+            reset: Default::default(),
+            go: Default::default(),
+            starts: Default::default(),
+            steps: Default::default(),
+            start_index: Default::default(),
+            start_pose: Default::default(),
+            pass_go: Default::default(),
+            pose: Default::default(),
+            pass_done: Default::default(),
+            pass_cost: Default::default(),
+            in_valid: Default::default(),
+            in_q: Default::default(),
+            in_n: Default::default(),
+            in_s: Default::default(),
+            ready: Default::default(),
+            busy: Default::default(),
+            done: Default::default(),
+            best_index: Default::default(),
+            best_pose: Default::default(),
+            best_cost: Default::default(),
+            unit: PolishUnit::new(),
+            mul: PipeMul::new(),
+        }
+    }
+}
+
+impl Default for PolishUnitBench {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Logic for PolishUnitBench {
+    #[hdl_gen]
+    fn update(&mut self) {
+        self.unit.clock.next = self.clock.val();
+        self.mul.clock.next = self.clock.val();
+        self.unit.reset.next = self.reset.val();
+        self.mul.reset.next = self.reset.val();
+        self.unit.go.next = self.go.val();
+        self.unit.starts.next = self.starts.val();
+        self.unit.steps.next = self.steps.val();
+        self.start_index.next = self.unit.start_index.val();
+        self.unit.start_pose.next = self.start_pose.val();
+        self.pass_go.next = self.unit.pass_go.val();
+        self.pose.next = self.unit.pose.val();
+        self.unit.pass_done.next = self.pass_done.val();
+        self.unit.pass_cost.next = self.pass_cost.val();
+        self.unit.in_valid.next = self.in_valid.val();
+        self.unit.in_q.next = self.in_q.val();
+        self.unit.in_n.next = self.in_n.val();
+        self.unit.in_s.next = self.in_s.val();
+        self.ready.next = self.unit.ready.val();
+        self.mul.go.next = self.unit.mul_go.val();
+        self.mul.a.next = self.unit.mul_a.val();
+        self.mul.b.next = self.unit.mul_b.val();
+        self.unit.mul_product.next = self.mul.product.val();
+        self.busy.next = self.unit.busy.val();
+        self.done.next = self.unit.done.val();
+        self.best_index.next = self.unit.best_index.val();
+        self.best_pose.next = self.unit.best_pose.val();
+        self.best_cost.next = self.unit.best_cost.val();
     }
 }
