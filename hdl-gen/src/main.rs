@@ -124,6 +124,9 @@ enum Design {
     /// `PolishBench`: the polish's pass, a multiplier and the datapath (on the board the
     /// multiplier is the sequencer's).
     PolishBench,
+    /// `PolishUnit`: the whole polish (control, datapath, pass) as the board will
+    /// instantiate it, the multiplier's ports at the top.
+    PolishUnit,
 }
 
 /// The design's name on the command line.
@@ -136,11 +139,13 @@ fn design_name(design: Design) -> String {
 fn generated_verilog(design: Design, lanes: usize, board: &BoardConfig) -> Result<(String, String)> {
     use pficp_fpga::rtl::{
         board_verilog, grid_pipeline_verilog, neighbour_pipeline_verilog, particle_weights_verilog, pipeline_verilog,
-        polish_bench_verilog, polish_program_verilog, surface_residual_verilog, weight_stage_verilog, BOARD_LANES,
-        SUPPORTED_LANES,
+        polish_bench_verilog, polish_program_verilog, polish_unit_verilog, surface_residual_verilog,
+        weight_stage_verilog, BOARD_LANES, SUPPORTED_LANES,
     };
-    let lane_free =
-        matches!(design, Design::Weights | Design::SurfaceResidual | Design::PolishProgram | Design::PolishBench);
+    let lane_free = matches!(
+        design,
+        Design::Weights | Design::SurfaceResidual | Design::PolishProgram | Design::PolishBench | Design::PolishUnit
+    );
     if !lane_free && !SUPPORTED_LANES.contains(&lanes) {
         bail!("--lanes {lanes} is not supported by the RTL; use one of {SUPPORTED_LANES:?}");
     }
@@ -171,6 +176,7 @@ fn generated_verilog(design: Design, lanes: usize, board: &BoardConfig) -> Resul
         }
         Design::PolishProgram => (polish_program_verilog(), "pficp_fpga::rtl::polish_program_verilog()".to_string()),
         Design::PolishBench => (polish_bench_verilog(), "pficp_fpga::rtl::polish_bench_verilog()".to_string()),
+        Design::PolishUnit => (polish_unit_verilog(), "pficp_fpga::rtl::polish_unit_verilog()".to_string()),
     })
 }
 

@@ -169,6 +169,17 @@ pub fn polish_bench_verilog() -> String {
     waive_unused_wires(&v, &["mul$busy", "mul$valid"])
 }
 
+/// The Verilog of the whole polish as the board will instantiate it (`PolishUnit`: the
+/// control, the program's datapath and the pass; the multiplier's ports at the top), top
+/// module `top`; the register file marked as in [`polish_program_verilog`]; the datapath's
+/// `read_data` above the 32 bits the control reads (a pose field, `TAU2`) waived as unused.
+pub fn polish_unit_verilog() -> String {
+    let mut uut = polish::PolishUnit::new();
+    uut.connect_all();
+    let v = distributed_register_files(&dedup_modules(&generate_verilog(&uut)));
+    waive_unused_wires(&v, &["prog$read_data"])
+}
+
 /// The 64 x 128-bit register files marked for distributed RAM: without the attribute Yosys
 /// maps one to 4 RAMB16 (rust_hdl emits no attributes).
 pub fn distributed_register_files(v: &str) -> String {

@@ -92,8 +92,9 @@ pub struct PolishControl {
     pub prog_load_data: Signal<Out, Bits<128>>,
     /// The register to read.
     pub prog_read_addr: Signal<Out, Bits<6>>,
-    /// The register read (a clock after its address).
-    pub prog_read_data: Signal<In, Bits<128>>,
+    /// The register read, its low 32 bits (a clock after its address; a pose field and
+    /// `TAU2` fit them).
+    pub prog_read_data: Signal<In, Bits<32>>,
     /// Run the program at `prog_entry`.
     pub prog_go: Signal<Out, Bit>,
     /// The program to run.
@@ -331,7 +332,7 @@ impl Logic for PolishControl {
                 }
             }
             ControlState::Tau => {
-                self.tau.d.next = self.prog_read_data.val().get_bits::<32>(0);
+                self.tau.d.next = self.prog_read_data.val();
                 self.gate_on.d.next = true;
                 self.entry.d.next = self.e_clear.val();
                 self.after.d.next = ControlState::Pass;

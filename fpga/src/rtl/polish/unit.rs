@@ -137,7 +137,7 @@ impl Logic for PolishUnit {
         self.prog.load_addr.next = self.control.prog_load_addr.val();
         self.prog.load_data.next = self.control.prog_load_data.val();
         self.prog.read_addr.next = self.control.prog_read_addr.val();
-        self.control.prog_read_data.next = self.prog.read_data.val();
+        self.control.prog_read_data.next = self.prog.read_data.val().get_bits::<32>(0);
         self.prog.go.next = self.control.prog_go.val();
         self.prog.entry.next = self.control.prog_entry.val();
         self.control.prog_busy.next = self.prog.busy.val();
