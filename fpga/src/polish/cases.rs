@@ -211,24 +211,6 @@ pub fn pass_cases(seed: u64, points: usize) -> Vec<PassCase> {
     out
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The pass cases let some points in and keep some out, and some rows saturate both
-    /// ways.
-    #[test]
-    fn the_pass_cases_take_the_gate_and_the_saturation_both_ways() {
-        let cases = pass_cases(0x9a55, 24);
-        let sums: Vec<PassSums> = cases.iter().map(PassCase::sums).collect();
-        assert!(sums.iter().any(|s| s.inliers > 0 && s.inliers < s.found), "{sums:?}");
-        assert!(sums.iter().any(|s| s.inliers == s.found) && sums[0].inliers == 0);
-        let rows: Vec<[i64; UNKNOWNS]> =
-            cases.iter().flat_map(|c| c.points.iter().map(|&(q, n, _)| super::super::jacobian(q, c.t, n))).collect();
-        assert!(rows.iter().any(|j| j.contains(&((1 << 17) - 1))) && rows.iter().any(|j| j.contains(&-(1 << 17))));
-    }
-}
-
 /// A bumpy height field's grid (41 x 41 points over `[-0.6, 0.6]^2`) and its unit normals
 /// (by finite differences of the field): a surface the polish converges on.
 pub fn surface() -> (Grid, Vec<FxNormal>) {
@@ -270,4 +252,22 @@ pub fn pose(scale: f64, angle_z: f64, t: [f64; 3]) -> FxPose {
 /// truth).
 pub fn window_scan(grid: &Grid) -> Vec<FxPoint> {
     grid.points.iter().copied().filter(|p| p[0].abs() < 4000 && p[1].abs() < 4000).step_by(3).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The pass cases let some points in and keep some out, and some rows saturate both
+    /// ways.
+    #[test]
+    fn the_pass_cases_take_the_gate_and_the_saturation_both_ways() {
+        let cases = pass_cases(0x9a55, 24);
+        let sums: Vec<PassSums> = cases.iter().map(PassCase::sums).collect();
+        assert!(sums.iter().any(|s| s.inliers > 0 && s.inliers < s.found), "{sums:?}");
+        assert!(sums.iter().any(|s| s.inliers == s.found) && sums[0].inliers == 0);
+        let rows: Vec<[i64; UNKNOWNS]> =
+            cases.iter().flat_map(|c| c.points.iter().map(|&(q, n, _)| super::super::jacobian(q, c.t, n))).collect();
+        assert!(rows.iter().any(|j| j.contains(&((1 << 17) - 1))) && rows.iter().any(|j| j.contains(&-(1 << 17))));
+    }
 }
