@@ -163,3 +163,25 @@ fn the_unit_chooses_and_polishes_as_the_model() {
     assert_eq!(passes, want_passes, "the passes' poses");
     assert_eq!((i, rtl_pose, rtl_cost), (best, p.pose, cost));
 }
+
+#[test]
+fn a_failed_gate_and_a_failed_solve_end_the_steps_as_in_the_model() {
+    let (grid, normals) = surface();
+    // Five scan points: fewer than the solve's seven inliers.
+    let scan: Vec<FxPoint> = window_scan(&grid).into_iter().step_by(60).take(5).collect();
+    assert_eq!(scan.len(), 5);
+    // A first start far off (nothing found: the gate fails), one near the truth (the
+    // solve fails).
+    let starts = vec![pose(1.0, 0.0, [3.0, 3.0, 0.0]), pose(1.01, 0.02, [0.0; 3])];
+    let stats: Vec<Option<u64>> = starts.iter().map(|s| gate(&pass(&grid, &normals, &scan, s, None))).collect();
+    assert!(stats[0].is_none() && stats[1].is_some(), "the first start finds nothing, the second some");
+    for s in &starts {
+        assert_eq!(polish(&grid, &normals, &scan, s, 3).steps, 0, "no step taken");
+    }
+    let (best, p, cost) = polish_best(&grid, &normals, &scan, &starts, 3).expect("a winner");
+    let want_passes = model_passes(&grid, &normals, &scan, &starts, 3);
+    let ((i, rtl_pose, rtl_cost), passes) =
+        run_unit(Arc::new(grid), Arc::new(normals), Arc::new(scan), starts.clone(), 3);
+    assert_eq!(passes, want_passes, "the passes' poses");
+    assert_eq!((i, rtl_pose, rtl_cost), (best, p.pose, cost));
+}
