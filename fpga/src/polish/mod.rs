@@ -6,8 +6,9 @@
 //! gate, the solve, the update, the drift check) runs as programs ([`programs`], in the
 //! instruction set of [`program`]) on a datapath that is built
 //! (`crate::rtl::polish::PolishProgram`), and a pass's point ([`PassSums::add_point`],
-//! [`jacobian`]) has its RTL (`crate::rtl::polish::PolishPass`); the polish's control and
-//! its place in the board top are not built yet.
+//! [`jacobian`]) has its RTL (`crate::rtl::polish::PolishPass`), and so has the sequence of
+//! [`polish_best`] (`crate::rtl::polish::PolishControl`); the polish's place in the board
+//! top is not built yet.
 //!
 //! **Why.** The filter minimises its cost over 50 particles x 50 iterations; among those
 //! 2,500 poses the lowest cost belongs to a pose a little off the truth (on 30 of the 32

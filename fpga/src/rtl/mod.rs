@@ -19,8 +19,10 @@
 //!   ([`crate::weights::WeightModel`]);
 //! - [`particle_weights`]: the two wired together ([`crate::particle_weights`]);
 //! - [`polish`]: the on-board polish's blocks: `PolishProgram`, the datapath of the
-//!   polish's programs ([`crate::polish::programs`]), and `PolishPass`, a pass's point
-//!   ([`crate::polish::PassSums::add_point`]); not in the board top yet;
+//!   polish's programs ([`crate::polish::programs`]), `PolishPass`, a pass's point
+//!   ([`crate::polish::PassSums::add_point`]), and `PolishControl`, the sequence of
+//!   [`crate::polish::polish_best`], wired together in `PolishUnit`; not in the board top
+//!   yet;
 //! - [`board`]: the board top and its blocks, the sequencer among them
 //!   ([`crate::board::BoardModel`], [`crate::sequencer::SequencerModel`]).
 //!
