@@ -9,27 +9,13 @@
 
 use pficp_fpga::format::{pack_point, transform, FxPoint, FxPose};
 use pficp_fpga::grid::{Grid, NONE};
-use pficp_fpga::messages::{pose_bytes, pose_from_bytes};
 use pficp_fpga::polish::cases::{pose, surface, window_scan};
 use pficp_fpga::polish::{gate, pass, polish, polish_best, solve, update, within_drift};
 use pficp_fpga::rtl::polish::PolishUnitBench;
+use pficp_fpga::rtl::{pose_word as word, word_pose as unword};
 use pficp_fpga::surface::{evaluate, signed_residual, FxNormal};
 use rust_hdl::prelude::*;
 use std::sync::{Arc, Mutex};
-
-/// A pose as the pipeline's pose word.
-fn word(p: &FxPose) -> Bits<216> {
-    pose_bytes(p)
-        .iter()
-        .enumerate()
-        .fold(Bits::<216>::default(), |w, (k, &b)| w | (Bits::<216>::from(b as u64) << (8 * k as u64)))
-}
-
-/// The pose of a pose word.
-fn unword(w: Bits<216>) -> FxPose {
-    let bytes: Vec<u8> = (0..27).map(|k| w.get_bits::<8>(8 * k).to_u64() as u8).collect();
-    pose_from_bytes(&bytes)
-}
 
 /// The found points of `scan` at `pose`, as the residual stage gives them to the pass:
 /// image, normal and signed residual.

@@ -4,7 +4,7 @@
 
 use pficp_fpga::format::{pack_point, FxPoint, FxPose};
 use pficp_fpga::pipeline::{Inputs, Outputs, PipelineModel};
-use pficp_fpga::rtl::{pipeline_verilog, NnPipeline, MUL18_MODULE, SUPPORTED_LANES};
+use pficp_fpga::rtl::{pipeline_verilog, pose_word, NnPipeline, MUL18_MODULE, SUPPORTED_LANES};
 use rust_hdl::prelude::*;
 
 /// What the driver does on a clock, given the reference's outputs before the edge.
@@ -24,15 +24,6 @@ enum Step {
 fn lcg(seed: &mut u64) -> u64 {
     *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
     *seed >> 33
-}
-
-fn pose_bits(p: &FxPose) -> Bits<216> {
-    let w = p.pack();
-    let mut b = Bits::<216>::default();
-    for k in 0..216 {
-        b = b.replace_bit(k, (w[k / 64] >> (k % 64)) & 1 == 1);
-    }
-    b
 }
 
 /// Expand the script into per-clock inputs, driven by the reference (the RTL must take a
@@ -119,7 +110,7 @@ fn set_inputs<const P: usize>(x: &mut NnPipeline<P>, i: &Inputs) {
     x.model_wdata.next = i.model_wdata.into();
     x.model_count.next = (i.model_count as u64).into();
     x.start.next = i.start;
-    x.pose.next = pose_bits(&i.pose);
+    x.pose.next = pose_word(&i.pose);
     x.scan_valid.next = i.scan_valid;
     x.scan_data.next = i.scan_data.into();
     x.scan_last.next = i.scan_last;
