@@ -16,6 +16,9 @@
 //!   `pficp_fpga::rtl::polish_program_verilog()` (prefix `Vpolish`);
 //! - `polish_bench`: `PolishBench`, the pass, a multiplier and the program's datapath, from
 //!   `pficp_fpga::rtl::polish_bench_verilog()` (prefix `Vpbench`);
+//! - `polish_unit`: `PolishUnit`, the whole polish as the board instantiates it (the
+//!   multiplier's ports outside), from `pficp_fpga::rtl::polish_unit_verilog()` (prefix
+//!   `Vpunit`);
 //! - `sequencer`: `PfSequencer` alone, from `pficp_fpga::rtl::sequencer_verilog()`;
 //! - `board` and `board_fast`: the whole board top, `pficp_fpga::rtl::board_verilog` of the
 //!   default and of the fast-UART configuration;
@@ -73,7 +76,7 @@ struct Design {
 }
 
 /// Every design that is verilated.
-const DESIGNS: [Design; 11] = [
+const DESIGNS: [Design; 12] = [
     Design {
         name: "pipeline",
         prefix: "Vpipe",
@@ -137,6 +140,14 @@ const DESIGNS: [Design; 11] = [
         verilog: |_| pficp_fpga::rtl::polish_bench_verilog(),
         ports: &[POLISH_BENCH_PORTS],
         spec: "fpga/src/rtl/polish/bench.rs (sim/src/ports.rs POLISH_BENCH_PORTS)",
+    },
+    Design {
+        name: "polish_unit",
+        prefix: "Vpunit",
+        per_lane: false,
+        verilog: |_| pficp_fpga::rtl::polish_unit_verilog(),
+        ports: &[POLISH_UNIT_PORTS],
+        spec: "fpga/src/rtl/polish/unit.rs (sim/src/ports.rs POLISH_UNIT_PORTS)",
     },
     Design {
         name: "board",

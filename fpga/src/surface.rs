@@ -98,6 +98,35 @@ pub fn evaluate_stored(ram: &[u64], normals: &[u64], first: &[u16], scan: &[FxPo
     Scored::new(nearest, residuals)
 }
 
+/// The board's search over its raw stores for the polish ([`crate::polish::Search`]): a
+/// scan point is found when its squared distance from [`evaluate_stored`] is below
+/// [`CAP_D2`]; its stored point and normal are the words at its index.
+#[derive(Clone, Copy, Debug)]
+pub struct StoredSearch<'a> {
+    /// The model store.
+    pub ram: &'a [u64],
+    /// The normal store.
+    pub normals: &'a [u64],
+    /// The cell table.
+    pub first: &'a [u16],
+}
+
+impl crate::polish::Search for StoredSearch<'_> {
+    fn found(&self, scan: &[FxPoint], pose: &FxPose) -> Vec<(FxPoint, FxPoint, FxNormal)> {
+        let nearest = crate::neighbour_pipeline::evaluate_stored(self.ram, self.first, scan, pose).nearest;
+        scan.iter()
+            .zip(&nearest)
+            .filter(|(_, &(_, d2))| d2 < CAP_D2)
+            .map(|(&p, &(i, _))| {
+                (transform(pose, p), unpack_point(self.ram[i as usize]), unpack_point(self.normals[i as usize]))
+            })
+            .collect()
+    }
+    fn evaluate(&self, scan: &[FxPoint], pose: &FxPose) -> crate::pf::Evaluated {
+        evaluate_stored(self.ram, self.normals, self.first, scan, pose).evaluated()
+    }
+}
+
 /// A pose's results with their residuals, as the residual stage presents them.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Scored {

@@ -48,11 +48,15 @@ fn feeder_streams_each_range_in_order_at_one_point_a_clock() {
             let mut addr = x.read_address.val().to_u64() as usize;
             wait_clock_cycle!(sim, clock, x);
             x.launch.next = false;
-            let (mut taken, mut clocks) = (Vec::new(), 0usize);
+            let (mut taken, mut clocks, mut issued) = (Vec::new(), 0usize, 0usize);
+            // Every 4th stalled range with the store's reads held at random too.
+            let hold = stall && case % 4 == 1;
             while x.streaming.val() && clocks < 10 * len + 20 {
                 x.read_data.next = Bits::<48>::from(store[addr]);
                 x.ready.next = !stall || !lcg(&mut seed).is_multiple_of(3);
+                x.hold.next = hold && lcg(&mut seed).is_multiple_of(2);
                 x = sim.wait(1, x)?;
+                issued += usize::from(x.issued.val());
                 if x.valid.val() && x.ready.val() {
                     taken.push((x.data.val().to_u64(), x.last.val()));
                 }
@@ -61,6 +65,10 @@ fn feeder_streams_each_range_in_order_at_one_point_a_clock() {
                 clocks += 1;
             }
             x.ready.next = false;
+            x.hold.next = false;
+            if issued != to - from {
+                errors.push(format!("case {case}: range {from}..{to}: {issued} reads marked issued"));
+            }
             let want: Vec<(u64, bool)> = (from..to).map(|i| (store[i], i + 1 == to)).collect();
             if taken != want {
                 errors.push(format!(

@@ -47,6 +47,7 @@ pub(crate) const BOARD_FAST: &str = "board_fast";
 pub(crate) const SEQUENCER: &str = "sequencer";
 pub(crate) const POLISH_PROGRAM: &str = "polish_program";
 pub(crate) const POLISH_BENCH: &str = "polish_bench";
+pub(crate) const POLISH_UNIT: &str = "polish_unit";
 
 /// Lane counts with a Verilated pipeline (and particle-weight pipeline): the build verilates
 /// 4 and 16 unless `PFICP_SIM_LANES` says otherwise.

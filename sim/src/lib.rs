@@ -11,6 +11,7 @@
 //! | the sequencer `PfSequencer` alone (docs/sequencer.md) | [`VerilatedSequencer`] | [`SequencerModel`](pficp_fpga::sequencer::SequencerModel) | [`SeqLockstep`] |
 //! | `polish_program_verilog()` (the polish's datapath with the polish's programs) | [`VerilatedPolishProgram`] | `pficp_fpga::polish::program::run` (registers after each run; no cycle model) | none: `sim/tests/polish_program.rs` |
 //! | `polish_bench_verilog()` (the pass, a multiplier and the polish's datapath) | [`VerilatedPolishBench`] | `PassSums::add_point` and the programs (registers after each pass and solve; no cycle model) | none: `sim/tests/polish_pass.rs` |
+//! | `polish_unit_verilog()` (the whole polish: control, datapath, pass; the multiplier outside) | [`VerilatedPolishUnit`] | `polish_best` (the winner, its pose and cost, after each polish; no cycle model) | none: `sim/tests/polish_unit.rs` |
 //! | `board_verilog` (the whole board top, default and fast builds) | [`VerilatedBoard`] | `BoardModel` (byte level) | [`serial::SerialBoard`] |
 //!
 //! - The wrappers run the Verilated RTL one clock at a time, with an optional VCD.

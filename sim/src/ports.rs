@@ -136,6 +136,9 @@ pub const SEQUENCER_PORTS: &[PortSpec] = &[
     ("cost", true, 48),
     ("nn_valid", true, 1),
     ("nn_dist", true, 34),
+    ("ext_go", true, 1),
+    ("ext_a", true, 26),
+    ("ext_b", true, 18),
     ("start", false, 1),
     ("pose", false, 216),
     ("running", false, 1),
@@ -147,6 +150,7 @@ pub const SEQUENCER_PORTS: &[PortSpec] = &[
     ("p_we", false, 1),
     ("p_waddr", false, 12),
     ("p_wdata", false, 24),
+    ("mul_product", false, 44),
 ];
 
 /// The ports of the polish's datapath (`fpga/src/rtl/polish/program.rs`).
@@ -188,6 +192,35 @@ pub const POLISH_BENCH_PORTS: &[PortSpec] = &[
     ("entry", true, 9),
     ("busy", false, 1),
     ("failed", false, 1),
+];
+
+/// The ports of the whole polish (`fpga/src/rtl/polish/unit.rs`).
+pub const POLISH_UNIT_PORTS: &[PortSpec] = &[
+    ("clock", true, 1),
+    ("reset", true, 1),
+    ("go", true, 1),
+    ("starts", true, 2),
+    ("steps", true, 4),
+    ("start_pose", true, 216),
+    ("pass_done", true, 1),
+    ("pass_cost", true, 48),
+    ("in_valid", true, 1),
+    ("in_q", true, 48),
+    ("in_n", true, 48),
+    ("in_s", true, 13),
+    ("mul_product", true, 44),
+    ("start_index", false, 2),
+    ("pass_go", false, 1),
+    ("pose", false, 216),
+    ("ready", false, 1),
+    ("mul_go", false, 1),
+    ("mul_a", false, 26),
+    ("mul_b", false, 18),
+    ("busy", false, 1),
+    ("done", false, 1),
+    ("best_index", false, 2),
+    ("best_pose", false, 216),
+    ("best_cost", false, 48),
 ];
 
 /// The names of the output ports of `lists` (concatenated), in order; `N` must be their

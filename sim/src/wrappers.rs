@@ -456,6 +456,128 @@ impl Default for VerilatedPolishBench {
     }
 }
 
+/// The input ports of the whole polish (`PolishUnit`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct UnitInputs {
+    /// Synchronous reset.
+    pub reset: bool,
+    /// While idle: polish `starts` starts with `steps` steps each.
+    pub go: bool,
+    /// Starts (1 to 3).
+    pub starts: u8,
+    /// Steps a start.
+    pub steps: u8,
+    /// The pose of start `start_index` ([`pficp_fpga::format::FxPose::pack`]).
+    pub start_pose: [u64; 4],
+    /// The pass is over.
+    pub pass_done: bool,
+    /// Its cost.
+    pub pass_cost: u64,
+    /// A found point (while `ready`).
+    pub in_valid: bool,
+    /// Its image.
+    pub in_q: [i16; 3],
+    /// Its nearest stored point's normal.
+    pub in_n: [i16; 3],
+    /// Its signed residual (13 bits).
+    pub in_s: i64,
+    /// The product of the pair issued three clocks before (44 bits).
+    pub mul_product: u64,
+}
+
+/// The output ports of the whole polish.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct UnitOutputs {
+    /// The start the unit takes next.
+    pub start_index: u8,
+    /// Ask for a pass.
+    pub pass_go: bool,
+    /// The pass's pose ([`pficp_fpga::format::FxPose::pack`]).
+    pub pose: [u64; 4],
+    /// The pass takes a point.
+    pub ready: bool,
+    /// Multiplier: take `mul_a`, `mul_b`.
+    pub mul_go: bool,
+    /// Multiplicand (26 bits).
+    pub mul_a: u64,
+    /// Multiplier (18 bits).
+    pub mul_b: u64,
+    /// Polishing.
+    pub busy: bool,
+    /// A result is held.
+    pub done: bool,
+    /// The winning start.
+    pub best_index: u8,
+    /// Its pose.
+    pub best_pose: [u64; 4],
+    /// Its cost.
+    pub best_cost: u64,
+}
+
+/// The Verilated whole polish (`PolishUnit`), its multiplier outside.
+pub struct VerilatedPolishUnit {
+    pub(crate) core: Core,
+}
+
+verilated_common!(VerilatedPolishUnit, UnitInputs);
+
+/// Output words of the polish unit, one name per `u64` (wide ports repeat).
+pub(crate) const POLISH_UNIT_OUTPUT_WORDS: [&str; 18] = ports::output_words(ports::POLISH_UNIT_PORTS);
+
+impl VerilatedPolishUnit {
+    /// The unit after power-up (idle, no result).
+    pub fn new() -> Self {
+        VerilatedPolishUnit { core: Core::new(POLISH_UNIT, 0, 15, &POLISH_UNIT_OUTPUT_WORDS) }
+    }
+
+    /// Drive the input ports (masked to the port widths).
+    pub fn set_inputs(&mut self, i: &UnitInputs) {
+        let p = i.start_pose;
+        self.core.set_inputs(&[
+            i.reset as u64,
+            i.go as u64,
+            i.starts as u64,
+            i.steps as u64,
+            p[0],
+            p[1],
+            p[2],
+            p[3],
+            i.pass_done as u64,
+            i.pass_cost,
+            i.in_valid as u64,
+            pficp_fpga::format::pack_point(i.in_q),
+            pficp_fpga::format::pack_point(i.in_n),
+            i.in_s as u64,
+            i.mul_product,
+        ])
+    }
+
+    /// The output ports now.
+    pub fn outputs(&self) -> UnitOutputs {
+        let o = self.core.outputs::<18>();
+        UnitOutputs {
+            start_index: o[0] as u8,
+            pass_go: o[1] != 0,
+            pose: [o[2], o[3], o[4], o[5]],
+            ready: o[6] != 0,
+            mul_go: o[7] != 0,
+            mul_a: o[8],
+            mul_b: o[9],
+            busy: o[10] != 0,
+            done: o[11] != 0,
+            best_index: o[12] as u8,
+            best_pose: [o[13], o[14], o[15], o[16]],
+            best_cost: o[17],
+        }
+    }
+}
+
+impl Default for VerilatedPolishUnit {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 /// The Verilated particle-filter sequencer alone (`PfSequencer`, docs/sequencer.md).
 pub struct VerilatedSequencer {
     pub(crate) core: Core,
@@ -464,12 +586,12 @@ pub struct VerilatedSequencer {
 verilated_common!(VerilatedSequencer, SeqInputs);
 
 /// Output words of the sequencer, one name per `u64` (wide ports repeat).
-pub(crate) const SEQUENCER_OUTPUT_WORDS: [&str; 16] = ports::output_words(ports::SEQUENCER_PORTS);
+pub(crate) const SEQUENCER_OUTPUT_WORDS: [&str; 17] = ports::output_words(ports::SEQUENCER_PORTS);
 
 impl VerilatedSequencer {
     /// The sequencer after power-up (idle, no result).
     pub fn new() -> Self {
-        VerilatedSequencer { core: Core::new(SEQUENCER, 0, 10, &SEQUENCER_OUTPUT_WORDS) }
+        VerilatedSequencer { core: Core::new(SEQUENCER, 0, 13, &SEQUENCER_OUTPUT_WORDS) }
     }
 
     /// Drive the input ports (masked to the port widths).
@@ -485,12 +607,15 @@ impl VerilatedSequencer {
             i.cost,
             i.nn_valid as u64,
             i.nn_dist,
+            i.ext_go as u64,
+            i.ext_a,
+            i.ext_b,
         ])
     }
 
     /// The output ports now.
     pub fn outputs(&self) -> SeqOutputs {
-        let o = self.core.outputs::<16>();
+        let o = self.core.outputs::<17>();
         SeqOutputs {
             start: o[0] != 0,
             pose: [o[1], o[2], o[3], o[4]],
@@ -503,6 +628,7 @@ impl VerilatedSequencer {
             p_we: o[13] != 0,
             p_waddr: o[14] as u16,
             p_wdata: o[15] as u32,
+            mul_product: o[16],
         }
     }
 }
@@ -788,7 +914,7 @@ impl Rtl for VerilatedParticleWeights {
 }
 
 /// The sequencer's output words as [`Rtl::OUTPUT_PORTS`] (a wide port's words numbered).
-pub const SEQUENCER_OUTPUT_PORTS: [&str; 16] = [
+pub const SEQUENCER_OUTPUT_PORTS: [&str; 17] = [
     "start",
     "pose.0",
     "pose.1",
@@ -805,6 +931,7 @@ pub const SEQUENCER_OUTPUT_PORTS: [&str; 16] = [
     "p_we",
     "p_waddr",
     "p_wdata",
+    "mul_product",
 ];
 
 impl Rtl for VerilatedSequencer {
@@ -817,7 +944,7 @@ impl Rtl for VerilatedSequencer {
         v.extend(o.pose);
         v.extend([o.running as u64, o.finished as u64, o.iterations as u64, o.best_cost, o.best_max]);
         v.extend(o.params);
-        v.extend([o.p_we as u64, o.p_waddr as u64, o.p_wdata as u64]);
+        v.extend([o.p_we as u64, o.p_waddr as u64, o.p_wdata as u64, o.mul_product]);
         v
     }
     fn new_reference(&self) -> SequencerModel {

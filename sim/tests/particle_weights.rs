@@ -53,6 +53,7 @@ fn every_design_is_verilated() {
             ("surface_residual", 0, "Vsurf"),
             ("polish_program", 0, "Vpolish"),
             ("polish_bench", 0, "Vpbench"),
+            ("polish_unit", 0, "Vpunit"),
             ("board", 0, "Vboard"),
             ("sequencer", 0, "Vseq"),
             ("board_fast", 0, "Vboardfast"),

@@ -132,6 +132,9 @@ fn lockstep_random_inputs() {
                 cost: r() & if x % 5 == 0 { u64::MAX } else { 0xffff_ffff },
                 nn_valid: (x >> 24) % 2 == 0,
                 nn_dist: r(),
+                ext_go: (x >> 40) % 2 == 0,
+                ext_a: r(),
+                ext_b: r(),
                 reset: (x >> 32) % 20_000 == 0,
             };
             b.step(&i);

@@ -149,17 +149,50 @@ pub fn jacobian(q: FxPoint, t: [i32; 3], n: FxNormal) -> [i64; UNKNOWNS] {
     [jac(cross[0]), jac(cross[1]), jac(cross[2]), n[0], n[1], n[2], jac(dot)]
 }
 
+/// What a pass needs of the board's search: under a pose, each scan point's image `q` with
+/// its nearest stored point and that point's normal, capped points left out; and the pose's
+/// evaluation (the residual stage's cost, wrapping at 48 bits, and largest residual).
+pub trait Search {
+    /// `(q, p, n)` of every found scan point, in scan order.
+    fn found(&self, scan: &[FxPoint], pose: &FxPose) -> Vec<(FxPoint, FxPoint, FxNormal)>;
+    /// The evaluation of `scan` under `pose`.
+    fn evaluate(&self, scan: &[FxPoint], pose: &FxPose) -> crate::pf::Evaluated;
+}
+
+/// The search over a [`Grid`] and its normals ([`Grid::nearest`], [`crate::surface::evaluate`]).
+#[derive(Clone, Copy, Debug)]
+pub struct GridSearch<'a> {
+    /// The model by cell.
+    pub grid: &'a Grid,
+    /// One normal per stored point.
+    pub normals: &'a [FxNormal],
+}
+
+impl Search for GridSearch<'_> {
+    fn found(&self, scan: &[FxPoint], pose: &FxPose) -> Vec<(FxPoint, FxPoint, FxNormal)> {
+        scan.iter()
+            .filter_map(|&p| {
+                let q = transform(pose, p);
+                let nr = self.grid.nearest(q);
+                (nr.index != NONE).then(|| (q, self.grid.points[nr.index as usize], self.normals[nr.index as usize]))
+            })
+            .collect()
+    }
+    fn evaluate(&self, scan: &[FxPoint], pose: &FxPose) -> crate::pf::Evaluated {
+        crate::surface::evaluate(self.grid, self.normals, scan, pose)
+    }
+}
+
 /// One pass over `scan` under `pose` (module doc): the normal equations of the points whose
 /// squared residual is at most `tau2` (`None`: none, statistics only).
 pub fn pass(grid: &Grid, normals: &[FxNormal], scan: &[FxPoint], pose: &FxPose, tau2: Option<u64>) -> PassSums {
+    pass_over(&GridSearch { grid, normals }, scan, pose, tau2)
+}
+
+/// [`pass`] over any [`Search`] (the board's raw stores: [`crate::surface::StoredSearch`]).
+pub fn pass_over(search: &impl Search, scan: &[FxPoint], pose: &FxPose, tau2: Option<u64>) -> PassSums {
     let mut sums = PassSums::new();
-    for &p in scan {
-        let q = transform(pose, p);
-        let nr = grid.nearest(q);
-        if nr.index == NONE {
-            continue;
-        }
-        let (m, n) = (grid.points[nr.index as usize], normals[nr.index as usize]);
+    for (q, m, n) in search.found(scan, pose) {
         sums.add_point(signed_residual(q, m, n), tau2, || jacobian(q, pose.t, n));
     }
     sums
@@ -210,12 +243,17 @@ pub struct Polished {
 /// early when nothing is found, fewer than 7 points pass the gate or the solve finds a
 /// pivot below `lambda / 2`.
 pub fn polish(grid: &Grid, normals: &[FxNormal], scan: &[FxPoint], start: &FxPose, steps: u32) -> Polished {
+    polish_over(&GridSearch { grid, normals }, scan, start, steps)
+}
+
+/// [`polish`] over any [`Search`].
+pub fn polish_over(search: &impl Search, scan: &[FxPoint], start: &FxPose, steps: u32) -> Polished {
     let mut pose = *start;
-    let mut last = pass(grid, normals, scan, &pose, None);
+    let mut last = pass_over(search, scan, &pose, None);
     let mut taken = 0;
     for _ in 0..steps {
         let Some(tau2) = gate(&last) else { break };
-        let sums = pass(grid, normals, scan, &pose, Some(tau2));
+        let sums = pass_over(search, scan, &pose, Some(tau2));
         let step = solve(&sums);
         last = sums;
         let Some(step) = step else { break };
@@ -256,18 +294,28 @@ pub fn polish_best(
     starts: &[FxPose],
     steps: u32,
 ) -> Option<(usize, Polished, u64)> {
+    polish_best_over(&GridSearch { grid, normals }, scan, starts, steps)
+}
+
+/// [`polish_best`] over any [`Search`]: what the board runs after its filter.
+pub fn polish_best_over(
+    search: &impl Search,
+    scan: &[FxPoint],
+    starts: &[FxPose],
+    steps: u32,
+) -> Option<(usize, Polished, u64)> {
     starts
         .iter()
         .enumerate()
         .filter_map(|(i, start)| {
-            let mut p = polish(grid, normals, scan, start, steps);
+            let mut p = polish_over(search, scan, start, steps);
             if !within_drift(start, &p.pose) {
                 if i > 0 {
                     return None;
                 }
                 p = Polished { pose: *start, steps: 0, last: p.last };
             }
-            let cost = crate::surface::evaluate(grid, normals, scan, &p.pose).cost;
+            let cost = search.evaluate(scan, &p.pose).cost;
             Some((i, p, cost))
         })
         .min_by(|a, b| a.2.cmp(&b.2).then(a.0.cmp(&b.0)))
@@ -382,6 +430,34 @@ mod tests {
             / one;
         let angle = (p.m[3] as f64).atan2(p.m[0] as f64).abs();
         ((scale - 1.0).abs(), angle)
+    }
+
+    /// The board's search over its raw stores finds what the grid finds, so the polish over
+    /// either is the same; a store whose table names no cell finds nothing.
+    #[test]
+    fn the_stored_search_is_the_grid_search() {
+        use crate::format::{pack_point, MAX_POINTS};
+        use crate::surface::StoredSearch;
+        let (grid, normals) = surface();
+        let scan = scan(&grid);
+        let pad = |v: Vec<u64>| [v, vec![0; MAX_POINTS]].concat()[..MAX_POINTS].to_vec();
+        let ram = pad(grid.points.iter().map(|&p| pack_point(p)).collect());
+        let nrm = pad(normals.iter().map(|&n| pack_point(n)).collect());
+        let stored = StoredSearch { ram: &ram, normals: &nrm, first: &grid.first };
+        let gridded = GridSearch { grid: &grid, normals: &normals };
+        let mut found = 0;
+        for at in [pose(1.0, 0.0, [0.0; 3]), pose(1.03, 0.1, [0.02, -0.01, 0.0]), pose(0.9, 1.5, [0.3, 0.0, 0.1])] {
+            let f = stored.found(&scan, &at);
+            assert_eq!(f, gridded.found(&scan, &at));
+            assert_eq!(stored.evaluate(&scan, &at), gridded.evaluate(&scan, &at));
+            found += f.len();
+        }
+        assert!(found > scan.len(), "the poses find points");
+        let start = pose(1.02, 0.03, [0.01, -0.008, 0.004]);
+        assert_eq!(polish_over(&stored, &scan, &start, 3), polish(&grid, &normals, &scan, &start, 3));
+        let empty = vec![0u16; grid.first.len()];
+        let nothing = StoredSearch { first: &empty, ..stored };
+        assert!(nothing.found(&scan, &start).is_empty());
     }
 
     #[test]

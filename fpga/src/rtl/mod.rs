@@ -270,12 +270,23 @@ fn board_of<const P: usize>(config: &crate::board::BoardConfig) -> String {
 /// co-simulation of the sequencer alone; the engine leaves it unconnected (Yosys removes
 /// it). The pipeline's `cost` (its sum of squared distances) is not the board's cost: the
 /// residual stage after it sums the residuals. The residual stage's `nn_s`, `nn_point` and
-/// `nn_normal` are for the on-board polish's pass, not wired yet. Their wire declarations get a targeted
+/// `nn_normal`, the sequencer's lent multiplier's `mul_product` and the scan feeder's
+/// `issued` are for the on-board polish's pass, not wired yet. Their wire declarations get a targeted
 /// `UNUSEDSIGNAL` waiver ([`waive_unused_wires`]), nothing else.
 pub fn waive_probe_ports(v: &str) -> String {
     waive_unused_wires(
         v,
-        &["filter$p_we", "filter$p_waddr", "filter$p_wdata", "nn$cost", "surf$nn_s", "surf$nn_point", "surf$nn_normal"],
+        &[
+            "filter$p_we",
+            "filter$p_waddr",
+            "filter$p_wdata",
+            "filter$mul_product",
+            "nn$cost",
+            "surf$nn_s",
+            "surf$nn_point",
+            "surf$nn_normal",
+            "feeder$issued",
+        ],
     )
 }
 

@@ -72,6 +72,12 @@ pub struct SeqInputs {
     pub nn_valid: bool,
     /// Its squared distance (34 bits).
     pub nn_dist: u64,
+    /// While no run is in progress: the lent multiplier takes `ext_a`, `ext_b`.
+    pub ext_go: bool,
+    /// The lent multiplier's multiplicand (26 bits).
+    pub ext_a: u64,
+    /// The lent multiplier's multiplier (18 bits).
+    pub ext_b: u64,
 }
 
 /// Output ports (after an edge).
@@ -99,6 +105,8 @@ pub struct SeqOutputs {
     pub p_waddr: u16,
     /// Its data (24 bits).
     pub p_wdata: u32,
+    /// The multiplier's product (44 bits).
+    pub mul_product: u64,
 }
 
 /// The configuration writes that load a [`crate::pf::PfConfig`] (word address, 48-bit word),

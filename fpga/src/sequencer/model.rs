@@ -166,6 +166,7 @@ impl SequencerModel {
             p_we: port.we,
             p_waddr: port.addr as u16,
             p_wdata: port.data as u32,
+            mul_product: r.m_acc,
         }
     }
 
@@ -819,6 +820,10 @@ impl SequencerModel {
 
         // ---- The pipelined multiplier: operands, the carry-save product (`m_p`, the sum
         // of the RTL's two rows), the product; `m_v` marks which stages hold a started one.
+        // Lent out while no run is in progress.
+        if !r.run_r {
+            (mul_go, mul_a_in, mul_b_in) = (i.ext_go, i.ext_a & m(26), i.ext_b & m(18));
+        }
         if mul_go {
             n.m_a = sx(mul_a_in & m(26), 26) as u64 & m(44);
             n.m_b = mul_b_in & m(18);

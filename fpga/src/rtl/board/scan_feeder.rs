@@ -2,6 +2,8 @@
 //! nearest-neighbour pipeline, one a clock while the pipeline takes them, through a
 //! two-entry queue that hides the store's one-clock read (the order and the `last` flag
 //! are what [`crate::pipeline::PipelineModel`] expects; test: `fpga/tests/scan_feeder.rs`).
+//! While `hold` is high it reads no further point from the store (the points already read
+//! still go out); `issued` marks each read, so a consumer can count the points it has let in.
 
 use rust_hdl::prelude::*;
 
@@ -18,6 +20,10 @@ pub struct ScanFeeder {
     pub to_index: Signal<In, Bits<13>>,
     /// The pipeline takes the presented point.
     pub ready: Signal<In, Bit>,
+    /// Read no further point from the store.
+    pub hold: Signal<In, Bit>,
+    /// A point is read from the store this clock (it will be presented).
+    pub issued: Signal<Out, Bit>,
     /// The store's read data (the point at last clock's `read_address`).
     pub read_data: Signal<In, Bits<48>>,
     /// The store's read address.
@@ -64,6 +70,7 @@ impl Logic for ScanFeeder {
         }
         // Read point `sa` when the queue will have room for it.
         self.issue.next = (self.sa.q.val() < self.send.q.val())
+            && !self.hold.val()
             && (!self.occ_after.val().any() || ((self.occ_after.val() == 1) && !self.inflight.q.val()));
         if self.launch.val() {
             self.sa.d.next = self.from_index.val();
@@ -71,6 +78,7 @@ impl Logic for ScanFeeder {
         }
         self.read_address.next = self.sa.q.val().get_bits::<12>(0);
         self.inflight.d.next = self.issue.val();
+        self.issued.next = self.issue.val();
         self.inflight_last.d.next = (self.sa.q.val() + 1) == self.send.q.val();
         if self.issue.val() {
             self.sa.d.next = self.sa.q.val() + 1;

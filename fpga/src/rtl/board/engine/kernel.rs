@@ -60,6 +60,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
         self.feeder.from_index.next = 0.into();
         self.feeder.to_index.next = self.scan_count.q.val();
         self.feeder.ready.next = self.nn.scan_ready.val();
+        self.feeder.hold.next = false;
         self.feeder.read_data.next = self.scan_store.read_data.val();
         self.scan_store.read_address.next = self.feeder.read_address.val();
         self.nn.scan_valid.next = self.feeder.valid.val();
@@ -112,6 +113,10 @@ impl<const P: usize> Logic for CommandEngine<P> {
         if self.filter.running.val() {
             self.nn.pose.next = self.filter.pose.val();
         }
+        // The sequencer's multiplier is lent to nobody yet (the polish's pass will take it).
+        self.filter.ext_go.next = false;
+        self.filter.ext_a.next = 0.into();
+        self.filter.ext_b.next = 0.into();
         self.scan_store.write_enable.next = false;
         self.scan_store.write_address.next = self.waddr.q.val().get_bits::<12>(0);
         self.scan_store.write_data.next = self.inbuf.q.val().get_bits::<48>(168);

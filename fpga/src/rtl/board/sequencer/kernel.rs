@@ -675,10 +675,17 @@ impl Logic for PfSequencer {
             }
         }
 
-        // The multiplier and divider take what the states chose.
+        // The multiplier and divider take what the states chose; the multiplier is lent
+        // out while no run is in progress.
         self.mul.go.next = self.mul_go.val();
         self.mul.a.next = self.mul_a_in.val();
         self.mul.b.next = self.mul_b_in.val();
+        if !self.run_r.q.val() {
+            self.mul.go.next = self.ext_go.val();
+            self.mul.a.next = self.ext_a.val();
+            self.mul.b.next = self.ext_b.val();
+        }
+        self.mul_product.next = self.mul.product.val();
         self.div.go.next = self.div_go.val();
         self.div.n.next = self.div_n_in.val();
         self.div.d.next = self.w_sum.q.val();

@@ -99,6 +99,15 @@ pub struct PfSequencer {
     pub best_max: Signal<Out, Bits<34>>,
     /// The best parameters, 24 bits each, `[a, b, c, s, phi, theta, psi]` from bit 0.
     pub params: Signal<Out, Bits<168>>,
+    /// While no run is in progress, the multiplier is lent out: take `ext_a`, `ext_b`
+    /// (the polish's pass, after the filter).
+    pub ext_go: Signal<In, Bit>,
+    /// The lent multiplier's multiplicand.
+    pub ext_a: Signal<In, Bits<26>>,
+    /// The lent multiplier's multiplier.
+    pub ext_b: Signal<In, Bits<18>>,
+    /// The multiplier's product ([`PipeMul`]'s `product`).
+    pub mul_product: Signal<Out, Bits<44>>,
     /// Particle RAM write enable (observed by the co-simulation).
     pub p_we: Signal<Out, Bit>,
     /// Particle RAM write address `{half, particle, parameter}`.
@@ -224,6 +233,10 @@ impl PfSequencer {
             best_cost: Default::default(),
             best_max: Default::default(),
             params: Default::default(),
+            ext_go: Default::default(),
+            ext_a: Default::default(),
+            ext_b: Default::default(),
+            mul_product: Default::default(),
             p_we: Default::default(),
             p_waddr: Default::default(),
             p_wdata: Default::default(),
