@@ -57,6 +57,9 @@ fn feeder_streams_each_range_in_order_at_one_point_a_clock() {
                 x.hold.next = hold && lcg(&mut seed).is_multiple_of(2);
                 x = sim.wait(1, x)?;
                 issued += usize::from(x.issued.val());
+                if x.hold.val() && x.issued.val() {
+                    errors.push(format!("case {case}: a read while held"));
+                }
                 if x.valid.val() && x.ready.val() {
                     taken.push((x.data.val().to_u64(), x.last.val()));
                 }

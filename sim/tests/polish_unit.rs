@@ -6,10 +6,10 @@
 //! clocks after the clock that issues it, as the sequencer's `PipeMul`). The winner, its
 //! polished pose and cost, and every pass's pose must equal the model's.
 
-use pficp_fpga::format::{transform, FxPoint, FxPose};
-use pficp_fpga::grid::{Grid, NONE};
+use pficp_fpga::format::{FxPoint, FxPose};
+use pficp_fpga::grid::Grid;
 use pficp_fpga::polish::cases::{pose, surface, window_scan};
-use pficp_fpga::polish::polish_best;
+use pficp_fpga::polish::{polish_best, GridSearch, Search};
 use pficp_fpga::sequencer::unpack_pose;
 use pficp_fpga::surface::{evaluate, signed_residual, FxNormal};
 use pficp_sim::{UnitInputs, VerilatedPolishUnit};
@@ -18,16 +18,8 @@ use std::collections::VecDeque;
 /// The found points of `scan` at `pose` as the residual stage gives them: image, normal,
 /// signed residual.
 fn found(grid: &Grid, normals: &[FxNormal], scan: &[FxPoint], pose: &FxPose) -> Vec<Found> {
-    scan.iter()
-        .filter_map(|&p| {
-            let q = transform(pose, p);
-            let nr = grid.nearest(q);
-            (nr.index != NONE).then(|| {
-                let (m, n) = (grid.points[nr.index as usize], normals[nr.index as usize]);
-                (q, n, signed_residual(q, m, n))
-            })
-        })
-        .collect()
+    let search = GridSearch { grid, normals };
+    search.found(scan, pose).into_iter().map(|(q, p, n)| (q, n, signed_residual(q, p, n))).collect()
 }
 
 /// A found point as the pass takes it: image, normal, signed residual.
