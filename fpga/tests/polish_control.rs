@@ -119,7 +119,7 @@ fn run_unit(
             }
         }
         *out.lock().unwrap() =
-            Some((x.best_index.val().to_u64() as usize, unword(x.best_pose.val()), x.best_cost.val().to_u64()));
+            Some((x.best_index.val().to_u64() as usize, unword(x.pose.val()), x.best_cost.val().to_u64()));
         sim.done(x)
     });
     sim.run(Box::new(uut), 100_000_000_000).expect("simulation");

@@ -219,7 +219,6 @@ pub const POLISH_UNIT_PORTS: &[PortSpec] = &[
     ("busy", false, 1),
     ("done", false, 1),
     ("best_index", false, 2),
-    ("best_pose", false, 216),
     ("best_cost", false, 48),
 ];
 

@@ -508,8 +508,6 @@ pub struct UnitOutputs {
     pub done: bool,
     /// The winning start.
     pub best_index: u8,
-    /// Its pose.
-    pub best_pose: [u64; 4],
     /// Its cost.
     pub best_cost: u64,
 }
@@ -522,7 +520,7 @@ pub struct VerilatedPolishUnit {
 verilated_common!(VerilatedPolishUnit, UnitInputs);
 
 /// Output words of the polish unit, one name per `u64` (wide ports repeat).
-pub(crate) const POLISH_UNIT_OUTPUT_WORDS: [&str; 18] = ports::output_words(ports::POLISH_UNIT_PORTS);
+pub(crate) const POLISH_UNIT_OUTPUT_WORDS: [&str; 14] = ports::output_words(ports::POLISH_UNIT_PORTS);
 
 impl VerilatedPolishUnit {
     /// The unit after power-up (idle, no result).
@@ -554,7 +552,7 @@ impl VerilatedPolishUnit {
 
     /// The output ports now.
     pub fn outputs(&self) -> UnitOutputs {
-        let o = self.core.outputs::<18>();
+        let o = self.core.outputs::<14>();
         UnitOutputs {
             start_index: o[0] as u8,
             pass_go: o[1] != 0,
@@ -566,8 +564,7 @@ impl VerilatedPolishUnit {
             busy: o[10] != 0,
             done: o[11] != 0,
             best_index: o[12] as u8,
-            best_pose: [o[13], o[14], o[15], o[16]],
-            best_cost: o[17],
+            best_cost: o[13],
         }
     }
 }

@@ -51,7 +51,7 @@ fn run_unit(
     loop {
         let o = u.outputs();
         if o.done && !o.busy {
-            return ((o.best_index as usize, unpack_pose(&o.best_pose), o.best_cost), passes, clock);
+            return ((o.best_index as usize, unpack_pose(&o.pose), o.best_cost), passes, clock);
         }
         assert!(clock < 50_000_000, "the unit did not finish");
         // The multiplier.

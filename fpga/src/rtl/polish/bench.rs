@@ -149,7 +149,7 @@ pub struct PolishUnitBench {
     pub start_pose: Signal<In, Bits<216>>,
     /// Ask for a pass at `pose`.
     pub pass_go: Signal<Out, Bit>,
-    /// The pass's pose.
+    /// The pass's pose; once done, the winner's.
     pub pose: Signal<Out, Bits<216>>,
     /// The pass is over.
     pub pass_done: Signal<In, Bit>,
@@ -171,8 +171,6 @@ pub struct PolishUnitBench {
     pub done: Signal<Out, Bit>,
     /// The winning start.
     pub best_index: Signal<Out, Bits<2>>,
-    /// Its pose.
-    pub best_pose: Signal<Out, Bits<216>>,
     /// Its cost.
     pub best_cost: Signal<Out, Bits<48>>,
     unit: PolishUnit,
@@ -202,7 +200,6 @@ impl PolishUnitBench {
             busy: Default::default(),
             done: Default::default(),
             best_index: Default::default(),
-            best_pose: Default::default(),
             best_cost: Default::default(),
             unit: PolishUnit::new(),
             mul: PipeMul::new(),
@@ -244,7 +241,6 @@ impl Logic for PolishUnitBench {
         self.busy.next = self.unit.busy.val();
         self.done.next = self.unit.done.val();
         self.best_index.next = self.unit.best_index.val();
-        self.best_pose.next = self.unit.best_pose.val();
         self.best_cost.next = self.unit.best_cost.val();
     }
 }

@@ -70,11 +70,13 @@ pub struct PolishControl {
     pub steps: Signal<In, Bits<4>>,
     /// The start the control takes next.
     pub start_index: Signal<Out, Bits<2>>,
-    /// The pose of start `start_index` (as the pipeline's pose word).
+    /// The pose of start `start_index` (as the pipeline's pose word), held while the start
+    /// runs (a failed drift check takes it again).
     pub start_pose: Signal<In, Bits<216>>,
     /// Ask for a pass over the scan at `pose` (a clock's pulse).
     pub pass_go: Signal<Out, Bit>,
-    /// The pose of the pass (as the pipeline's pose word; held until `pass_done`).
+    /// The pose of the pass (as the pipeline's pose word; held until `pass_done`); once
+    /// done, the winner's.
     pub pose: Signal<Out, Bits<216>>,
     /// The pass's gate on.
     pub gated: Signal<Out, Bit>,
@@ -107,10 +109,8 @@ pub struct PolishControl {
     pub busy: Signal<Out, Bit>,
     /// A result is held (from the end of a polish to the next `go`).
     pub done: Signal<Out, Bit>,
-    /// The winning start.
+    /// The winning start (its polished pose is `pose` once done).
     pub best_index: Signal<Out, Bits<2>>,
-    /// Its polished pose.
-    pub best_pose: Signal<Out, Bits<216>>,
     /// Its cost.
     pub best_cost: Signal<Out, Bits<48>>,
     state: DFF<ControlState>,
@@ -122,9 +122,9 @@ pub struct PolishControl {
     step_max: DFF<Bits<4>>,
     step: DFF<Bits<4>>,
     k: DFF<Bits<4>>,
+    /// The pose: the pass's, rotated by a field a clock through a load or a read back, and
+    /// the winner's once done.
     cur: DFF<Bits<216>>,
-    first: DFF<Bits<216>>,
-    sh: DFF<Bits<216>>,
     keep: DFF<Bit>,
     cost: DFF<Bits<48>>,
     gate_on: DFF<Bit>,
@@ -141,7 +141,8 @@ pub struct PolishControl {
     e_update: Constant<Bits<9>>,
     e_drift: Constant<Bits<9>>,
     field: Signal<Local, Bits<18>>,
-    sh_in: Signal<Local, Bits<216>>,
+    rot_in: Signal<Local, Bits<216>>,
+    rot_out: Signal<Local, Bits<216>>,
 }
 
 /// The entry of program `e` in the polish's ROM.
@@ -181,7 +182,6 @@ impl PolishControl {
             busy: Default::default(),
             done: Default::default(),
             best_index: Default::default(),
-            best_pose: Default::default(),
             best_cost: Default::default(),
             state: Default::default(),
             after: Default::default(),
@@ -193,8 +193,6 @@ impl PolishControl {
             step: Default::default(),
             k: Default::default(),
             cur: Default::default(),
-            first: Default::default(),
-            sh: Default::default(),
             keep: Default::default(),
             cost: Default::default(),
             gate_on: Default::default(),
@@ -211,7 +209,8 @@ impl PolishControl {
             e_update: entry_of(Entry::Update),
             e_drift: entry_of(Entry::Drift),
             field: Default::default(),
-            sh_in: Default::default(),
+            rot_in: Default::default(),
+            rot_out: Default::default(),
         }
     }
 }
@@ -226,8 +225,8 @@ impl Logic for PolishControl {
     #[hdl_gen]
     fn update(&mut self) {
         dff_setup!(
-            self, clock, state, after, pass_after, entry, index, count, step_max, step, k, cur, first, sh, keep, cost,
-            gate_on, tau, have, held, b_index, b_pose, b_cost
+            self, clock, state, after, pass_after, entry, index, count, step_max, step, k, cur, keep, cost, gate_on,
+            tau, have, held, b_index, b_pose, b_cost
         );
         self.start_index.next = self.index.q.val();
         self.pose.next = self.cur.q.val();
@@ -236,23 +235,24 @@ impl Logic for PolishControl {
         self.busy.next = self.state.q.val() != ControlState::Idle;
         self.done.next = self.held.q.val();
         self.best_index.next = self.b_index.q.val();
-        self.best_pose.next = self.b_pose.q.val();
         self.best_cost.next = self.b_cost.q.val();
         self.pass_go.next = false;
         self.prog_go.next = false;
         self.prog_entry.next = self.entry.q.val();
         self.prog_load.next = false;
         self.prog_load_addr.next = bit_cast::<6, 4>(self.k.q.val()) + 48;
-        // The pose word's fields go out of `sh` from the bottom (a load) and come back in at
-        // the top (a read back), 18 bits at a time: no shifter.
-        self.field.next = self.sh.q.val().get_bits::<18>(0);
+        // The pose word's fields go out of `cur` from the bottom and back in at the top (a
+        // load: twelve rotations restore it), or come back from the registers at the top (a
+        // read back), 18 bits at a time: no shifter, no second pose register.
+        self.field.next = self.cur.q.val().get_bits::<18>(0);
         self.prog_load_data.next = bit_cast::<128, 18>(self.field.val());
         if self.field.val().get_bit(17) {
             self.prog_load_data.next = bit_cast::<128, 18>(self.field.val()) | ((!bits::<128>(0)) << 18);
         }
         self.prog_read_addr.next = bit_cast::<6, 4>(self.k.q.val()) + 48;
-        self.sh_in.next =
-            (self.sh.q.val() >> 18) | (bit_cast::<216, 18>(self.prog_read_data.val().get_bits::<18>(0)) << 198);
+        self.rot_in.next =
+            (self.cur.q.val() >> 18) | (bit_cast::<216, 18>(self.prog_read_data.val().get_bits::<18>(0)) << 198);
+        self.rot_out.next = (self.cur.q.val() >> 18) | (bit_cast::<216, 18>(self.field.val()) << 198);
 
         match self.state.q.val() {
             ControlState::Idle => {
@@ -270,8 +270,6 @@ impl Logic for PolishControl {
             }
             ControlState::Begin => {
                 self.cur.d.next = self.start_pose.val();
-                self.first.d.next = self.start_pose.val();
-                self.sh.d.next = self.start_pose.val();
                 self.keep.d.next = true;
                 self.k.d.next = 0.into();
                 self.step.d.next = 0.into();
@@ -279,7 +277,7 @@ impl Logic for PolishControl {
             }
             ControlState::Load => {
                 self.prog_load.next = true;
-                self.sh.d.next = self.sh.q.val() >> 18;
+                self.cur.d.next = self.rot_out.val();
                 self.k.d.next = self.k.q.val() + 1;
                 if self.k.q.val() == 11 {
                     self.entry.d.next = self.e_start.val();
@@ -358,10 +356,9 @@ impl Logic for PolishControl {
                 // Register `POSE + k` is read now; `POSE + k - 1` is here.
                 self.k.d.next = self.k.q.val() + 1;
                 if self.k.q.val().any() {
-                    self.sh.d.next = self.sh_in.val();
+                    self.cur.d.next = self.rot_in.val();
                 }
                 if self.k.q.val() == 12 {
-                    self.cur.d.next = self.sh_in.val();
                     self.step.d.next = self.step.q.val() + 1;
                     self.state.d.next = ControlState::Step;
                 }
@@ -373,7 +370,8 @@ impl Logic for PolishControl {
                 self.pass_after.d.next = ControlState::Costed;
                 self.state.d.next = ControlState::Pass;
                 if self.prog_failed.val() {
-                    self.cur.d.next = self.first.q.val();
+                    // The start's pose, still at `start_pose` (it follows `start_index`).
+                    self.cur.d.next = self.start_pose.val();
                     if self.index.q.val().any() {
                         self.keep.d.next = false;
                         self.state.d.next = ControlState::Costed;
@@ -390,6 +388,10 @@ impl Logic for PolishControl {
                 self.index.d.next = self.index.q.val() + 1;
                 self.state.d.next = ControlState::Begin;
                 if (self.index.q.val() + 1) == self.count.q.val() {
+                    // The winner's pose into `cur` (it is there if this start won).
+                    if !self.keep.q.val() || (self.have.q.val() && (self.cost.q.val() >= self.b_cost.q.val())) {
+                        self.cur.d.next = self.b_pose.q.val();
+                    }
                     self.held.d.next = true;
                     self.state.d.next = ControlState::Idle;
                 }

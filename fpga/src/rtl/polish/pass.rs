@@ -9,8 +9,8 @@
 //! Schedule, clock `k` after the point is taken (a product comes back three clocks after
 //! the clock that issues it): `s s` issued at 0; the nine products of `x = q - t` and `n` at
 //! 1 to 9; `s^2` back and added at 3, `found` at 4 (an outlier ends there); the cross and
-//! dot products combined at 4 to 12; the row rounded and saturated at 13; `inliers` added at
-//! 15; the 35 products issued at 14 to 48 and added at 17 to 51. An inlier takes 52 clocks,
+//! dot products combined at 4 to 12 in one accumulator, each rounded and saturated into
+//! its Jacobian entry as the next starts (at 6, 8, 10 and 13); `inliers` added at 15; the 35 products issued at 14 to 48 and added at 17 to 51. An inlier takes 52 clocks,
 //! an outlier 5, and `ready` the clock after.
 
 use crate::polish::programs::{FOUND, INLIERS, SUM_B, SUM_R2};
@@ -60,10 +60,8 @@ pub struct PolishPass {
     n: DFF<Bits<48>>,
     s: DFF<Bits<13>>,
     inlier: DFF<Bit>,
-    c0: DFF<Bits<38>>,
-    c1: DFF<Bits<38>>,
-    c2: DFF<Bits<38>>,
-    dot: DFF<Bits<38>>,
+    /// The cross sums and the dot product, one after another.
+    acc: DFF<Bits<38>>,
     j0: DFF<Bits<18>>,
     j1: DFF<Bits<18>>,
     j2: DFF<Bits<18>>,
@@ -86,10 +84,9 @@ pub struct PolishPass {
     n2: Signal<Local, Bits<18>>,
     s18: Signal<Local, Bits<18>>,
     p38: Signal<Local, Bits<38>>,
-    r0: Signal<Local, Bits<25>>,
-    r1: Signal<Local, Bits<25>>,
-    r2: Signal<Local, Bits<25>>,
-    r6: Signal<Local, Bits<25>>,
+    acc_base: Signal<Local, Bits<38>>,
+    r: Signal<Local, Bits<25>>,
+    jsat: Signal<Local, Bits<18>>,
     i_prod: Signal<Local, Bits<6>>,
     row: Signal<Local, Bits<3>>,
     col: Signal<Local, Bits<3>>,
@@ -145,10 +142,7 @@ impl PolishPass {
             n: Default::default(),
             s: Default::default(),
             inlier: Default::default(),
-            c0: Default::default(),
-            c1: Default::default(),
-            c2: Default::default(),
-            dot: Default::default(),
+            acc: Default::default(),
             j0: Default::default(),
             j1: Default::default(),
             j2: Default::default(),
@@ -173,10 +167,9 @@ impl PolishPass {
             n2: Default::default(),
             s18: Default::default(),
             p38: Default::default(),
-            r0: Default::default(),
-            r1: Default::default(),
-            r2: Default::default(),
-            r6: Default::default(),
+            acc_base: Default::default(),
+            r: Default::default(),
+            jsat: Default::default(),
             i_prod: Default::default(),
             row: Default::default(),
             col: Default::default(),
@@ -194,7 +187,7 @@ const _: () = assert!(crate::format::COORD_FRAC == 13 && crate::format::POSE_TRA
 impl Logic for PolishPass {
     #[hdl_gen]
     fn update(&mut self) {
-        dff_setup!(self, clock, run, k, img, n, s, inlier, c0, c1, c2, dot, j0, j1, j2, j6);
+        dff_setup!(self, clock, run, k, img, n, s, inlier, acc, j0, j1, j2, j6);
         self.ready.next = !self.run.q.val();
         // Sign extensions (a mux on the sign bit); x = q - t (19 bits, in the multiplicand's 26).
         self.q0e.next = bit_cast::<26, 16>(self.img.q.val().get_bits::<16>(0));
@@ -247,12 +240,22 @@ impl Logic for PolishPass {
             self.p48.next = bit_cast::<48, 44>(self.mul_product.val()) | !bits::<48>(0xfff_ffff_ffff_u64);
         }
         self.p38.next = self.mul_product.val().get_bits::<38>(0);
-        // rnd_13 of the cross and dot sums: the sums start at 2^12 (the rounding
-        // constant), so it is their top 25 of 38 bits (arithmetic).
-        self.r0.next = self.c0.q.val().get_bits::<25>(13);
-        self.r1.next = self.c1.q.val().get_bits::<25>(13);
-        self.r2.next = self.c2.q.val().get_bits::<25>(13);
-        self.r6.next = self.dot.q.val().get_bits::<25>(13);
+        // rnd_13 of the accumulated sum: it starts at 2^12 (the rounding constant), so it is
+        // its top 25 of 38 bits (arithmetic); then sat18: the top 8 of 25 bits all equal, else
+        // the bound of the sign.
+        self.r.next = self.acc.q.val().get_bits::<25>(13);
+        self.jsat.next = self.r.val().get_bits::<18>(0);
+        if (self.r.val().get_bits::<8>(17) != 0) && (self.r.val().get_bits::<8>(17) != 255) {
+            self.jsat.next = 0x1_ffff.into();
+            if self.r.val().get_bit(24) {
+                self.jsat.next = 0x2_0000.into();
+            }
+        }
+        // A sum starts from the rounding constant (at 4, 6, 8, 10), else goes on.
+        self.acc_base.next = self.acc.q.val();
+        if (self.k.q.val() == 4) || (self.k.q.val() == 6) || (self.k.q.val() == 8) || (self.k.q.val() == 10) {
+            self.acc_base.next = 4096.into();
+        }
         // The row products: the ROM's row and column of product k - 14.
         self.i_prod.next = self.k.q.val() - 14;
         self.order.address.next = self.i_prod.val();
@@ -387,62 +390,28 @@ impl Logic for PolishPass {
                 self.add.next = true;
                 self.add_addr.next = 46.into();
                 self.add_data.next = 1.into();
-                self.c0.d.next = self.p38.val() + 4096;
                 if !self.inlier.q.val() {
                     self.run.d.next = false;
                 }
             }
-            if self.k.q.val() == 5 {
-                self.c0.d.next = self.c0.q.val() - self.p38.val();
+            // The cross sums (x1 n2 - x2 n1, x2 n0 - x0 n2, x0 n1 - x1 n0) and the dot product.
+            if (self.k.q.val() >= 4) && (self.k.q.val() < 13) {
+                self.acc.d.next = self.acc_base.val() + self.p38.val();
+                if (self.k.q.val() == 5) || (self.k.q.val() == 7) || (self.k.q.val() == 9) {
+                    self.acc.d.next = self.acc_base.val() - self.p38.val();
+                }
             }
             if self.k.q.val() == 6 {
-                self.c1.d.next = self.p38.val() + 4096;
-            }
-            if self.k.q.val() == 7 {
-                self.c1.d.next = self.c1.q.val() - self.p38.val();
+                self.j0.d.next = self.jsat.val();
             }
             if self.k.q.val() == 8 {
-                self.c2.d.next = self.p38.val() + 4096;
-            }
-            if self.k.q.val() == 9 {
-                self.c2.d.next = self.c2.q.val() - self.p38.val();
+                self.j1.d.next = self.jsat.val();
             }
             if self.k.q.val() == 10 {
-                self.dot.d.next = self.p38.val() + 4096;
-            }
-            if (self.k.q.val() == 11) || (self.k.q.val() == 12) {
-                self.dot.d.next = self.dot.q.val() + self.p38.val();
+                self.j2.d.next = self.jsat.val();
             }
             if self.k.q.val() == 13 {
-                // sat18: the top 8 of 25 bits all equal, else the bound of the sign.
-                self.j0.d.next = self.r0.val().get_bits::<18>(0);
-                if (self.r0.val().get_bits::<8>(17) != 0) && (self.r0.val().get_bits::<8>(17) != 255) {
-                    self.j0.d.next = 0x1_ffff.into();
-                    if self.r0.val().get_bit(24) {
-                        self.j0.d.next = 0x2_0000.into();
-                    }
-                }
-                self.j1.d.next = self.r1.val().get_bits::<18>(0);
-                if (self.r1.val().get_bits::<8>(17) != 0) && (self.r1.val().get_bits::<8>(17) != 255) {
-                    self.j1.d.next = 0x1_ffff.into();
-                    if self.r1.val().get_bit(24) {
-                        self.j1.d.next = 0x2_0000.into();
-                    }
-                }
-                self.j2.d.next = self.r2.val().get_bits::<18>(0);
-                if (self.r2.val().get_bits::<8>(17) != 0) && (self.r2.val().get_bits::<8>(17) != 255) {
-                    self.j2.d.next = 0x1_ffff.into();
-                    if self.r2.val().get_bit(24) {
-                        self.j2.d.next = 0x2_0000.into();
-                    }
-                }
-                self.j6.d.next = self.r6.val().get_bits::<18>(0);
-                if (self.r6.val().get_bits::<8>(17) != 0) && (self.r6.val().get_bits::<8>(17) != 255) {
-                    self.j6.d.next = 0x1_ffff.into();
-                    if self.r6.val().get_bit(24) {
-                        self.j6.d.next = 0x2_0000.into();
-                    }
-                }
+                self.j6.d.next = self.jsat.val();
             }
             if self.k.q.val() == 15 {
                 self.add.next = true;

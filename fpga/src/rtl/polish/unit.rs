@@ -27,7 +27,7 @@ pub struct PolishUnit {
     pub start_pose: Signal<In, Bits<216>>,
     /// Ask for a pass over the scan at `pose`.
     pub pass_go: Signal<Out, Bit>,
-    /// The pass's pose.
+    /// The pass's pose; once done, the winner's.
     pub pose: Signal<Out, Bits<216>>,
     /// The pass is over and its last point's adds are in.
     pub pass_done: Signal<In, Bit>,
@@ -57,8 +57,6 @@ pub struct PolishUnit {
     pub done: Signal<Out, Bit>,
     /// The winning start.
     pub best_index: Signal<Out, Bits<2>>,
-    /// Its polished pose.
-    pub best_pose: Signal<Out, Bits<216>>,
     /// Its cost.
     pub best_cost: Signal<Out, Bits<48>>,
     control: PolishControl,
@@ -93,7 +91,6 @@ impl PolishUnit {
             busy: Default::default(),
             done: Default::default(),
             best_index: Default::default(),
-            best_pose: Default::default(),
             best_cost: Default::default(),
             control: PolishControl::new(),
             prog: PolishProgram::polish(),
@@ -130,7 +127,6 @@ impl Logic for PolishUnit {
         self.busy.next = self.control.busy.val();
         self.done.next = self.control.done.val();
         self.best_index.next = self.control.best_index.val();
-        self.best_pose.next = self.control.best_pose.val();
         self.best_cost.next = self.control.best_cost.val();
         // The datapath, driven by the control, added to by the pass.
         self.prog.load.next = self.control.prog_load.val();
