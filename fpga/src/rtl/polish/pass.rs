@@ -10,8 +10,9 @@
 //! the clock that issues it): `s s` issued at 0; the nine products of `x = q - t` and `n` at
 //! 1 to 9; `s^2` back and added at 3, `found` at 4 (an outlier ends there); the cross and
 //! dot products combined at 4 to 12 in one accumulator, each rounded and saturated into
-//! its Jacobian entry as the next starts (at 6, 8, 10 and 13); `inliers` added at 15; the 35 products issued at 14 to 48 and added at 17 to 51. An inlier takes 52 clocks,
-//! an outlier 5, and `ready` the clock after.
+//! its Jacobian entry as the next starts (at 6, 8, 10 and 13); `inliers` added at 15; the
+//! 35 products issued at 14 to 48 and added at 17 to 51. An inlier takes 52 clocks, an
+//! outlier 5, and `ready` the clock after.
 
 use crate::polish::programs::{FOUND, INLIERS, SUM_B, SUM_R2};
 use crate::polish::{upper, UNKNOWNS};
