@@ -143,6 +143,8 @@ pub struct PolishControl {
     field: Signal<Local, Bits<18>>,
     rot_in: Signal<Local, Bits<216>>,
     rot_out: Signal<Local, Bits<216>>,
+    /// The start just costed beats the held winner (or is the first kept).
+    better: Signal<Local, Bit>,
 }
 
 /// The entry of program `e` in the polish's ROM.
@@ -211,6 +213,7 @@ impl PolishControl {
             field: Default::default(),
             rot_in: Default::default(),
             rot_out: Default::default(),
+            better: Default::default(),
         }
     }
 }
@@ -253,6 +256,7 @@ impl Logic for PolishControl {
         self.rot_in.next =
             (self.cur.q.val() >> 18) | (bit_cast::<216, 18>(self.prog_read_data.val().get_bits::<18>(0)) << 198);
         self.rot_out.next = (self.cur.q.val() >> 18) | (bit_cast::<216, 18>(self.field.val()) << 198);
+        self.better.next = self.keep.q.val() && (!self.have.q.val() || (self.cost.q.val() < self.b_cost.q.val()));
 
         match self.state.q.val() {
             ControlState::Idle => {
@@ -379,7 +383,7 @@ impl Logic for PolishControl {
                 }
             }
             ControlState::Costed => {
-                if self.keep.q.val() && (!self.have.q.val() || (self.cost.q.val() < self.b_cost.q.val())) {
+                if self.better.val() {
                     self.have.d.next = true;
                     self.b_index.d.next = self.index.q.val();
                     self.b_pose.d.next = self.cur.q.val();
@@ -389,7 +393,7 @@ impl Logic for PolishControl {
                 self.state.d.next = ControlState::Begin;
                 if (self.index.q.val() + 1) == self.count.q.val() {
                     // The winner's pose into `cur` (it is there if this start won).
-                    if !self.keep.q.val() || (self.have.q.val() && (self.cost.q.val() >= self.b_cost.q.val())) {
+                    if !self.better.val() {
                         self.cur.d.next = self.b_pose.q.val();
                     }
                     self.held.d.next = true;
