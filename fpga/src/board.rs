@@ -20,12 +20,13 @@ pub struct BoardConfig {
     pub baud: u32,
 }
 
-/// The default board: 16 lanes, the design clock straight from the default pin map's 50 MHz
+/// The default board: 8 lanes (16 with the on-board polish pass 80% of the LUTs,
+/// docs/polish.md), the design clock straight from the default pin map's 50 MHz
 /// oscillator (constraints/pinmap.toml: no DCM), [`DEFAULT_BAUD`] (16 2/3 clocks per bit).
 /// This is the board `hdl-gen` generates and `pficp-sim-board` serves.
 impl Default for BoardConfig {
     fn default() -> Self {
-        BoardConfig { lanes: 16, clock_hz: 50_000_000, baud: DEFAULT_BAUD }
+        BoardConfig { lanes: 8, clock_hz: 50_000_000, baud: DEFAULT_BAUD }
     }
 }
 
@@ -123,9 +124,10 @@ use crate::messages::{
     MAX_POSES, MODEL_WORDS, NEAREST_REQUEST_BYTES, NORMALS_OFFSET, POINT_BYTES, POSE_BYTES, RUN_REPLY_BYTES,
     TABLE_ENTRIES, TABLE_ENTRY_BYTES, TABLE_ENTRY_MASK, TWO_U16_BYTES, W_SUM_MASK,
 };
-use crate::pf::{PfConfig, PfOutcome};
+use crate::pf::ConfigError;
 use crate::protocol::{digest_update, Command, Deframer, ErrorCode, Frame, DIGEST_INIT, DIGEST_NONE};
-use crate::surface::{evaluate_stored, Scored};
+use crate::run_request::{execute, RunOutcome, RunRequest};
+use crate::surface::{evaluate_stored, Scored, StoredSearch};
 use crate::weights::{weights, COST_MAX, MAX_PARTICLES};
 
 /// The byte-level reference of the whole board (docs/protocol.md): the receiver
@@ -134,7 +136,7 @@ use crate::weights::{weights, COST_MAX, MAX_PARTICLES};
 /// the last on-board filter run. It models a host that waits for every answer, so the
 /// board is always idle when a byte arrives and `Busy` never happens (the RTL tests check
 /// the busy rules). Being timeless, it runs the whole filter ([`crate::pf::run`]) when Run
-/// arrives, so it is never "running": Status says 0 or 2, never 1.
+/// arrives, and the polish after it ([`crate::run_request::execute`]), so it is never "running": Status says 0 or 2, never 1.
 #[derive(Clone, Debug)]
 pub struct BoardModel {
     config: BoardConfig,
@@ -145,7 +147,7 @@ pub struct BoardModel {
     model_count: u16,
     scan_count: u16,
     costs: Vec<u64>,
-    outcome: Option<PfOutcome>,
+    outcome: Option<RunOutcome>,
     digest: u32,
     deframer: Deframer,
 }
@@ -246,8 +248,8 @@ impl BoardModel {
         &self.costs
     }
 
-    /// The outcome of the last filter run (Run) since power-up or reset.
-    pub fn pf_outcome(&self) -> Option<&PfOutcome> {
+    /// The outcome of the last Run (the filter and the polish) since power-up or reset.
+    pub fn run_outcome(&self) -> Option<&RunOutcome> {
         self.outcome.as_ref()
     }
 
@@ -256,7 +258,9 @@ impl BoardModel {
     pub fn status(&self) -> StatusReply {
         match &self.outcome {
             None => StatusReply::IDLE,
-            Some(o) => StatusReply { state: RunState::Done, iterations: o.iterations, best_cost: o.best.cost },
+            Some(o) => {
+                StatusReply { state: RunState::Done, iterations: o.filter.iterations, best_cost: o.filter.best.cost }
+            }
         }
     }
 
@@ -405,15 +409,20 @@ impl BoardModel {
                 Ok(NearestReply { first: first as u16, cost: e.cost, results: e.nearest }.encode())
             }
             Command::Run => {
-                let cfg = PfConfig::decode(d).map_err(|e| match e {
-                    crate::pf::ConfigError::Length(_) => BadLength,
-                    crate::pf::ConfigError::Capacity(..) => OverCapacity,
-                })?;
-                if self.model_count == 0 || self.scan_count == 0 {
+                // The length, the filter's capacities and the sizes (the checks of every
+                // command), then the polish's points (the engine's, after them).
+                let request = RunRequest::decode(d);
+                if let Err(ConfigError::Length(_)) = request {
+                    return Err(BadLength);
+                }
+                if matches!(request, Err(ConfigError::Capacity(..))) || self.model_count == 0 || self.scan_count == 0 {
                     return Err(OverCapacity);
                 }
+                let request = request.map_err(|_| OverCapacity)?;
                 let scan = Self::points(&self.scan, 0..self.scan_count as usize);
-                let outcome = crate::pf::run(&cfg, |pose| self.search(&scan, pose).evaluated());
+                let polish_scan = Self::points(&self.scan, 0..request.polish.points as usize);
+                let search = StoredSearch { ram: &self.model, normals: &self.normals, first: &self.table };
+                let outcome = execute(&request, |pose| self.search(&scan, pose).evaluated(), &search, &polish_scan);
                 self.outcome = Some(outcome);
                 Ok(d[..RUN_REPLY_BYTES].to_vec())
             }

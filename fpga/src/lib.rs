@@ -22,6 +22,8 @@
 //!   programs ([`polish::programs`]) for the datapath that is the polish's first RTL block.
 //! - [`sequencer`]: the cycle-accurate model of the filter's RTL (`PfSequencer`) and its
 //!   clock formulas; [`seq_state`]: their one list of states.
+//! - [`run_request`]: the Run request (the filter, then the polish) and what the board
+//!   computes for it.
 //! - [`protocol`]: the wire protocol (COBS framing, CRC-16, commands, error codes).
 //! - [`messages`]: each command's data layout, encoded and decoded.
 //! - [`board`]: the board's configuration and the byte-level reference board (`BoardModel`).
@@ -43,6 +45,7 @@ pub mod polish;
 pub mod protocol;
 #[cfg(feature = "rtl")]
 pub mod rtl;
+pub mod run_request;
 pub mod seq_state;
 pub mod sequencer;
 pub mod splitmix;

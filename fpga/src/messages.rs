@@ -53,8 +53,12 @@ pub const NEAREST_RESULT_BYTES: usize = 2 + DIST_BYTES;
 pub const RESULT_HEAD_BYTES: usize = 2 + COST_BYTES + DIST_BYTES;
 /// Bytes of the Result reply's parameters (24 bits each).
 pub const RESULT_PARAMS_BYTES: usize = 3 * PARAMS;
-/// Data bytes of the Result reply.
-pub const RESULT_BYTES: usize = RESULT_HEAD_BYTES + RESULT_PARAMS_BYTES + POSE_BYTES;
+/// Bytes of the Result reply's filter part: head, parameters, the filter's pose.
+pub const RESULT_FILTER_BYTES: usize = RESULT_HEAD_BYTES + RESULT_PARAMS_BYTES + POSE_BYTES;
+/// Bytes of the Result reply's polish head: the winning start, its cost.
+pub const RESULT_POLISH_HEAD_BYTES: usize = 1 + COST_BYTES;
+/// Data bytes of the Result reply: the filter's part, the polish's head, the polished pose.
+pub const RESULT_BYTES: usize = RESULT_FILTER_BYTES + RESULT_POLISH_HEAD_BYTES + POSE_BYTES;
 /// Mask of the 24-bit `w_sum` field (the weight stage's accumulator).
 pub const W_SUM_MASK: u32 = (1 << 24) - 1;
 /// Data bytes of a Nearest request: first, count, pose.
@@ -535,7 +539,8 @@ impl StatusReply {
     }
 }
 
-/// A Result reply: the finished filter's best particle (or estimate) and its evaluation.
+/// A Result reply: the finished filter's best particle and its evaluation, then the
+/// polish's choice.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ResultReply {
     /// Iterations run.
@@ -548,22 +553,28 @@ pub struct ResultReply {
     pub params: Particle,
     /// Its pose as the board built it ([`crate::pf::pose_of`]).
     pub pose: FxPose,
+    /// The polish's choice: the winning start (0 the filter's pose), its polished pose and
+    /// its cost over the polish's points.
+    pub polish: crate::run_request::PolishOutcome,
 }
 
 impl ResultReply {
-    /// The reply for a filter's outcome.
-    pub fn of(outcome: &crate::pf::PfOutcome) -> Self {
+    /// The reply for a Run's outcome.
+    pub fn of(outcome: &crate::run_request::RunOutcome) -> Self {
+        let f = &outcome.filter;
         ResultReply {
-            iterations: outcome.iterations,
-            cost: outcome.best.cost,
-            max_d2: outcome.best.max_d2,
-            params: outcome.params,
-            pose: outcome.pose,
+            iterations: f.iterations,
+            cost: f.best.cost,
+            max_d2: f.best.max_d2,
+            params: f.params,
+            pose: f.pose,
+            polish: outcome.polish,
         }
     }
 
     /// The reply data: iterations u16, cost u48, max_d2 u40 (34 bits), the 7 parameters
-    /// as 3 bytes each, the pose (27 bytes).
+    /// as 3 bytes each, the filter's pose (27 bytes); the winning start u8, its cost u48,
+    /// its polished pose (27 bytes).
     pub fn encode(&self) -> Vec<u8> {
         let mut out = Vec::with_capacity(RESULT_BYTES);
         put(&mut out, self.iterations as u64, 2);
@@ -573,6 +584,9 @@ impl ResultReply {
             put(&mut out, p as u32 as u64 & 0xff_ffff, 3);
         }
         out.extend_from_slice(&pose_bytes(&self.pose));
+        out.push(self.polish.winner);
+        put(&mut out, self.polish.cost & NO_COST, COST_BYTES);
+        out.extend_from_slice(&pose_bytes(&self.polish.pose));
         out
     }
 
@@ -583,12 +597,18 @@ impl ResultReply {
         if max_d2 > MAX_D2_MASK {
             return Err(MessageError::Field { field: "max_d2", got: max_d2, expected: MAX_D2_MASK });
         }
+        let p = RESULT_FILTER_BYTES;
         Ok(ResultReply {
             iterations: le(&d[0..2]) as u16,
             cost: le(&d[2..8]),
             max_d2,
             params: std::array::from_fn(|k| crate::pf::wrap24(le(&d[13 + 3 * k..16 + 3 * k]) as i64)),
-            pose: pose_from_bytes(&d[13 + 3 * PARAMS..]),
+            pose: pose_from_bytes(&d[13 + 3 * PARAMS..p]),
+            polish: crate::run_request::PolishOutcome {
+                winner: d[p],
+                cost: le(&d[p + 1..p + RESULT_POLISH_HEAD_BYTES]),
+                pose: pose_from_bytes(&d[p + RESULT_POLISH_HEAD_BYTES..]),
+            },
         })
     }
 }
@@ -654,14 +674,20 @@ mod tests {
             max_d2: (1 << 34) - 1,
             params: [-1, 1, -(1 << 23), (1 << 23) - 1, 0, 12345, -54321],
             pose: FxPose { m: [1, -1, 2, -2, 131071, -131072, 0, 5, -5], t: [7, -7, 100] },
+            polish: crate::run_request::PolishOutcome {
+                winner: 2,
+                cost: (1 << 48) - 3,
+                pose: FxPose { m: [3, -3, 2, -2, 131071, -131072, 0, 5, -5], t: [-7, 7, -100] },
+            },
         };
         let d = r.encode();
         assert_eq!(d.len(), RESULT_BYTES);
-        assert_eq!(RESULT_BYTES, 61);
+        assert_eq!(RESULT_BYTES, 95);
+        assert_eq!(d[61], 2, "the winner after the filter's 61 bytes");
         assert_eq!(&d[13..16], &[0xff, 0xff, 0xff], "-1 as 24-bit two's complement");
         assert_eq!(&d[19..22], &[0, 0, 0x80]);
         assert_eq!(ResultReply::decode(&d), Ok(r));
-        assert!(matches!(ResultReply::decode(&d[..60]), Err(MessageError::Length { got: 60, expected: 61 })));
+        assert!(matches!(ResultReply::decode(&d[..94]), Err(MessageError::Length { got: 94, expected: 95 })));
         assert!(ResultReply::decode(&[d.clone(), vec![0]].concat()).is_err());
         let mut wide = d.clone();
         wide[12] = 0x04; // bit 34 of max_d2

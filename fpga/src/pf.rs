@@ -102,6 +102,10 @@ pub enum ConfigError {
     /// Particles not in 1..=256 or no iterations.
     #[error("{0} particles and {1} iterations (1..=256 particles, at least 1 iteration)")]
     Capacity(u16, u16),
+    /// A polish over no points or more than the scan store holds
+    /// ([`crate::run_request::RunRequest`]).
+    #[error("a polish over {0} scan points (1..=4096)")]
+    Points(u16),
 }
 
 fn le(b: &[u8]) -> u64 {

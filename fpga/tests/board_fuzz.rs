@@ -11,10 +11,11 @@ use pficp_fpga::messages::{
     parse_two_u16, pose_from_bytes, EvaluateReply, Identity, NearestReply, NearestRequest, ResultReply, RunState,
     StatusReply, FLAG_FIRST, FLAG_LAST,
 };
-use pficp_fpga::pf::{self, PfConfig, PfOutcome, RUN_BYTES};
+use pficp_fpga::pf::{self, RUN_BYTES};
 use pficp_fpga::protocol::{digest_update, Deframer, ErrorCode, Frame, DIGEST_INIT, MAX_FRAME};
+use pficp_fpga::run_request::{execute, RunOutcome, RunRequest};
 use pficp_fpga::splitmix::SplitMix64;
-use pficp_fpga::surface::{evaluate_stored, Scored};
+use pficp_fpga::surface::{evaluate_stored, Scored, StoredSearch};
 use pficp_fpga::weights::weights;
 use proptest::prelude::*;
 
@@ -62,7 +63,7 @@ struct Snapshot {
     scan: Vec<u64>,
     sizes: (u16, u16),
     costs: Vec<u64>,
-    outcome: Option<PfOutcome>,
+    outcome: Option<RunOutcome>,
     digest: u32,
 }
 
@@ -75,14 +76,14 @@ impl Snapshot {
             scan: b.scan_store().to_vec(),
             sizes: b.sizes(),
             costs: b.stored_costs().to_vec(),
-            outcome: b.pf_outcome().cloned(),
+            outcome: b.run_outcome().cloned(),
             digest: b.model_digest(),
         }
     }
     fn same_as(&self, b: &BoardModel) -> bool {
         self.sizes == b.sizes()
             && self.costs == b.stored_costs()
-            && self.outcome.as_ref() == b.pf_outcome()
+            && self.outcome.as_ref() == b.run_outcome()
             && self.model == b.model_store()
             && self.normals == b.normal_store()
             && self.table == b.table_store()
@@ -171,8 +172,11 @@ fn verdict(sizes: (u16, u16), stored: usize, ran: bool, code: u8, d: &[u8]) -> R
         0x06 if d.len() != 31 || field(2) == 0 || field(2) > 144 => Err(BadLength),
         0x06 if model == 0 || scan == 0 || field(0) + field(2) > scan => Err(OverCapacity),
         0x06 => Ok(()),
-        0x07 if d.len() != 150 => Err(BadLength),
+        // 150 bytes of the filter, 6 of the polish, a pose a start after the first (the
+        // sixth byte's low two bits, 0 as 1).
+        0x07 if d.len() < 6 || d.len() != 156 + 27 * ((d[5] & 3).max(1) as usize - 1) => Err(BadLength),
         0x07 if field(0) == 0 || field(0) > 256 || field(2) == 0 || model == 0 || scan == 0 => Err(OverCapacity),
+        0x07 if field(150) == 0 || field(150) > 4096 => Err(OverCapacity),
         0x07 => Ok(()),
         0x08 | 0x09 if !d.is_empty() => Err(BadLength),
         0x08 => Ok(()),
@@ -303,10 +307,12 @@ fn check_reply(request: &Frame, reply: &Frame, before: &Snapshot, b: &BoardModel
         }
         0x07 => {
             assert_eq!(&r[..], &d[..4], "particles and iterations echoed");
-            let cfg = PfConfig::decode(d).expect("a Run the doc accepts decodes");
-            let scan: Vec<FxPoint> = before.scan[..before.sizes.1 as usize].iter().map(|&w| unpack_point(w)).collect();
-            let want = pf::run(&cfg, |pose| before.search(&scan, pose).evaluated());
-            assert_eq!(b.pf_outcome(), Some(&want));
+            let run = RunRequest::decode(d).expect("a Run the doc accepts decodes");
+            let points = |n: usize| before.scan[..n].iter().map(|&w| unpack_point(w)).collect::<Vec<FxPoint>>();
+            let (scan, polish_scan) = (points(before.sizes.1 as usize), points(run.polish.points as usize));
+            let search = StoredSearch { ram: &before.model, normals: &before.normals, first: &before.table };
+            let want = execute(&run, |pose| before.search(&scan, pose).evaluated(), &search, &polish_scan);
+            assert_eq!(b.run_outcome(), Some(&want));
             assert!(before.sizes == b.sizes() && before.costs == b.stored_costs(), "Run changed the stores");
             assert!(
                 before.model == b.model_store() && before.scan == b.scan_store() && before.table == b.table_store()
@@ -316,14 +322,20 @@ fn check_reply(request: &Frame, reply: &Frame, before: &Snapshot, b: &BoardModel
             let s = StatusReply::decode(r).expect("Status reply layout");
             let want = match &before.outcome {
                 None => StatusReply { state: RunState::Idle, iterations: 0, best_cost: (1 << 48) - 1 },
-                Some(o) => StatusReply { state: RunState::Done, iterations: o.iterations, best_cost: o.best.cost },
+                Some(o) => StatusReply {
+                    state: RunState::Done,
+                    iterations: o.filter.iterations,
+                    best_cost: o.filter.best.cost,
+                },
             };
             assert_eq!(s, want);
             assert!(before.same_as(b));
         }
         0x09 => {
-            let o = before.outcome.as_ref().expect("a result only after a run");
+            let run = before.outcome.as_ref().expect("a result only after a run");
+            let o = &run.filter;
             let got = ResultReply::decode(r).expect("Result reply layout");
+            assert_eq!(got.polish, run.polish);
             assert_eq!(got.iterations, o.iterations);
             assert_eq!((got.cost, got.max_d2, got.params), (o.best.cost, o.best.max_d2, o.params));
             assert_eq!(got.pose, pf::pose_of(&o.params));
@@ -416,6 +428,15 @@ fn random_request(r: &mut Rng, scan_count: u16) -> Frame {
             let (particles, iterations) = if particles == 256 { (256, 1) } else { (particles, iterations) };
             let mut d = [le16(particles), le16(iterations)].concat();
             d.extend(r.bytes(RUN_BYTES - 4));
+            // The polish: a few points, a few steps (the model runs it at once), sometimes
+            // out of range; the starts from the random sixth byte.
+            let scan = scan_count.max(1) as u64;
+            let points = if r.chance(85) { r.range(1, scan.min(48)) } else { r.pick(&[0, 4097, 0xffff, 4096]) };
+            d.extend(le16(points));
+            d.push(r.range(0, 2) as u8 | if r.chance(50) { 0xf0 } else { 0 });
+            d.extend(r.bytes(3));
+            let starts = (d[5] & 3).max(1) as usize;
+            d.extend(r.bytes(27 * (starts - 1)));
             d
         }
         0x08 | 0x09 => Vec::new(),
@@ -440,7 +461,7 @@ fn random_request(r: &mut Rng, scan_count: u16) -> Frame {
 fn valid_request(r: &mut Rng, b: &BoardModel) -> Frame {
     loop {
         let f = random_request(r, b.sizes().1);
-        if verdict(b.sizes(), b.stored_costs().len(), b.pf_outcome().is_some(), f.code, &f.data).is_ok()
+        if verdict(b.sizes(), b.stored_costs().len(), b.run_outcome().is_some(), f.code, &f.data).is_ok()
             && f.data.len() < 300
         {
             return f;

@@ -54,18 +54,21 @@ fn fuzz_decoders(cases: u32, seed: u64) {
         .unwrap();
 
     let status = (0u8..3, any::<u16>(), 0..=NO_COST);
-    let result =
-        (any::<u16>(), 0..=NO_COST, 0..=MAX_D2_MASK, proptest::array::uniform7(-(1i32 << 23)..(1i32 << 23)), pose());
+    let result = (
+        (any::<u16>(), 0..=NO_COST, 0..=MAX_D2_MASK, proptest::array::uniform7(-(1i32 << 23)..(1i32 << 23)), pose()),
+        (any::<u8>(), 0..=NO_COST, pose()),
+    );
     let nearest = (any::<u16>(), 0..=NO_COST, proptest::collection::vec((any::<u16>(), 0u64..1 << 40), 0..150));
     let evaluate = (
         proptest::collection::vec(0..=NO_COST, 0..38),
         proptest::option::of((0..=NO_COST, 0u32..1 << 24, proptest::collection::vec(any::<u16>(), 0..257))),
     );
     runner(cases, seed + 1)
-        .run(&(status, result, nearest, evaluate), |(s, r, n, e)| {
+        .run(&(status, result, nearest, evaluate), |(s, (r, p), n, e)| {
             let s = StatusReply { state: RunState::from_byte(s.0).unwrap(), iterations: s.1, best_cost: s.2 };
             prop_assert_eq!(StatusReply::decode(&s.encode()).unwrap(), s);
-            let r = ResultReply { iterations: r.0, cost: r.1, max_d2: r.2, params: r.3, pose: r.4 };
+            let polish = pficp_fpga::run_request::PolishOutcome { winner: p.0, cost: p.1, pose: p.2 };
+            let r = ResultReply { iterations: r.0, cost: r.1, max_d2: r.2, params: r.3, pose: r.4, polish };
             prop_assert_eq!(ResultReply::decode(&r.encode()).unwrap(), r);
             let reply = NearestReply { first: n.0, cost: n.1, results: n.2 };
             let request = NearestRequest { first: n.0, count: reply.results.len() as u16, pose: r.pose };

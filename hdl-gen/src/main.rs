@@ -22,8 +22,8 @@ struct Cli {
     /// Output directory (created if missing).
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
-    /// Number of parallel lanes P of the generated pipeline.
-    #[arg(long, value_name = "P", default_value_t = 16, conflicts_with = "verilog")]
+    /// Number of parallel lanes P of the generated pipeline (default: the shipped board's).
+    #[arg(long, value_name = "P", default_value_t = BoardConfig::default().lanes, conflicts_with = "verilog")]
     lanes: usize,
     /// Which design to generate: the whole board (pins, UART, protocol engine, pipeline), the
     /// particle-weight pipeline (nearest-neighbour pipeline and weight stage), the

@@ -197,7 +197,7 @@ fn cli_board_as_shipped() {
     let dir = fresh_dir("hdl-gen-cli-board");
     let (okay, stdout, stderr) = hdl_gen(&["--out", dir.to_str().unwrap()]);
     assert!(okay, "{stdout}\n{stderr}");
-    assert!(stdout.contains("pficp_fpga::rtl::board_verilog(BoardConfig { lanes: 16,"), "{stdout}");
+    assert!(stdout.contains("pficp_fpga::rtl::board_verilog(BoardConfig { lanes: 8,"), "{stdout}");
     assert!(stdout.contains("lint: clean"), "{stdout}");
     assert!(stdout.contains("**within limits**"), "{stdout}");
     let json: serde_json::Value =

@@ -15,8 +15,9 @@ use pficp::registration::methods::{PoseError, Tolerance};
 use pficp_fpga::messages::{Identity, ResultReply, RunState, StatusReply};
 use pficp_fpga::pf::{self, PfConfig};
 use pficp_fpga::protocol::{Command, ErrorCode, Frame};
+use pficp_fpga::run_request::{PolishRequest, RunRequest};
 use std::time::{Duration, Instant};
-use support::{cloud, grid, loaded, normals, upload, PtyBoard};
+use support::{cloud, grid, loaded, normals, run_reference, upload, PtyBoard};
 
 /// A Run configuration over the unit-cube clouds of [`cloud`]: centre at the identity.
 /// `register_on_board` with 50 board points, Status polled every 20 ms, no progress output.
@@ -29,8 +30,10 @@ fn on_board_50(
     on_board::register_on_board(client, nn, scan, settings, 50, Duration::from_millis(20), &mut |_, _, _| {})
 }
 
-fn run_config(particles: u16, iterations: u16, seed: u32) -> PfConfig {
-    PfConfig {
+/// A Run: the filter of `particles`, `iterations`, `seed`, then a polish of 2 steps over
+/// the first 30 stored scan points from its pose alone.
+fn run_config(particles: u16, iterations: u16, seed: u32) -> RunRequest {
+    let filter = PfConfig {
         particles,
         iterations,
         temper_exp: 12,
@@ -40,7 +43,8 @@ fn run_config(particles: u16, iterations: u16, seed: u32) -> PfConfig {
         seed,
         thr_cost: 0,
         thr_max: 0,
-    }
+    };
+    RunRequest { filter, polish: PolishRequest { points: 30, steps: 2, hypotheses: vec![] } }
 }
 
 #[test]
@@ -51,13 +55,14 @@ fn run_status_and_result_equal_the_functional_reference() {
     let cfg = run_config(20, 8, 99);
     client.run(&cfg).unwrap();
     let (g, n) = (grid(&model), normals(&model));
-    let want = pf::run(&cfg, |pose| pficp_fpga::surface::evaluate(&g, &n, &scan, pose));
+    let run = run_reference(&model, &scan, &cfg);
+    let want = run.filter.clone();
     // The host's fast emulation (the grid's 27-cell search) is the reference to the bit.
-    assert_eq!(want, pf::run(&cfg, |pose| on_board::evaluate(&g, &n, &scan, pose)));
+    assert_eq!(want, pf::run(&cfg.filter, |pose| on_board::evaluate(&g, &n, &scan, pose)));
     let s = client.status().unwrap();
     assert_eq!(s, StatusReply { state: RunState::Done, iterations: want.iterations, best_cost: want.best.cost });
     let r = client.result().unwrap();
-    assert_eq!(r, ResultReply::of(&want));
+    assert_eq!(r, ResultReply::of(&run));
     assert_eq!(r.pose, pf::pose_of(&r.params));
     // Result reads only: again, the same.
     assert_eq!(client.result().unwrap(), r);
@@ -68,13 +73,16 @@ fn run_status_and_result_equal_the_functional_reference() {
     // The modelled time: the sequencer's clocks with the data-dependent parts at their
     // largest, at the board's clock; above the clocks of the run the reference made.
     let clocks = client.run_clocks(&cfg);
-    assert_eq!(clocks, pficp::board::run_clocks_bound(20, 8, 80, 300, 16));
+    let polish = pficp_fpga::run_request::polish_clocks_bound(&cfg.polish, 300, 8);
+    assert_eq!(clocks, pficp::board::run_clocks_bound(20, 8, 80, 300, 8) + polish);
     assert_eq!(client.modelled_run_time(&cfg), Duration::from_secs_f64(clocks as f64 / 50e6));
-    let poses = (20 * want.iterations as u64 + want.iterations as u64 + 1) as u64;
-    let per_pose = pficp_fpga::neighbour_pipeline::clocks_bound(80, 300, 16);
-    assert!(per_pose >= pficp_fpga::pipeline::clocks_per_particle(80, 300, 16));
-    assert!(clocks > poses * per_pose);
-    assert!(clocks < 2 * poses * per_pose);
+    let poses = 20 * want.iterations as u64 + want.iterations as u64 + 1;
+    let per_pose = pficp_fpga::neighbour_pipeline::clocks_bound(80, 300, 8);
+    assert!(per_pose >= pficp_fpga::pipeline::clocks_per_particle(80, 300, 8));
+    assert!(clocks - polish > poses * per_pose);
+    assert!(clocks - polish < 2 * poses * per_pose);
+    // The polish: 2 steps from one start are 4 passes of 30 points and their programs.
+    assert!(polish > 4 * 30 * pficp_fpga::run_request::PASS_POINT_CLOCKS);
 }
 
 #[test]
@@ -115,9 +123,7 @@ fn a_lost_run_reply_is_not_run_twice_blindly() {
     let cfg = run_config(8, 4, 5);
     client.run(&cfg).unwrap();
     assert_eq!(client.stats().resends, 1);
-    let (g, n) = (grid(&model), normals(&model));
-    let want = pf::run(&cfg, |pose| pficp_fpga::surface::evaluate(&g, &n, &scan, pose));
-    assert_eq!(client.result().unwrap(), ResultReply::of(&want));
+    assert_eq!(client.result().unwrap(), ResultReply::of(&run_reference(&model, &scan, &cfg)));
 }
 
 #[test]
@@ -126,7 +132,7 @@ fn a_running_board_is_polled_and_busy_is_not_resent() {
     let (model, scan) = (cloud(100, 41), cloud(30, 42));
     let mut polls = 0u16;
     let mut board = PtyBoard::serve(support::intercepting_handler(move |f, b| {
-        let running = b.pf_outcome().is_some() && polls < 3;
+        let running = b.run_outcome().is_some() && polls < 3;
         if f.code == Command::Status as u8 && running {
             polls += 1;
             let s = StatusReply { state: RunState::Running, iterations: polls, best_cost: 1000 - polls as u64 };
@@ -205,9 +211,9 @@ fn pf_icp_with_the_filter_on_the_board_registers_a_reduced_model_1() {
     // The board's outcome is exactly the functional reference's on the planned clouds.
     // The software mode's emulation (`plan.emulate`) is the same to the bit.
     let plan = on_board::plan(&nn, &ds.scan, &settings, on_board::DEFAULT_BOARD_POINTS, 4096).unwrap();
-    assert_eq!(plan.config, b.config);
+    assert_eq!(plan.run_request(), b.request);
     let want = pf::run(&plan.config, |p| pficp_fpga::surface::evaluate(&plan.grid, &plan.normals, &plan.scan, p));
-    assert_eq!(b.result, ResultReply::of(&want));
+    assert_eq!(b.result.pose, want.pose);
     assert_eq!(b.result, ResultReply::of(&plan.emulate()));
     // The uploads (the model in data bytes with its cell table), then the filter's
     // progress ending at the cap.
@@ -265,7 +271,7 @@ fn a_board_that_stops_answering_mid_run_is_a_clear_error_within_the_timeout() {
 fn a_board_that_never_finishes_is_a_run_timeout() {
     let (model, scan) = (cloud(300, 51), cloud(100, 52));
     let mut board = PtyBoard::serve(support::intercepting_handler(move |f, b| {
-        (f.code == Command::Status as u8 && b.pf_outcome().is_some()).then(|| {
+        (f.code == Command::Status as u8 && b.run_outcome().is_some()).then(|| {
             let s = StatusReply { state: RunState::Running, iterations: 2, best_cost: 777 };
             Frame { code: 0x88, seq: f.seq, data: s.encode() }.encode()
         })
@@ -296,7 +302,7 @@ fn a_slow_board_that_makes_progress_is_waited_for() {
     let serve = |step: Duration, iterations: u16, stall_at: u16| {
         let mut started: Option<Instant> = None;
         PtyBoard::serve(support::intercepting_handler(move |f, b| {
-            if f.code != Command::Status as u8 || b.pf_outcome().is_none() {
+            if f.code != Command::Status as u8 || b.run_outcome().is_none() {
                 return None;
             }
             let t0 = *started.get_or_insert_with(Instant::now);
@@ -348,7 +354,7 @@ fn an_iteration_count_that_goes_back_or_past_the_cap_is_an_error() {
     for (counts, words) in [(vec![1u16, 2, 3, 1, 2, 3], "went back"), (vec![1, 2, 9], "more than")] {
         let mut polls = 0usize;
         let mut board = PtyBoard::serve(support::intercepting_handler(move |f, b| {
-            if f.code != Command::Status as u8 || b.pf_outcome().is_none() {
+            if f.code != Command::Status as u8 || b.run_outcome().is_none() {
                 return None;
             }
             let iterations = counts[polls.min(counts.len() - 1)];

@@ -68,14 +68,16 @@ fn poses(
 ) -> ([Pose; 6], bool, usize) {
     let software = pf_icp::register(nn, scan, settings).registration.pose;
     let plan = plan(nn, scan, settings, on_board::DEFAULT_BOARD_POINTS, pficp::board::MAX_POINTS).expect("plan");
-    let out = plan.emulate();
+    let out = plan.emulate_filter();
     let alone = on_board::params_pose(&out.params, &plan.model_norm, &plan.scan_norm);
     assert!(scan.len() <= pficp::board::MAX_POINTS, "the whole scan fits the board");
     let whole = plan.scan_norm.quantise(scan);
     let polished = |points: &[pficp_fpga::format::FxPoint]| {
         restored(&plan, &pficp_fpga::polish::polish(&plan.grid, &plan.normals, points, &out.pose, steps()).pose)
     };
-    let host = on_board::finish(&plan, nn, scan, settings, &ResultReply::of(&out), Duration::ZERO).registration.pose;
+    let host = on_board::finish(&plan, nn, scan, settings, &ResultReply::of(&unpolished(&out)), Duration::ZERO)
+        .registration
+        .pose;
     let at_truth = on_board::evaluate(&plan.grid, &plan.normals, &plan.scan, &on_board_pose(&plan, truth));
     // The starts the host's conclusion compares, the filter's pose exactly as the board has it.
     let starts: Vec<pficp_fpga::format::FxPose> = candidates(&alone, &plan.prior.hypotheses)
@@ -91,6 +93,13 @@ fn poses(
         out.best.cost < at_truth.cost,
         starts.len(),
     )
+}
+
+/// A filter's outcome with its pose as the polish's winner: the host's polish then starts
+/// from the filter's pose, as before the polish was on the board.
+fn unpolished(out: &pficp_fpga::pf::PfOutcome) -> pficp_fpga::run_request::RunOutcome {
+    let polish = pficp_fpga::run_request::PolishOutcome { winner: 0, pose: out.pose, cost: out.best.cost };
+    pficp_fpga::run_request::RunOutcome { filter: out.clone(), polish }
 }
 
 /// A pose (original frame) as the board holds it.

@@ -19,6 +19,7 @@ use pficp::io::{read_points, write_points_to_bytes, Format, ParseError};
 use pficp_fpga::format::{point, FxPoint, FxPose, WeightScale};
 use pficp_fpga::pf::{PfConfig, PARAMS, SCALE_FRAC};
 use pficp_fpga::protocol::Frame;
+use pficp_fpga::run_request::{PolishRequest, RunRequest};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
 use rand::{Rng, SeedableRng};
@@ -332,7 +333,9 @@ fn fuzz_client(cases: usize, seed: u64) -> (BTreeMap<&'static str, usize>, Durat
                     thr_cost: 0,
                     thr_max: 0,
                 };
-                outcome(&client.run(&cfg))
+                let polish =
+                    PolishRequest { points: rng.gen_range(1..40), steps: rng.gen_range(0..3), hypotheses: vec![] };
+                outcome(&client.run(&RunRequest { filter: cfg, polish }))
             }
         };
         *tally.entry(name).or_insert(0) += 1;

@@ -11,6 +11,7 @@ use pficp_fpga::messages::{
 };
 use pficp_fpga::pf::PfConfig;
 use pficp_fpga::protocol::{Command, Frame};
+use pficp_fpga::run_request::{PolishRequest, RunRequest};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::time::{Duration, Instant};
@@ -180,8 +181,9 @@ fn a_nearest_reply_outside_the_model_or_with_a_wrong_sum_is_an_error() {
     }
 }
 
-fn run_config() -> PfConfig {
-    PfConfig {
+/// A small Run: the filter, then a polish of 1 step over 30 stored points.
+fn run_config() -> RunRequest {
+    let filter = PfConfig {
         particles: 8,
         iterations: 4,
         temper_exp: 12,
@@ -191,7 +193,8 @@ fn run_config() -> PfConfig {
         seed: 7,
         thr_cost: 0,
         thr_max: 0,
-    }
+    };
+    RunRequest { filter, polish: PolishRequest { points: 30, steps: 1, hypotheses: vec![] } }
 }
 
 #[test]
@@ -233,7 +236,7 @@ fn a_creeping_board_ends_within_the_overall_cap() {
     let limit = Duration::from_millis(500);
     let mut started: Option<Instant> = None;
     let mut board = PtyBoard::serve(intercepting_handler(move |f, b| {
-        if f.code != Command::Status as u8 || b.pf_outcome().is_none() {
+        if f.code != Command::Status as u8 || b.run_outcome().is_none() {
             return None;
         }
         let t0 = *started.get_or_insert_with(Instant::now);
@@ -245,7 +248,7 @@ fn a_creeping_board_ends_within_the_overall_cap() {
     client.run(&run_config()).unwrap();
     let t = Instant::now();
     let e = client.wait_for_run(limit, Duration::ZERO, Duration::from_millis(10), |_| {}).unwrap_err();
-    let overall = limit * (run_config().iterations as u32 + 1);
+    let overall = limit * (run_config().filter.iterations as u32 + 1);
     assert!(
         matches!(e, BoardError::RunTimeout { overall_limit, iterations: 4, .. } if overall_limit == overall),
         "{e:?}"

@@ -100,9 +100,13 @@ fn scan_points_per_weight_on_the_board() {
                             pf::Evaluated::of(&pficp_fpga::pipeline::evaluate(&plan.model, &plan.scan, p))
                         })
                     } else {
-                        plan.emulate()
+                        plan.emulate_filter()
                     };
-                    let r = on_board::finish(&plan, &nn, &ds.scan, &settings, &ResultReply::of(&out), Duration::ZERO);
+                    // As measured before the on-board polish: the filter's pose, unpolished.
+                    let polish =
+                        pficp_fpga::run_request::PolishOutcome { winner: 0, pose: out.pose, cost: out.best.cost };
+                    let run = pficp_fpga::run_request::RunOutcome { filter: out.clone(), polish };
+                    let r = on_board::finish(&plan, &nn, &ds.scan, &settings, &ResultReply::of(&run), Duration::ZERO);
                     let clocks = pficp::board::run_clocks_bound(
                         plan.config.particles,
                         out.iterations,

@@ -16,6 +16,7 @@ use pficp_fpga::format::{FxPoint, FxPose, WeightScale};
 use pficp_fpga::messages::{self, EvaluateRequest, NearestRequest};
 use pficp_fpga::pf::{PfConfig, PARAMS, SCALE_FRAC};
 use pficp_fpga::protocol::{Command, Frame, MAX_FRAME};
+use pficp_fpga::run_request::{PolishRequest, RunRequest};
 use pficp_fpga::splitmix::SplitMix64;
 
 /// Most particles a fuzzed Run asks for.
@@ -98,7 +99,8 @@ impl FrameFuzzer {
         Frame { code: command as u8, seq, data }.encode()
     }
 
-    /// A small Run request.
+    /// A small Run request: a small filter, then a polish of 0 to 2 steps over up to the
+    /// fuzzer's largest scan (beyond the sizes in use at times) from 1 to 3 starts.
     pub fn run_request(&mut self) -> Vec<u8> {
         let cfg = PfConfig {
             particles: 1 + self.below(MAX_RUN_PARTICLES as u64) as u16,
@@ -111,7 +113,12 @@ impl FrameFuzzer {
             thr_cost: if self.below(4) == 0 { self.below(1 << 20) } else { 0 },
             thr_max: 0,
         };
-        self.request(Command::Run, cfg.encode())
+        let polish = PolishRequest {
+            points: 1 + self.below(MAX_SCAN as u64) as u16,
+            steps: self.below(3) as u8,
+            hypotheses: (0..self.below(3)).map(|_| self.pose()).collect(),
+        };
+        self.request(Command::Run, RunRequest { filter: cfg, polish }.encode())
     }
 
     /// A SetSizes request within the fuzzer's bounds.

@@ -1,13 +1,16 @@
-//! The on-board particle filter through the Verilated board's serial pins: Run, Status while
-//! it runs (progress, not compared: the byte-level reference is timeless), Status and Result
-//! after it, byte for byte equal to the reference (so the pose bytes are `pf::run`'s).
+//! The on-board particle filter and the polish after it through the Verilated board's serial
+//! pins: Run, Status while it runs (progress, not compared: the byte-level reference is
+//! timeless), Status and Result after it, byte for byte equal to the reference (so the pose
+//! bytes are `pf::run`'s and the polish's those of `polish::polish_best`).
 
 use pficp_fpga::board::BoardConfig;
 use pficp_fpga::format::FxPoint;
 use pficp_fpga::grid::Grid;
 use pficp_fpga::messages::{self, ResultReply, RunState, StatusReply};
-use pficp_fpga::pf::{self, example_config, example_surface};
+use pficp_fpga::pf::example_surface;
+use pficp_fpga::polish::GridSearch;
 use pficp_fpga::protocol::{Command, Frame};
+use pficp_fpga::run_request::{example_request, execute, RunOutcome, RunRequest};
 use pficp_fpga::surface::{self, FxNormal};
 use pficp_sim::serial::SerialBoard;
 
@@ -29,6 +32,20 @@ fn exchange(b: &mut SerialBoard, frame: &Frame) -> Frame {
     let (compared, mismatch) = b.comparison();
     assert!(mismatch.is_none(), "after {compared} bytes: {}", mismatch.unwrap());
     Frame::decode(&got[..got.len() - 1]).expect("a well-formed reply")
+}
+
+/// What the board computes for `run` over `model`'s grid: the filter over the first
+/// `filter_points` of `scan`, the polish over all of it.
+fn reference(
+    run: &RunRequest,
+    grid: &Grid,
+    normals: &[FxNormal],
+    scan: &[FxPoint],
+    filter_points: usize,
+) -> RunOutcome {
+    let search = GridSearch { grid, normals };
+    let polish_scan = &scan[..run.polish.points as usize];
+    execute(run, |pose| surface::evaluate(grid, normals, &scan[..filter_points], pose), &search, polish_scan)
 }
 
 fn req(cmd: Command, seq: u8, data: Vec<u8>) -> Frame {
@@ -59,10 +76,16 @@ fn the_board_runs_the_filter_and_returns_the_reference_pose() {
     let r = exchange(&mut b, &req(Command::Result, 3, vec![]));
     assert_eq!((r.code, r.data.first()), (0xff, Some(&7)), "{r:?}");
     // Run before SetSizes: OverCapacity.
-    let cfg = example_config(24, 12, 11);
+    let cfg = example_request(24, 12, 11, 30);
     let r = exchange(&mut b, &req(Command::Run, 4, cfg.encode()));
     assert_eq!((r.code, r.data.first()), (0xff, Some(&4)), "{r:?}");
-    exchange(&mut b, &req(Command::SetSizes, 5, messages::two_u16(80, 30)));
+    // The filter over the first 24 points, the polish over all 30.
+    exchange(&mut b, &req(Command::SetSizes, 5, messages::two_u16(80, 24)));
+    // A polish over no points: OverCapacity, and nothing runs.
+    let mut none = cfg.clone();
+    none.polish.points = 0;
+    let r = exchange(&mut b, &req(Command::Run, 6, none.encode()));
+    assert_eq!((r.code, r.data.first()), (0xff, Some(&4)), "{r:?}");
     let r = exchange(&mut b, &req(Command::Run, 6, cfg.encode()));
     assert_eq!(r.code, Command::Run as u8 | 0x80);
     // While it runs: Status answers (progress).
@@ -83,7 +106,7 @@ fn the_board_runs_the_filter_and_returns_the_reference_pose() {
     assert!(b.progress_frames() >= 1, "at least one Status while running");
     let r = exchange(&mut b, &req(Command::Result, seq, vec![]));
     let result = ResultReply::decode(&r.data).unwrap();
-    let outcome = pf::run(&cfg, |pose| surface::evaluate(&grid, &normals, &scan, pose));
+    let RunOutcome { filter: outcome, polish } = reference(&cfg, &grid, &normals, &scan, 24);
     // The filter found something: a pose that undoes most of the scan's shift (the start,
     // the identity, misses by all of it) at a lower cost than the start's.
     let miss = |t: [i32; 3]| (0..3).map(|k| ((t[k] - SHIFT[k] as i32) as f64).powi(2)).sum::<f64>().sqrt();
@@ -94,6 +117,10 @@ fn the_board_runs_the_filter_and_returns_the_reference_pose() {
     assert_eq!(result.pose, outcome.pose);
     assert_eq!(result.params, outcome.params);
     assert_eq!((result.iterations, result.cost), (outcome.iterations, outcome.best.cost));
+    assert_eq!(result.polish, polish);
+    println!("polish: start {} won at cost {}, filter's cost over the 30 points {}", polish.winner, polish.cost, {
+        surface::evaluate(&grid, &normals, &scan, &outcome.pose).cost
+    });
     let (compared, _) = b.comparison();
     println!("{polls} Status polls while running, {compared} bytes compared, {} clocks", b.clocks());
 }
@@ -109,12 +136,12 @@ fn commands_get_busy_while_the_filter_runs() {
     let (grid, normals) = load_grid(&mut b, &model);
     exchange(&mut b, &req(Command::LoadScan, 2, messages::load_request(0, &scan)));
     exchange(&mut b, &req(Command::SetSizes, 3, messages::two_u16(80, 30)));
-    exchange(&mut b, &req(Command::Run, 4, example_config(10, 6, 11).encode()));
+    exchange(&mut b, &req(Command::Run, 4, example_request(10, 6, 11, 30).encode()));
     let busy = [
         req(Command::LoadScan, 5, messages::load_request(0, &scan[..3])),
         req(Command::LoadTable, 5, messages::table_request(7, &[1, 2, 3])),
         req(Command::SetSizes, 6, messages::two_u16(80, 30)),
-        req(Command::Run, 7, example_config(10, 6, 11).encode()),
+        req(Command::Run, 7, example_request(10, 6, 11, 30).encode()),
         req(Command::Result, 8, vec![]),
     ];
     for f in &busy {
@@ -128,6 +155,6 @@ fn commands_get_busy_while_the_filter_runs() {
     // The scan store was not touched: the result is the reference's.
     b.run_until_idle(100_000_000).expect("the filter finishes");
     let result = ResultReply::decode(&exchange(&mut b, &req(Command::Result, 11, vec![])).data).unwrap();
-    let outcome = pf::run(&example_config(10, 6, 11), |pose| surface::evaluate(&grid, &normals, &scan, pose));
-    assert_eq!(result.pose, outcome.pose);
+    let outcome = reference(&example_request(10, 6, 11, 30), &grid, &normals, &scan, 30);
+    assert_eq!((result.pose, result.polish), (outcome.filter.pose, outcome.polish));
 }

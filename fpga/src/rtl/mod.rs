@@ -269,24 +269,14 @@ fn board_of<const P: usize>(config: &crate::board::BoardConfig) -> String {
 /// The sequencer's particle-RAM write port (`p_we`, `p_waddr`, `p_wdata`) is a probe for the
 /// co-simulation of the sequencer alone; the engine leaves it unconnected (Yosys removes
 /// it). The pipeline's `cost` (its sum of squared distances) is not the board's cost: the
-/// residual stage after it sums the residuals. The residual stage's `nn_s`, `nn_point` and
-/// `nn_normal`, the sequencer's lent multiplier's `mul_product` and the scan feeder's
-/// `issued` are for the on-board polish's pass, not wired yet. Their wire declarations get a targeted
-/// `UNUSEDSIGNAL` waiver ([`waive_unused_wires`]), nothing else.
+/// residual stage after it sums the residuals. The residual stage's `nn_s` goes to the
+/// polish's pass without its top bit (13 bits hold every signed residual of a found point),
+/// and the polish's datapath's `read_data` above the 32 bits its control reads. Their wire
+/// declarations get a targeted `UNUSEDSIGNAL` waiver ([`waive_unused_wires`]), nothing else.
 pub fn waive_probe_ports(v: &str) -> String {
     waive_unused_wires(
         v,
-        &[
-            "filter$p_we",
-            "filter$p_waddr",
-            "filter$p_wdata",
-            "filter$mul_product",
-            "nn$cost",
-            "surf$nn_s",
-            "surf$nn_point",
-            "surf$nn_normal",
-            "feeder$issued",
-        ],
+        &["filter$p_we", "filter$p_waddr", "filter$p_wdata", "nn$cost", "surf$nn_s", "prog$read_data"],
     )
 }
 

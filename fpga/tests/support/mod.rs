@@ -11,6 +11,7 @@ pub use pficp_fpga::pf::{PfConfig, PfOutcome};
 pub use pficp_fpga::pipeline::{run_particle, PipelineModel};
 pub use pficp_fpga::protocol::{cobs_encode, crc16, FrameError, MAX_FRAME};
 pub use pficp_fpga::protocol::{ErrorCode, Frame};
+pub use pficp_fpga::run_request::{PolishRequest, RunOutcome, RunRequest};
 pub use pficp_fpga::weights::{WeightInputs, WeightModel};
 
 pub const IDENTIFY: u8 = 0x01;
@@ -32,7 +33,7 @@ pub fn req(code: u8, seq: u8, data: Vec<u8>) -> Frame {
 
 /// Everything a command may change.
 #[derive(Debug, PartialEq)]
-pub struct Snapshot(pub Vec<u64>, pub Vec<u64>, pub (u16, u16), pub Vec<u64>, pub Option<PfOutcome>);
+pub struct Snapshot(pub Vec<u64>, pub Vec<u64>, pub (u16, u16), pub Vec<u64>, pub Option<RunOutcome>);
 
 pub fn snap(b: &BoardModel) -> Snapshot {
     Snapshot(
@@ -40,7 +41,7 @@ pub fn snap(b: &BoardModel) -> Snapshot {
         b.scan_store().to_vec(),
         b.sizes(),
         b.stored_costs().to_vec(),
-        b.pf_outcome().cloned(),
+        b.run_outcome().cloned(),
     )
 }
 

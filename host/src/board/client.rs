@@ -136,6 +136,8 @@ pub struct BoardClient {
     stats: ClientStats,
     /// The iteration cap of the last Run sent (a Status beyond it is a broken board).
     run_iterations: Option<u16>,
+    /// The starts of the polish of the last Run sent (the Result's winner is one of them).
+    run_starts: Option<usize>,
     /// `Grid::order` of the grid last uploaded whole ([`BoardClient::load_grid`]): the
     /// host's index of each stored model point. `None` after any other model or table write.
     grid_order: Option<Vec<u16>>,
@@ -244,6 +246,7 @@ impl BoardClient {
             stored: 0,
             stats: ClientStats::default(),
             run_iterations: None,
+            run_starts: None,
             grid_order: None,
         }
     }

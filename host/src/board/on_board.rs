@@ -2,13 +2,14 @@
 //! the host computes the start and the covariance (PF-ICP stages 1 and 2,
 //! [`crate::pf_icp::prior`]), uploads the model gridded (protocol 3: sorted by cell, with
 //! its cell table, [`pficp_fpga::grid::Grid`]) and a sample of `board_points` scan points
-//! in Morton order ([`super::morton_sorted`]), sends the prior as a Run request
-//! ([`pf_config`]), polls Status, reads Result and polishes the board's pose with ICP on
-//! the whole scan. The filter itself (steps 6 to 8
-//! of Algorithm 6) runs on the board, bit-exact with `pficp_fpga::pf::run`; it refines
-//! nothing with ICP between iterations.
+//! in Morton order ([`super::morton_sorted`]) followed by the rest of the scan, sends the
+//! prior as a Run request ([`pf_config`]) with the polish's starts ([`polish_request`]),
+//! polls Status, reads Result and polishes the board's pose with ICP on the whole scan. The
+//! filter itself (steps 6 to 8 of Algorithm 6) runs on the board, bit-exact with
+//! `pficp_fpga::pf::run`, and so does the polish after it (protocol 5,
+//! `pficp_fpga::run_request::execute`): the board's pose alone is the polished one.
 
-use super::fixed::{original_pose, Normalisation};
+use super::fixed::{normalised_pose, original_pose, quantise_pose, Normalisation};
 use super::{
     board_grid, board_model, morton_sorted, BoardClient, BoardError, ClientStats, Upload, MAX_PARTICLES, MAX_POINTS,
 };
@@ -24,6 +25,7 @@ use pficp_fpga::pf::{
     wrap24, Particle, PfConfig, PARAMS, PARAM_BITS, PARAM_TRANSLATION_FRAC, SCALE, SCALE_FRAC, SIGMA_BITS,
 };
 use pficp_fpga::protocol::{Command, ErrorCode, VERSION};
+use pficp_fpga::run_request::{PolishRequest, RunOutcome, RunRequest, MAX_STARTS};
 use pficp_fpga::surface::FxNormal;
 use std::time::{Duration, Instant};
 
@@ -33,6 +35,10 @@ use std::time::{Duration, Instant};
 /// result matches the software mode's success on models 1 to 3 and the realistic quick
 /// set (none of them makes the board's pose alone match it).
 pub const DEFAULT_BOARD_POINTS: usize = 300;
+
+/// Gauss-Newton steps of the on-board polish a start (docs/polish.md, "How many starts and
+/// steps the board needs": 5 steps score as 10 on the dev split).
+pub const POLISH_STEPS: u8 = 5;
 
 /// Steps of the on-board registration, for progress reports.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -69,8 +75,13 @@ pub struct OnBoardPlan {
     /// The scan points for the board (the weight sample of `board_points`), normalised,
     /// quantised and sorted by the Morton order of their cells ([`morton_sorted`]).
     pub scan: Vec<FxPoint>,
-    /// The Run request.
+    /// The rest of the scan, normalised and quantised (every k-th when the whole scan does
+    /// not fit the store): stored after `scan`, for the polish.
+    pub rest: Vec<FxPoint>,
+    /// The filter's part of the Run request.
     pub config: PfConfig,
+    /// The polish's part ([`polish_request`]).
+    pub polish: PolishRequest,
 }
 
 /// `x * 2^frac` rounded and saturated to a 24-bit signed parameter.
@@ -223,6 +234,8 @@ pub fn plan_with_prior(
     let config = pf_config(&prior, &model_norm, &scan_norm, sample.len(), settings);
     let model_q = model_norm.quantise(&on_board);
     let grid = board_grid(&model_q)?;
+    let rest = scan_norm.quantise(&rest_of(scan, &sample, MAX_POINTS.saturating_sub(sample.len())));
+    let polish = polish_request(&prior, &model_norm, &scan_norm, sample.len() + rest.len());
     Ok(OnBoardPlan {
         prior,
         normals: stored_normals(&grid),
@@ -230,19 +243,95 @@ pub fn plan_with_prior(
         model: model_q,
         model_subsampled: on_board.len() < model.len(),
         scan: morton_sorted(&scan_norm.quantise(&sample)),
+        rest,
         model_norm,
         scan_norm,
         config,
+        polish,
     })
 }
 
+/// The scan without the points of `sample` (each sample point removes one equal scan
+/// point), every k-th of them when more than `room`.
+fn rest_of(scan: &[Point3<f64>], sample: &[Point3<f64>], room: usize) -> Vec<Point3<f64>> {
+    let key = |p: &Point3<f64>| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
+    let mut taken: std::collections::HashMap<[u64; 3], usize> = std::collections::HashMap::new();
+    for p in sample {
+        *taken.entry(key(p)).or_default() += 1;
+    }
+    let rest: Vec<Point3<f64>> = scan
+        .iter()
+        .filter(|p| match taken.get_mut(&key(p)) {
+            Some(n) if *n > 0 => {
+                *n -= 1;
+                false
+            }
+            _ => true,
+        })
+        .copied()
+        .collect();
+    let stride = rest.len().div_ceil(room.max(1)).max(1);
+    rest.into_iter().step_by(stride).take(room).collect()
+}
+
+/// The polish the board runs after its filter: [`POLISH_STEPS`] steps over the `points`
+/// stored scan points, from the filter's pose and the first `MAX_STARTS - 1` of the
+/// hypotheses the host's conclusion would compare with it
+/// ([`crate::pf_icp::conclusion::candidates`]), as the board holds poses.
+pub fn polish_request(
+    prior: &Prior,
+    model_norm: &Normalisation,
+    scan_norm: &Normalisation,
+    points: usize,
+) -> PolishRequest {
+    let hypotheses = crate::pf_icp::conclusion::candidates(&prior.start, &prior.hypotheses)
+        .iter()
+        .skip(1)
+        .take(MAX_STARTS - 1)
+        .map(|p| quantise_pose(&normalised_pose(p, scan_norm, model_norm)))
+        .collect();
+    PolishRequest { points: points.min(MAX_POINTS) as u16, steps: POLISH_STEPS, hypotheses }
+}
+
 impl OnBoardPlan {
+    /// The Run request: the filter, then the polish.
+    pub fn run_request(&self) -> RunRequest {
+        RunRequest { filter: self.config.clone(), polish: self.polish.clone() }
+    }
+
+    /// The scan store's contents: the filter's sample, then the rest.
+    pub fn stored_scan(&self) -> Vec<FxPoint> {
+        [&self.scan[..], &self.rest[..]].concat()
+    }
+
     /// What the board computes for this plan's Run, by the bit-exact reference
-    /// (`pficp_fpga::pf::run` over the grid search of [`Self::grid`] and [`Self::scan`] and
-    /// the surface residual with [`Self::normals`]): the software mode's board emulation,
+    /// (`pficp_fpga::run_request::execute`: the filter over the grid search of
+    /// [`Self::grid`] and [`Self::scan`] with the surface residual of [`Self::normals`],
+    /// then the polish over [`Self::stored_scan`]): the software mode's board emulation,
     /// equal to the board's Result to the bit.
-    pub fn emulate(&self) -> pficp_fpga::pf::PfOutcome {
+    pub fn emulate(&self) -> RunOutcome {
+        let search = pficp_fpga::polish::GridSearch { grid: &self.grid, normals: &self.normals };
+        let stored = self.stored_scan();
+        pficp_fpga::run_request::execute(
+            &self.run_request(),
+            |p| evaluate(&self.grid, &self.normals, &self.scan, p),
+            &search,
+            &stored[..self.polish.points as usize],
+        )
+    }
+
+    /// The filter's part of [`Self::emulate`] alone.
+    pub fn emulate_filter(&self) -> pficp_fpga::pf::PfOutcome {
         pficp_fpga::pf::run(&self.config, |p| evaluate(&self.grid, &self.normals, &self.scan, p))
+    }
+
+    /// The board's pose alone (the polish's winner) in the original frame; the filter's
+    /// pose when the polished matrix is no similarity.
+    pub fn board_pose(&self, result: &ResultReply) -> Pose {
+        match super::fixed::restore_pose(&result.polish.pose) {
+            Some(p) => original_pose(&p, &self.scan_norm, &self.model_norm),
+            None => params_pose(&result.params, &self.model_norm, &self.scan_norm),
+        }
     }
 }
 
@@ -275,10 +364,11 @@ pub fn evaluate(
     pficp_fpga::surface::evaluate(grid, normals, scan, pose)
 }
 
-/// What the board's filter found, in the host's terms: the filter's pose, the polish on the
-/// whole scan, and PF-ICP's result as the software mode gives it (the filter history is
-/// empty: the board reports only its best; `registration.errors` holds the board's best
-/// cost as an MSD of the sample, then the polished MSD).
+/// What the board found, in the host's terms: the board's pose alone (its polish's winner,
+/// as `filter_pose`), the host's conclusion and polish on the whole scan from it, and
+/// PF-ICP's result as the software mode gives it (the filter history is empty: the board
+/// reports only its best; `registration.errors` holds the board's best cost as an MSD of
+/// the sample, then the polished MSD).
 pub fn finish(
     plan: &OnBoardPlan,
     nn: &NearestNeighbours,
@@ -287,7 +377,7 @@ pub fn finish(
     result: &ResultReply,
     filter_time: Duration,
 ) -> PfIcpResult {
-    let filter_pose = params_pose(&result.params, &plan.model_norm, &plan.scan_norm);
+    let filter_pose = plan.board_pose(result);
     let t = Instant::now();
     let surface = crate::pf_icp::surface::Surface::new(nn);
     let conclusion = crate::pf_icp::conclusion::conclude(
@@ -341,7 +431,7 @@ pub struct OnBoardReport {
     /// Scan points the board weighs each particle over.
     pub scan_points: usize,
     /// The Run request.
-    pub config: PfConfig,
+    pub request: RunRequest,
     /// The board's Result.
     pub result: ResultReply,
     /// The best cost as the software's MSD (of the board's scan points, clouds' units).
@@ -365,11 +455,12 @@ pub struct OnBoardResult {
     pub board: OnBoardReport,
 }
 
-/// Register `scan` to the model behind `nn` with PF-ICP, the whole particle filter on the
-/// board behind `client` (protocol version 2: Run, Status, Result): the start and the
-/// covariance on the host ([`plan`]), the model and `board_points` scan points uploaded,
-/// Run, Status polled every `poll` (progress: [`OnBoardStep::Filter`] with the iterations
-/// done), Result, and the host's ICP polish on the whole scan ([`finish`]). A board whose
+/// Register `scan` to the model behind `nn` with PF-ICP, the whole particle filter and its
+/// polish on the board behind `client` (protocol 5: Run, Status, Result): the start and the
+/// covariance on the host ([`plan`]), the model uploaded unless resident, the scan stored
+/// (the `board_points` of the filter's sample first), Run, Status polled every `poll`
+/// (progress: [`OnBoardStep::Filter`] with the iterations done), Result, and the host's
+/// conclusion and ICP polish on the whole scan ([`finish`]). A board whose
 /// iteration count stands still for [`BoardClient::run_allowance`] is a
 /// [`BoardError::RunTimeout`].
 pub fn register_on_board(
@@ -384,8 +475,8 @@ pub fn register_on_board(
     let identity = client.identify()?;
     if identity.version != VERSION {
         return Err(BoardError::Limit(format!(
-            "the board speaks protocol version {}, this host {VERSION} (the on-board filter with the grid search \
-             needs {VERSION}; --host-driven works with versions 1, 2 and {VERSION})",
+            "the board speaks protocol version {}, this host {VERSION} (the on-board filter and its polish \
+             need {VERSION}; --host-driven works with versions 1, 2, 4 and {VERSION})",
             identity.version
         )));
     }
@@ -428,12 +519,13 @@ pub fn register_on_board(
     })? {
         progress(OnBoardStep::Resident, 0, 0);
     }
-    client.load_scan(&plan.scan, |done, total| progress(OnBoardStep::Upload(Upload::Scan), done, total))?;
+    client.load_scan(&plan.stored_scan(), |done, total| progress(OnBoardStep::Upload(Upload::Scan), done, total))?;
     client.set_sizes(plan.model.len(), plan.scan.len())?;
-    let modelled = client.modelled_run_time(&plan.config);
-    let limit = client.run_allowance(&plan.config);
+    let request = plan.run_request();
+    let modelled = client.modelled_run_time(&request);
+    let limit = client.run_allowance(&request);
     let run_start = Instant::now();
-    client.run(&plan.config)?;
+    client.run(&request)?;
     let cap = plan.config.iterations as usize;
     progress(OnBoardStep::Filter, 0, cap);
     let mut last = 0;
@@ -453,7 +545,7 @@ pub fn register_on_board(
             model_subsampled: plan.model_subsampled,
             scan_points: plan.scan.len(),
             cost_msd: cost_msd(result.cost, plan.scan.len(), &plan.model_norm),
-            config: plan.config.clone(),
+            request,
             result,
             polls,
             modelled,

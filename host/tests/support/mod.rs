@@ -192,6 +192,19 @@ pub fn grid(model: &[FxPoint]) -> pficp_fpga::grid::Grid {
     pficp_fpga::grid::Grid::build(model).expect("a model in the cube")
 }
 
+/// What the board computes for `run` after [`upload`] of `model` and `scan`: the filter
+/// over `scan`, the polish over its first `run.polish.points` points.
+pub fn run_reference(
+    model: &[FxPoint],
+    scan: &[FxPoint],
+    run: &pficp_fpga::run_request::RunRequest,
+) -> pficp_fpga::run_request::RunOutcome {
+    let (g, n) = (grid(model), normals(model));
+    let search = pficp_fpga::polish::GridSearch { grid: &g, normals: &n };
+    let polish_scan = &scan[..run.polish.points as usize];
+    pficp_fpga::run_request::execute(run, |p| pficp_fpga::surface::evaluate(&g, &n, scan, p), &search, polish_scan)
+}
+
 /// A client on the reference with the model and scan loaded and sized.
 pub fn loaded(model: &[FxPoint], scan: &[FxPoint]) -> (PtyBoard, BoardClient) {
     let mut board = PtyBoard::reference();

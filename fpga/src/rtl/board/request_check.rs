@@ -11,8 +11,8 @@ use crate::messages::{
     EVALUATE_HEADER_BYTES, FLAG_FIRST, FLAG_LAST, LOAD_HEADER_BYTES, MAX_LOAD_ENTRIES, MAX_LOAD_POINTS, MAX_NEAREST,
     MAX_POSES, NEAREST_REQUEST_BYTES, POINT_BYTES, POSE_BYTES, TABLE_ENTRIES, TABLE_ENTRY_BYTES, TWO_U16_BYTES,
 };
-use crate::pf::RUN_BYTES;
 use crate::protocol::{Command, ErrorCode};
+use crate::run_request::run_bytes;
 use rust_hdl::prelude::*;
 
 /// The checks of one request.
@@ -29,7 +29,7 @@ pub struct RequestCheck {
     pub lo: Signal<In, Bits<16>>,
     /// The next two: a Load's or Nearest's count, SetSizes' scan count, Run's iterations.
     pub hi: Signal<In, Bits<16>>,
-    /// The sixth byte: an Evaluate's pose count.
+    /// The sixth byte: an Evaluate's pose count, a Run's starts.
     pub n: Signal<In, Bits<8>>,
     /// The weight stage's stored particle count.
     pub ws_count: Signal<In, Bits<9>>,
@@ -86,7 +86,9 @@ pub struct RequestCheck {
     max_particles16: Constant<Bits<16>>,
     nearest_body: Constant<Bits<11>>,
     max_nearest: Constant<Bits<16>>,
-    run_body: Constant<Bits<11>>,
+    run_body1: Constant<Bits<11>>,
+    run_body2: Constant<Bits<11>>,
+    run_body3: Constant<Bits<11>>,
     // Registered a clock after `h` (the engine's Decode state), for timing.
     times6: DFF<Bits<20>>,
     times27: DFF<Bits<20>>,
@@ -115,6 +117,8 @@ pub struct RequestCheck {
     c_is_run: Signal<Local, Bit>,
     c_is_status: Signal<Local, Bit>,
     c_is_result: Signal<Local, Bit>,
+    /// A Run's length by its starts.
+    run_len: Signal<Local, Bits<11>>,
 }
 
 impl Default for RequestCheck {
@@ -185,7 +189,10 @@ impl RequestCheck {
             max_particles16: Constant::new(Bits::<16>::from(MAX_PARTICLES as u64)),
             nearest_body: c11(NEAREST_REQUEST_BYTES),
             max_nearest: Constant::new(Bits::<16>::from(MAX_NEAREST as u64)),
-            run_body: c11(RUN_BYTES),
+            run_body1: c11(run_bytes(1)),
+            run_body2: c11(run_bytes(2)),
+            run_body3: c11(run_bytes(3)),
+            run_len: Default::default(),
             times6: Default::default(),
             times27: Default::default(),
             sum17: Default::default(),
@@ -261,6 +268,13 @@ impl Logic for RequestCheck {
             && (self.cmd.val() <= self.c_result.val())
             && !self.c_is_status.val())
             || self.c_is_table.val();
+        // A Run's length: one pose a start after the first (0 starts taken as 1).
+        self.run_len.next = self.run_body1.val();
+        if self.n.val().get_bits::<2>(0) == 2 {
+            self.run_len.next = self.run_body2.val();
+        } else if self.n.val().get_bits::<2>(0) == 3 {
+            self.run_len.next = self.run_body3.val();
+        }
         self.c_code.next = 0.into();
         if self.c_is_identify.val() || self.c_is_status.val() {
             if self.dlen.val().any() {
@@ -323,7 +337,7 @@ impl Logic for RequestCheck {
                 self.c_code.next = self.e_capacity.val();
             }
         } else if self.c_is_run.val() {
-            if self.dlen.val() != self.run_body.val() {
+            if self.dlen.val() != self.run_len.val() {
                 self.c_code.next = self.e_length.val();
             } else if !self.lo.val().any()
                 || (self.lo.val() > self.max_particles16.val())

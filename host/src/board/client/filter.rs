@@ -1,25 +1,29 @@
-//! The on-board filter's requests (protocol 2: Run, Status, Result) and the time a run may
-//! take: the modelled board time from the sequencer's clock count, the allowance, the wait.
+//! The on-board filter's requests (Run, Status, Result; the polish after the filter since
+//! protocol 5) and the time a run may take: the modelled board time from the sequencer's
+//! clock count and the polish's bound, the allowance, the wait.
 
 use super::{BoardClient, BoardError, MAX_RETRIES, MIN_CLOCK_HZ, RUN_SAFETY};
 use pficp_fpga::messages::{
     parse_two_u16, MessageError, ResultReply, RunState, StatusReply, RESULT_BYTES, RUN_REPLY_BYTES, STATUS_BYTES,
 };
-use pficp_fpga::pf::PfConfig;
 use pficp_fpga::protocol::Command;
+use pficp_fpga::run_request::{polish_clocks_bound, RunRequest};
 use pficp_fpga::surface_residual::evaluation_clocks_bound;
 use std::time::{Duration, Instant};
 
 impl BoardClient {
-    /// The board's clocks for the on-board filter of `cfg` over the sizes in use: the
-    /// bound of [`run_clocks_bound`] with the board's lanes (1 before Identify).
-    pub fn run_clocks(&self, cfg: &PfConfig) -> u64 {
-        run_clocks_bound(cfg.particles, cfg.iterations, self.sizes.1 as usize, self.sizes.0 as usize, self.lanes())
+    /// The board's clocks for the Run `r` over the sizes in use: the filter's bound
+    /// ([`run_clocks_bound`]) and the polish's ([`polish_clocks_bound`]) with the board's
+    /// lanes (1 before Identify).
+    pub fn run_clocks(&self, r: &RunRequest) -> u64 {
+        let (model, scan, lanes) = (self.sizes.0 as usize, self.sizes.1 as usize, self.lanes());
+        run_clocks_bound(r.filter.particles, r.filter.iterations, scan, model, lanes)
+            + polish_clocks_bound(&r.polish, model, lanes)
     }
 
     /// The modelled board time of the on-board filter of `cfg` ([`Self::run_clocks`] at the
     /// board's clock; 100 MHz before Identify).
-    pub fn modelled_run_time(&self, cfg: &PfConfig) -> Duration {
+    pub fn modelled_run_time(&self, cfg: &RunRequest) -> Duration {
         Duration::from_secs_f64(self.run_clocks(cfg) as f64 / self.clock_hz())
     }
 
@@ -31,15 +35,16 @@ impl BoardClient {
 
     /// How long a run of `cfg` may take before it is an error: [`RUN_SAFETY`] times the
     /// modelled board time plus the timeout per reply.
-    pub fn run_allowance(&self, cfg: &PfConfig) -> Duration {
+    pub fn run_allowance(&self, cfg: &RunRequest) -> Duration {
         self.modelled_run_time(cfg) * RUN_SAFETY + self.timeout
     }
 
-    /// Start the on-board filter (Run) over the model and scan in use; it runs in the
-    /// background. Particles (1 to the board's most) and iterations (at least 1) are checked
-    /// here; the board checks the sizes. A board already running a filter answers `Busy`:
-    /// [`BoardError::Board`].
-    pub fn run(&mut self, cfg: &PfConfig) -> Result<(), BoardError> {
+    /// Start the on-board filter and the polish after it (Run) over the model and scan in
+    /// use; they run in the background. Particles (1 to the board's most) and iterations (at
+    /// least 1) are checked here; the board checks the sizes and the polish's points. A board
+    /// already running answers `Busy`: [`BoardError::Board`].
+    pub fn run(&mut self, request: &RunRequest) -> Result<(), BoardError> {
+        let cfg = &request.filter;
         let (n, k) = (cfg.particles as usize, cfg.iterations);
         if n == 0 || n > self.max_particles() || k == 0 {
             return Err(BoardError::Limit(format!(
@@ -48,9 +53,10 @@ impl BoardClient {
             )));
         }
         self.run_iterations = Some(cfg.iterations);
-        let data = cfg.encode();
+        self.run_starts = Some(1 + request.polish.hypotheses.len());
+        let data = request.encode();
         // A board that computes before it answers (the timeless reference) needs the run's time.
-        let extra = self.run_allowance(cfg).saturating_sub(self.timeout);
+        let extra = self.run_allowance(request).saturating_sub(self.timeout);
         let mut lost = 0;
         loop {
             match self.transact_with(Command::Run, data.clone(), RUN_REPLY_BYTES, extra, 0, false) {
@@ -92,13 +98,15 @@ impl BoardClient {
         StatusReply::decode(&reply.data).map_err(|problem| BoardError::Reply { command: Command::Status, problem })
     }
 
-    /// The finished filter's best particle, cost and pose (Result). A board still running
+    /// The finished filter's best particle, cost and pose, and the polish's choice (Result).
+    /// A board still running
     /// answers `Busy`, one that has run no filter since power-up or reset `NoResult`: both
     /// [`BoardError::Board`].
     ///
     /// The reply is checked: at least 1 iteration and no more than the last Run asked for,
     /// the largest point distance within the cost, the pose the one
-    /// [`pficp_fpga::pf::pose_of`] builds from the parameters.
+    /// [`pficp_fpga::pf::pose_of`] builds from the parameters, the winning start one of the
+    /// last Run's.
     pub fn result(&mut self) -> Result<ResultReply, BoardError> {
         let reply = self.transact(Command::Result, Vec::new(), RESULT_BYTES, 0, true)?;
         let bad = |problem| BoardError::Reply { command: Command::Result, problem };
@@ -113,6 +121,14 @@ impl BoardClient {
         }
         if r.max_d2 > r.cost {
             return Err(bad(MessageError::Field { field: "max_d2 (above the cost)", got: r.max_d2, expected: r.cost }));
+        }
+        let starts = self.run_starts.unwrap_or(pficp_fpga::run_request::MAX_STARTS);
+        if r.polish.winner as usize >= starts {
+            return Err(bad(MessageError::Field {
+                field: "winning start",
+                got: r.polish.winner as u64,
+                expected: starts as u64 - 1,
+            }));
         }
         if r.pose != pficp_fpga::pf::pose_of(&r.params) {
             return Err(BoardError::Filter(format!(

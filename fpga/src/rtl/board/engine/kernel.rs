@@ -8,6 +8,9 @@ impl<const P: usize> Logic for CommandEngine<P> {
         dff_setup!(self, clock, state, ret, dlen, cur_cmd, cur_seq, e_code, e_cmd, e_seq, pending, p_cmd, p_seq);
         dff_setup!(self, clock, err_led, faddr, fcount, inbuf, outbuf, ecount, hdr, model_count, scan_count, idx);
         dff_setup!(self, clock, waddr, eval_mode, start_r, wi, ncost, dig_sr, dig_restart);
+        dff_setup!(self, clock, pol_count, pol_steps, pol_starts, hyp1, hyp2, hcnt, pol_arm, pol_ready, run_r);
+        dff_setup!(self, clock, pass_req, pol_pass, outst, skid_v, skid_q, skid_n, skid_s, pc_seen, pc_cost, quiet);
+        self.polish.clock.next = self.clock.val();
         self.model_digest.clock.next = self.clock.val();
         self.nn.clock.next = self.clock.val();
         self.surf.clock.next = self.clock.val();
@@ -24,7 +27,8 @@ impl<const P: usize> Logic for CommandEngine<P> {
         // Outputs.
         self.busy.next = self.state.q.val() != EngState::Idle;
         self.error.next = self.err_led.q.val();
-        self.running.next = self.filter.running.val();
+        self.running_l.next = self.filter.running.val() || self.pol_arm.q.val() || self.polish.busy.val();
+        self.running.next = self.running_l.val();
         self.tx.next = self.sender.tx.val();
         self.sender.reset.next = self.reset.val();
 
@@ -41,6 +45,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
         self.h_n.next = self.h.val().get_bits::<8>(40);
         // first + count of a Nearest (checked to be at most the scan count, so 13 bits).
         self.hdr_end.next = self.hdr.q.val().get_bits::<13>(0) + self.hdr.q.val().get_bits::<13>(16);
+        self.pw_count.next = self.inbuf.q.val().get_bits::<16>(168);
         self.sizes_unset.next = !self.model_count.q.val().any() || !self.scan_count.q.val().any();
 
         // The request's checks (the codes and limits are the protocol's, as constants).
@@ -60,7 +65,8 @@ impl<const P: usize> Logic for CommandEngine<P> {
         self.feeder.from_index.next = 0.into();
         self.feeder.to_index.next = self.scan_count.q.val();
         self.feeder.ready.next = self.nn.scan_ready.val();
-        self.feeder.hold.next = false;
+        // During a pass one point at a time: none while a result is due or waits in the skid.
+        self.feeder.hold.next = self.pol_pass.q.val() && (self.outst.q.val().any() || self.skid_v.q.val());
         self.feeder.read_data.next = self.scan_store.read_data.val();
         self.scan_store.read_address.next = self.feeder.read_address.val();
         self.nn.scan_valid.next = self.feeder.valid.val();
@@ -112,11 +118,77 @@ impl<const P: usize> Logic for CommandEngine<P> {
         self.filter.nn_dist.next = bit_cast::<34, 21>(self.surf.nn_resid.val());
         if self.filter.running.val() {
             self.nn.pose.next = self.filter.pose.val();
+        } else if self.polish.busy.val() {
+            self.nn.pose.next = self.polish.pose.val();
         }
-        // The sequencer's multiplier is lent to nobody yet (the polish's pass will take it).
-        self.filter.ext_go.next = false;
-        self.filter.ext_a.next = 0.into();
-        self.filter.ext_b.next = 0.into();
+        // The polish: the sequencer's multiplier (idle after the filter), its starts, its passes.
+        self.filter.ext_go.next = self.polish.mul_go.val();
+        self.filter.ext_a.next = self.polish.mul_a.val();
+        self.filter.ext_b.next = self.polish.mul_b.val();
+        self.polish.mul_product.next = self.filter.mul_product.val();
+        self.polish.reset.next = self.reset.val();
+        self.polish.starts.next = self.pol_starts.q.val();
+        self.polish.steps.next = self.pol_steps.q.val();
+        self.polish.start_pose.next = self.filter.pose.val();
+        if self.polish.start_index.val() == 1 {
+            self.polish.start_pose.next = self.hyp1.q.val();
+        } else if self.polish.start_index.val() == 2 {
+            self.polish.start_pose.next = self.hyp2.q.val();
+        }
+        // Started once the filter's `running` has fallen after the Run.
+        self.run_r.d.next = self.filter.running.val();
+        if self.pol_arm.q.val() && self.run_r.q.val() && !self.filter.running.val() {
+            self.pol_ready.d.next = true;
+        }
+        self.polish.go.next = self.pol_ready.q.val() && !self.polish.busy.val();
+        if self.polish.busy.val() {
+            self.pol_ready.d.next = false;
+            self.pol_arm.d.next = false;
+        }
+        // A pass: asked for, launched when the pipeline is idle, served point by point.
+        if self.polish.pass_go.val() {
+            self.pass_req.d.next = true;
+        }
+        if self.pol_pass.q.val() {
+            if self.feeder.issued.val() && !self.surf.nn_valid.val() {
+                self.outst.d.next = self.outst.q.val() + 1;
+            } else if !self.feeder.issued.val() && self.surf.nn_valid.val() {
+                self.outst.d.next = self.outst.q.val() - 1;
+            }
+            if self.surf.nn_valid.val() && (self.surf.nn_dist.val() < self.cap_d2.val()) {
+                self.skid_v.d.next = true;
+                self.skid_q.d.next = self.surf.nn_point.val();
+                self.skid_n.d.next = self.surf.nn_normal.val();
+                self.skid_s.d.next = self.surf.nn_s.val().get_bits::<13>(0);
+            }
+            if self.surf.cost_valid.val() {
+                self.pc_seen.d.next = true;
+                self.pc_cost.d.next = self.surf.cost.val();
+            }
+        }
+        self.polish.in_valid.next = self.skid_v.q.val() && self.polish.ready.val();
+        self.polish.in_q.next = self.skid_q.q.val();
+        self.polish.in_n.next = self.skid_n.q.val();
+        self.polish.in_s.next = self.skid_s.q.val();
+        if self.skid_v.q.val() && self.polish.ready.val() {
+            self.skid_v.d.next = false;
+            self.quiet.d.next = 0.into();
+        } else if self.polish.ready.val() && (self.quiet.q.val() != 7) {
+            self.quiet.d.next = self.quiet.q.val() + 1;
+        }
+        self.polish.pass_done.next = false;
+        self.polish.pass_cost.next = self.pc_cost.q.val();
+        if self.pol_pass.q.val()
+            && self.pc_seen.q.val()
+            && !self.skid_v.q.val()
+            && !self.outst.q.val().any()
+            && self.polish.ready.val()
+            && (self.quiet.q.val() == 7)
+        {
+            self.polish.pass_done.next = true;
+            self.pol_pass.d.next = false;
+            self.pc_seen.d.next = false;
+        }
         self.scan_store.write_enable.next = false;
         self.scan_store.write_address.next = self.waddr.q.val().get_bits::<12>(0);
         self.scan_store.write_data.next = self.inbuf.q.val().get_bits::<48>(168);
@@ -245,11 +317,11 @@ impl<const P: usize> Logic for CommandEngine<P> {
                 self.e_cmd.d.next = self.cur_cmd.q.val();
                 self.e_seq.d.next = self.cur_seq.q.val();
                 self.state.d.next = EngState::ErrHeader;
-                if self.filter.running.val() && self.check.busy_class.val() {
+                if self.running_l.val() && self.check.busy_class.val() {
                     self.e_code.d.next = self.e_busy.val();
                 } else if self.check.code.val().any() {
                     self.e_code.d.next = self.check.code.val();
-                } else if self.check.is_result.val() && !self.filter.finished.val() {
+                } else if self.check.is_result.val() && !(self.filter.finished.val() && self.polish.done.val()) {
                     self.e_code.d.next = self.e_no_result.val();
                 } else if self.check.is_identify.val() {
                     self.ret.d.next = EngState::IdBody;
@@ -281,9 +353,11 @@ impl<const P: usize> Logic for CommandEngine<P> {
                     self.ret.d.next = EngState::NrRun;
                     self.state.d.next = EngState::FetchAddr;
                 } else if self.check.is_run.val() {
-                    self.idx.d.next = 0.into();
-                    self.faddr.d.next = self.a_run.val();
-                    self.state.d.next = EngState::RunNext;
+                    // The polish word first: its points are checked before anything is kept.
+                    self.faddr.d.next = self.a_polish.val();
+                    self.fcount.d.next = self.n_word.val();
+                    self.ret.d.next = EngState::RunPolish;
+                    self.state.d.next = EngState::FetchAddr;
                 } else if self.check.is_status.val() {
                     self.ret.d.next = EngState::StBody;
                     self.state.d.next = EngState::Header;
@@ -292,16 +366,52 @@ impl<const P: usize> Logic for CommandEngine<P> {
                     self.state.d.next = EngState::Header;
                 }
             }
+            EngState::RunPolish => {
+                if !self.pw_count.val().any() || (self.pw_count.val() > self.max_points16.val()) {
+                    self.e_code.d.next = self.e_capacity.val();
+                    self.state.d.next = EngState::ErrHeader;
+                } else {
+                    self.pol_count.d.next = self.pw_count.val().get_bits::<13>(0);
+                    self.pol_steps.d.next = self.inbuf.q.val().get_bits::<4>(184);
+                    self.pol_starts.d.next = self.hdr.q.val().get_bits::<2>(40);
+                    if !self.hdr.q.val().get_bits::<2>(40).any() {
+                        self.pol_starts.d.next = 1.into();
+                    }
+                    self.hcnt.d.next = 0.into();
+                    self.idx.d.next = 0.into();
+                    self.faddr.d.next = self.a_run.val();
+                    self.state.d.next = EngState::RunNext;
+                }
+            }
             EngState::RunNext => {
                 if self.idx.q.val() == 24 {
-                    self.filter.cfg_we.next = true;
-                    self.filter.cfg_data.next = self.hdr.q.val();
-                    self.state.d.next = EngState::RunGo;
+                    self.faddr.d.next = self.a_hyp.val();
+                    self.state.d.next = EngState::RunHyp;
                 } else {
                     self.fcount.d.next = self.n_word.val();
                     self.ret.d.next = EngState::RunWrite;
                     self.state.d.next = EngState::FetchAddr;
                 }
+            }
+            EngState::RunHyp => {
+                if (bit_cast::<3, 2>(self.hcnt.q.val()) + 1) == bit_cast::<3, 2>(self.pol_starts.q.val()) {
+                    self.filter.cfg_we.next = true;
+                    self.filter.cfg_data.next = self.hdr.q.val();
+                    self.state.d.next = EngState::RunGo;
+                } else {
+                    self.fcount.d.next = self.n_pose.val();
+                    self.ret.d.next = EngState::RunHypWrite;
+                    self.state.d.next = EngState::FetchAddr;
+                }
+            }
+            EngState::RunHypWrite => {
+                if self.hcnt.q.val().any() {
+                    self.hyp2.d.next = self.inbuf.q.val();
+                } else {
+                    self.hyp1.d.next = self.inbuf.q.val();
+                }
+                self.hcnt.d.next = self.hcnt.q.val() + 1;
+                self.state.d.next = EngState::RunHyp;
             }
             EngState::RunWrite => {
                 self.filter.cfg_we.next = true;
@@ -310,15 +420,16 @@ impl<const P: usize> Logic for CommandEngine<P> {
             }
             EngState::RunGo => {
                 self.filter.go.next = true;
+                self.pol_arm.d.next = true;
                 self.ret.d.next = EngState::EchoBody;
                 self.state.d.next = EngState::Header;
             }
             EngState::StBody => {
-                if self.filter.running.val() {
+                if self.running_l.val() {
                     self.outbuf.d.next = bits::<216>(1)
                         | (bit_cast::<216, 16>(self.filter.iterations.val()) << 8)
                         | (bit_cast::<216, 48>(self.filter.best_cost.val()) << 24);
-                } else if self.filter.finished.val() {
+                } else if self.polish.done.val() {
                     self.outbuf.d.next = bits::<216>(2)
                         | (bit_cast::<216, 16>(self.filter.iterations.val()) << 8)
                         | (bit_cast::<216, 48>(self.filter.best_cost.val()) << 24);
@@ -345,6 +456,19 @@ impl<const P: usize> Logic for CommandEngine<P> {
             }
             EngState::ResBody3 => {
                 self.outbuf.d.next = self.filter.pose.val();
+                self.ecount.d.next = self.n_pose.val();
+                self.ret.d.next = EngState::ResBody4;
+                self.state.d.next = EngState::Emit;
+            }
+            EngState::ResBody4 => {
+                self.outbuf.d.next = bit_cast::<216, 2>(self.polish.best_index.val())
+                    | (bit_cast::<216, 48>(self.polish.best_cost.val()) << 8);
+                self.ecount.d.next = self.n_polish_head.val();
+                self.ret.d.next = EngState::ResBody5;
+                self.state.d.next = EngState::Emit;
+            }
+            EngState::ResBody5 => {
+                self.outbuf.d.next = self.polish.pose.val();
                 self.ecount.d.next = self.n_pose.val();
                 self.ret.d.next = EngState::Send;
                 self.state.d.next = EngState::Emit;
@@ -538,6 +662,16 @@ impl<const P: usize> Logic for CommandEngine<P> {
             }
         }
 
+        // A pass of the polish starts the pipeline on the unit's pose and its points.
+        if self.pass_req.q.val() && !self.nn.busy.val() && !self.feeder.streaming.val() && !self.start_r.q.val() {
+            self.pass_req.d.next = false;
+            self.pol_pass.d.next = true;
+            self.outst.d.next = 0.into();
+            self.start_r.d.next = true;
+            self.feeder.launch.next = true;
+            self.feeder.from_index.next = 0.into();
+            self.feeder.to_index.next = self.pol_count.q.val();
+        }
         // The sequencer starts the pipeline on its pose and the whole scan store.
         if self.filter.start.val() {
             self.start_r.d.next = true;
@@ -550,6 +684,12 @@ impl<const P: usize> Logic for CommandEngine<P> {
             self.state.d.next = EngState::Idle;
             self.pending.d.next = false;
             self.eval_mode.d.next = false;
+            self.pol_arm.d.next = false;
+            self.pol_ready.d.next = false;
+            self.pass_req.d.next = false;
+            self.pol_pass.d.next = false;
+            self.skid_v.d.next = false;
+            self.pc_seen.d.next = false;
         }
     }
 }

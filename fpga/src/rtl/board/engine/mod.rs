@@ -8,6 +8,13 @@
 //! bytes of `outbuf` to the reply) return to the state in `ret`; the states are [`EngState`]
 //! (`state.rs`), the state machine is `kernel.rs`, the scan stream into the pipeline is the
 //! [`ScanFeeder`].
+//!
+//! After the filter the engine runs the polish ([`PolishUnit`], docs/polish.md): it lends
+//! it the sequencer's multiplier, gives it its starts (the filter's pose, then the Run's
+//! hypotheses) and serves its passes: the pipeline at the unit's pose over the first
+//! `points` stored scan points, one point let in at a time (the feeder's `hold`) and its
+//! found result (distance below `CAP_D2`) handed to the pass through a one-entry skid, so
+//! the pipeline's latency overlaps the pass's 52 clocks an inlier.
 
 use super::digest::ModelDigest;
 use super::reply_tx::ReplySender;
@@ -18,14 +25,17 @@ use crate::board::BoardConfig;
 use crate::messages::{
     Identity, COST_BYTES, DIGEST_BYTES, EVALUATE_HEADER_BYTES, IDENTITY_BYTES, LOAD_HEADER_BYTES, NEAREST_HEAD_BYTES,
     NEAREST_REQUEST_BYTES, NEAREST_RESULT_BYTES, POINT_BYTES, POSE_BYTES, RESULT_HEAD_BYTES, RESULT_PARAMS_BYTES,
-    RUN_REPLY_BYTES, STATUS_BYTES, TABLE_ENTRY_BYTES, TWO_U16_BYTES, WEIGHT_BYTES, WEIGHT_SUMMARY_BYTES,
+    RESULT_POLISH_HEAD_BYTES, RUN_REPLY_BYTES, STATUS_BYTES, TABLE_ENTRY_BYTES, TWO_U16_BYTES, WEIGHT_BYTES,
+    WEIGHT_SUMMARY_BYTES,
 };
-use crate::pf::{RUN_HEADER_BYTES, RUN_WORD_BYTES};
+use crate::pf::{RUN_BYTES, RUN_HEADER_BYTES, RUN_WORD_BYTES};
 use crate::protocol::Command;
 use crate::protocol::{ErrorCode, CRC_BYTES, ERROR_DATA_BYTES, HEADER_BYTES};
 use crate::rtl::neighbour_pipeline::NeighbourPipeline;
+use crate::rtl::polish::PolishUnit;
 use crate::rtl::surface_residual::SurfaceResidual;
 use crate::rtl::weights::WeightStage;
+use crate::run_request::RUN_BASE_BYTES;
 use rust_hdl::prelude::*;
 
 mod kernel;
@@ -173,6 +183,45 @@ pub struct CommandEngine<const P: usize> {
     h_n: Signal<Local, Bits<8>>,
     sizes_unset: Signal<Local, Bit>,
     hdr_end: Signal<Local, Bits<13>>,
+    /// The polish after the filter.
+    polish: PolishUnit,
+    /// The Run's polish: stored scan points a pass goes over, steps, starts (1 to 3).
+    pol_count: DFF<Bits<13>>,
+    pol_steps: DFF<Bits<4>>,
+    pol_starts: DFF<Bits<2>>,
+    /// The Run's hypotheses (starts 1 and 2) and how many are in.
+    hyp1: DFF<Bits<216>>,
+    hyp2: DFF<Bits<216>>,
+    hcnt: DFF<Bits<2>>,
+    /// A Run's polish is to follow its filter; the filter has ended (its `running` fell).
+    pol_arm: DFF<Bit>,
+    pol_ready: DFF<Bit>,
+    /// The filter's `running`, a clock late.
+    run_r: DFF<Bit>,
+    /// A pass asked for and not yet launched; a pass in progress.
+    pass_req: DFF<Bit>,
+    pol_pass: DFF<Bit>,
+    /// The pass's points let into the pipeline whose results are not out yet.
+    outst: DFF<Bits<2>>,
+    /// A found result waiting for the pass: image, normal, signed residual.
+    skid_v: DFF<Bit>,
+    skid_q: DFF<Bits<48>>,
+    skid_n: DFF<Bits<48>>,
+    skid_s: DFF<Bits<13>>,
+    /// The pass's cost is in.
+    pc_seen: DFF<Bit>,
+    pc_cost: DFF<Bits<48>>,
+    /// Clocks the pass has been ready since its last point (to 7).
+    quiet: DFF<Bits<3>>,
+    cap_d2: Constant<Bits<34>>,
+    max_points16: Constant<Bits<16>>,
+    e_capacity: Constant<Bits<8>>,
+    a_polish: Constant<Bits<11>>,
+    a_hyp: Constant<Bits<11>>,
+    n_polish_head: Constant<Bits<5>>,
+    /// The filter or the polish is running (or about to).
+    running_l: Signal<Local, Bit>,
+    pw_count: Signal<Local, Bits<16>>,
 }
 
 impl<const P: usize> CommandEngine<P> {
@@ -273,6 +322,34 @@ impl<const P: usize> CommandEngine<P> {
             h_n: Default::default(),
             sizes_unset: Default::default(),
             hdr_end: Default::default(),
+            polish: PolishUnit::new(),
+            pol_count: Default::default(),
+            pol_steps: Default::default(),
+            pol_starts: Default::default(),
+            hyp1: Default::default(),
+            hyp2: Default::default(),
+            hcnt: Default::default(),
+            pol_arm: Default::default(),
+            pol_ready: Default::default(),
+            run_r: Default::default(),
+            pass_req: Default::default(),
+            pol_pass: Default::default(),
+            outst: Default::default(),
+            skid_v: Default::default(),
+            skid_q: Default::default(),
+            skid_n: Default::default(),
+            skid_s: Default::default(),
+            pc_seen: Default::default(),
+            pc_cost: Default::default(),
+            quiet: Default::default(),
+            cap_d2: Constant::new(Bits::<34>::from(crate::grid::CAP_D2)),
+            max_points16: Constant::new(Bits::<16>::from(crate::format::MAX_POINTS as u64)),
+            e_capacity: Constant::new(Bits::<8>::from(ErrorCode::OverCapacity as u64)),
+            a_polish: frame_address(HEADER_BYTES + RUN_BYTES),
+            a_hyp: frame_address(HEADER_BYTES + RUN_BASE_BYTES),
+            n_polish_head: emit_count(RESULT_POLISH_HEAD_BYTES),
+            running_l: Default::default(),
+            pw_count: Default::default(),
         }
     }
 }

@@ -69,8 +69,14 @@ pub enum EngState {
     NrLoop,
     /// Nearest: append a result.
     NrRead,
-    /// Run: next configuration word or the header word.
+    /// Run: the polish word is in: check its points, keep it.
+    RunPolish,
+    /// Run: next configuration word or the hypotheses.
     RunNext,
+    /// Run: next hypothesis pose or the header word.
+    RunHyp,
+    /// Run: keep the fetched hypothesis.
+    RunHypWrite,
     /// Run: write the fetched word.
     RunWrite,
     /// Run: start the sequencer, answer.
@@ -81,6 +87,10 @@ pub enum EngState {
     ResBody1,
     /// Result: the parameters.
     ResBody2,
-    /// Result: the pose.
+    /// Result: the filter's pose.
     ResBody3,
+    /// Result: the polish's winner and cost.
+    ResBody4,
+    /// Result: the polished pose.
+    ResBody5,
 }
