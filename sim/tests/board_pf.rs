@@ -79,8 +79,7 @@ fn the_board_runs_the_filter_and_returns_the_reference_pose() {
     let cfg = example_request(24, 12, 11, 30);
     let r = exchange(&mut b, &req(Command::Run, 4, cfg.encode()));
     assert_eq!((r.code, r.data.first()), (0xff, Some(&4)), "{r:?}");
-    // The filter over the first 24 points, the polish over all 30.
-    exchange(&mut b, &req(Command::SetSizes, 5, messages::two_u16(80, 24)));
+    exchange(&mut b, &req(Command::SetSizes, 5, messages::two_u16(80, 30)));
     // A polish over no points: OverCapacity, and nothing runs.
     let mut none = cfg.clone();
     none.polish.points = 0;
@@ -106,7 +105,7 @@ fn the_board_runs_the_filter_and_returns_the_reference_pose() {
     assert!(b.progress_frames() >= 1, "at least one Status while running");
     let r = exchange(&mut b, &req(Command::Result, seq, vec![]));
     let result = ResultReply::decode(&r.data).unwrap();
-    let RunOutcome { filter: outcome, polish } = reference(&cfg, &grid, &normals, &scan, 24);
+    let RunOutcome { filter: outcome, polish } = reference(&cfg, &grid, &normals, &scan, 30);
     // The filter found something: a pose that undoes most of the scan's shift (the start,
     // the identity, misses by all of it) at a lower cost than the start's.
     let miss = |t: [i32; 3]| (0..3).map(|k| ((t[k] - SHIFT[k] as i32) as f64).powi(2)).sum::<f64>().sqrt();
