@@ -424,7 +424,7 @@ fn a_version_1_board_serves_the_host_driven_mode_only() {
 }
 
 #[test]
-fn the_on_board_filter_needs_protocol_4_and_the_host_driven_mode_takes_1_2_and_4() {
+fn the_on_board_filter_needs_protocol_5_and_the_host_driven_mode_takes_1_2_4_and_5() {
     let (ds, _) = reduced_model_1();
     let nn = NearestNeighbours::new(&ds.model);
     let settings = PfIcpSettings { clusters: 25, particles: 20, iterations: 4, seed: 5, ..Default::default() };
@@ -434,25 +434,22 @@ fn the_on_board_filter_needs_protocol_4_and_the_host_driven_mode_takes_1_2_and_4
     let mut client = board.client();
     let e = on_board_50(&mut client, &nn, &ds.scan, &settings).unwrap_err();
     let m = e.to_string();
-    assert!(
-        m.contains("version 2") && m.contains("needs 4") && m.contains("--host-driven") && !m.contains('\n'),
-        "{m}"
-    );
+    assert!(m.contains("version 2") && m.contains("need 5") && m.contains("--host-driven") && !m.contains('\n'), "{m}");
     assert_eq!(client.stats().requests, 1, "only Identify");
     host_driven::register(&mut client, &nn, &ds.scan, &settings, &mut |_, _, _| {}).unwrap();
     // A board of a later version than the host: both modes refuse it.
     let mut board = PtyBoard::serve(support::intercepting_handler(|f, b| {
         (f.code == Command::Identify as u8).then(|| {
             let mut id = Identity::decode(&b.execute(f).data).unwrap();
-            id.version = 5;
+            id.version = 6;
             Frame { code: 0x81, seq: f.seq, data: id.encode() }.encode()
         })
     }));
     let mut client = board.client();
     let e = on_board_50(&mut client, &nn, &ds.scan, &settings).unwrap_err();
-    assert!(e.to_string().contains("version 5"), "{e}");
+    assert!(e.to_string().contains("version 6"), "{e}");
     let e = host_driven::register(&mut client, &nn, &ds.scan, &settings, &mut |_, _, _| {}).unwrap_err();
-    assert!(matches!(&e, BoardError::Limit(m) if m.contains("version 5") && m.contains("1, 2 or 4")), "{e}");
+    assert!(matches!(&e, BoardError::Limit(m) if m.contains("version 6") && m.contains("1, 2, 4 or 5")), "{e}");
 }
 
 #[test]

@@ -210,7 +210,7 @@ fn board_info_prints_the_identity() {
     let out = String::from_utf8(o.stdout).unwrap();
     let version = format!("protocol version  {}", pficp_fpga::protocol::VERSION);
     let baud = format!("baud              {}", pficp::board::DEFAULT_BAUD);
-    for line in [version.as_str(), "lanes             16", "max particles     256", &baud] {
+    for line in [version.as_str(), "lanes             8", "max particles     256", &baud] {
         assert!(out.contains(line), "{line:?} not in {out}");
     }
 }

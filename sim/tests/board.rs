@@ -85,7 +85,7 @@ fn every_command_matches_the_reference_byte_for_byte() {
     eprintln!("{} bytes compared in {} clocks", b.comparison().0, b.clocks());
 }
 
-/// The generated board (16 lanes, 50 MHz, 3 Mbaud: 16 2/3 clocks a bit, the UART's timing
+/// The generated board (8 lanes, 50 MHz, 3 Mbaud: 16 2/3 clocks a bit, the UART's timing
 /// fractional) with the host at the exact nominal timing (`SerialBoard` keeps rational time:
 /// back-to-back bytes start at every phase of the clock): long frames each way, byte for
 /// byte as the reference, the LEDs by their rule.
@@ -97,7 +97,7 @@ fn the_generated_board_at_16_2_3_clocks_a_bit_matches_the_reference() {
     b.run(100);
     let id = exchange(&mut b, &req(Command::Identify, 1, vec![]));
     let ident = messages::Identity::decode(&id.data).unwrap();
-    assert_eq!((ident.lanes, ident.baud, ident.clock_hz), (16, pficp_fpga::board::DEFAULT_BAUD, 50_000_000));
+    assert_eq!((ident.lanes, ident.baud, ident.clock_hz), (8, pficp_fpga::board::DEFAULT_BAUD, 50_000_000));
     let mut s = 11;
     let model = cloud(340, &mut s);
     let scan = cloud(200, &mut s);

@@ -1,5 +1,5 @@
 //! End to end: the real host client (`pficp::board`, through the real `serialport` crate)
-//! talks to `pficp-sim-board` (the Verilated board top as hdl-gen generates it: 16 lanes, 50 MHz, 3,000,000 baud) over a
+//! talks to `pficp-sim-board` (the Verilated board top as hdl-gen generates it: 8 lanes, 50 MHz, 3,000,000 baud) over a
 //! pseudo-terminal. The simulated board runs with `--check`: every byte it sends is
 //! compared with the byte-level reference, and it says so when it stops.
 
@@ -89,7 +89,7 @@ fn reduced_models_1_and_2_through_the_simulated_board() {
     let board = SimBoard::start();
     // No rate given: the client probes and the board answers at the first, its default.
     let (client, id) = BoardClient::connect(&board.path, None, Duration::from_secs(5)).unwrap();
-    assert_eq!((id.lanes, id.baud, id.clock_hz, client.baud()), (16, DEFAULT_BAUD, 50_000_000, DEFAULT_BAUD));
+    assert_eq!((id.lanes, id.baud, id.clock_hz, client.baud()), (8, DEFAULT_BAUD, 50_000_000, DEFAULT_BAUD));
     drop(client);
     register_both(ModelId::Model1, &board);
     register_both(ModelId::Model2, &board);
