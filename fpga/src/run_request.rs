@@ -89,8 +89,8 @@ impl RunRequest {
 }
 
 /// Clocks of the polish's programs between two passes, at most (the gate, the solve, the
-/// update and the drift check on the serial datapath; a generous bound on the ~TBD clocks
-/// measured, for the host's deadlines only).
+/// update and the drift check on the serial datapath): an allowance for the host's
+/// deadlines only, not yet checked against a measured count (docs/polish.md, next steps).
 pub const PROGRAM_CLOCKS_BOUND: u64 = 100_000;
 
 /// Clocks a pass spends on a point beyond the pipeline's evaluation of it, at most: the
