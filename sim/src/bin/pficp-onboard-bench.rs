@@ -1,6 +1,6 @@
 //! `pficp-onboard-bench`: the board time of one PF-ICP registration with the particle filter
 //! on the board (the default mode of `pficp register --board`), counted in clocks of the
-//! Verilated default board (the generated design: 16 lanes, the UCF's 50 MHz, 3,000,000
+//! Verilated default board (the generated design: 8 lanes, the UCF's 50 MHz, 3,000,000
 //! baud) driven through its serial pins at the UART's exact bit timing; beside the software
 //! mode's time on this machine.
 //!
@@ -13,13 +13,15 @@
 //! Two registrations run on the same board: the first uploads the model (sorted by cell)
 //! and its cell table, the second finds them resident (Identify's model digest equals
 //! the one the upload leaves, as the host's `ensure_grid` checks) and sends only the scan
-//! sample. Each one's board time is every clock from the first byte of Identify to the last
+//! (the filter's sample, then the rest of the scan for the board's polish). Each one's board time is every clock from the first byte of Identify to the last
 //! byte of the Result reply: Identify, the loads, SetSizes, Run, the filter, a Status poll
 //! every `pficp::board::DEFAULT_POLL` of board time (1 ms, as the host client polls), Status
 //! and Result.
 //! The board's bytes are compared with the byte-level reference on the way (Status replies
-//! of a running filter excepted). The prior and the polish run on the host (not timed here:
-//! the host's stages are the software mode's).
+//! of a running filter excepted). The Run is the host's (`OnBoardPlan::run_request`): the
+//! filter, then the board's polish from its pose and the prior's hypotheses, so the board's
+//! pose alone is the polished one. The prior and the host's optional polish run on the host
+//! (not timed here: the host's stages are the software mode's).
 //!
 //! `pficp-onboard-bench [--model-points 2000] [--scan-points 1000] [--board-points 300]
 //! [--particles 50] [--iterations 50] [--runs 3] [--seed 1] [--all-iterations]`; run in
@@ -117,7 +119,7 @@ fn registration(b: &mut SerialBoard, plan: &on_board::OnBoardPlan, config: Board
     let id = messages::Identity::decode(&id.data)?;
     let uploaded = id.model_digest != messages::grid_digest(&plan.grid, &plan.normals);
     let mut loads = if uploaded { messages::grid_upload(&plan.grid, &plan.normals) } else { Vec::new() };
-    for (k, chunk) in plan.scan.chunks(messages::MAX_LOAD_POINTS).enumerate() {
+    for (k, chunk) in plan.stored_scan().chunks(messages::MAX_LOAD_POINTS).enumerate() {
         loads.push((Command::LoadScan, messages::load_request((k * messages::MAX_LOAD_POINTS) as u16, chunk)));
     }
     for (cmd, data) in loads {
@@ -129,7 +131,7 @@ fn registration(b: &mut SerialBoard, plan: &on_board::OnBoardPlan, config: Board
     let sizes = messages::two_u16(plan.model.len() as u16, plan.scan.len() as u16);
     exchange(b, &Frame { code: Command::SetSizes as u8, seq: next(), data: sizes })?;
     let load_clocks = b.clocks() - t0;
-    let r = exchange(b, &Frame { code: Command::Run as u8, seq: next(), data: plan.config.encode() })?;
+    let r = exchange(b, &Frame { code: Command::Run as u8, seq: next(), data: plan.run_request().encode() })?;
     if r.code != Command::Run as u8 | 0x80 {
         bail!("Run refused: {r:?}");
     }
@@ -200,11 +202,14 @@ fn main() -> Result<()> {
     let board_err = PoseError::between(&fin.registration.pose, &truth, diag);
     let alone_err = PoseError::between(&fin.filter_pose, &truth, diag);
     println!(
-        "model-1, {} model points, {} scan points ({} on the board), {} particles, {} iterations cap; \
-         {compared} board bytes equal to the reference (simulated in {:.1} s)",
+        "model-1, {} model points, {} scan points ({} weighed on the board, {} polished over in {} steps from {} \
+         starts), {} particles, {} iterations cap; {compared} board bytes equal to the reference (simulated in {:.1} s)",
         a.model_points,
         a.scan_points,
         plan.scan.len(),
+        plan.polish.points,
+        plan.polish.steps,
+        1 + plan.polish.hypotheses.len(),
         a.particles,
         a.iterations,
         wall.elapsed().as_secs_f64()

@@ -25,7 +25,7 @@ use std::time::{Duration, Instant};
 #[command(name = "pficp-sim-board", version, about = "Serve the Verilated PF-ICP board on a pseudo-terminal")]
 struct Args {
     /// Serve the fast-UART test build (4 lanes, 25 Mbaud) instead of the real board
-    /// (16 lanes, 3,000,000 baud at 50 MHz, as hdl-gen generates it).
+    /// (8 lanes, 3,000,000 baud at 50 MHz, as hdl-gen generates it).
     #[arg(long)]
     fast: bool,
     /// Run the byte-level reference beside the RTL and compare every byte the board sends
