@@ -330,13 +330,14 @@ struct EvalArgs {
     /// Realistic suite: also run these methods (comma-separated), beside pf-icp.
     #[arg(long, value_enum, value_delimiter = ',')]
     with: Vec<MethodArg>,
-    /// Realistic suite: also run PF-ICP with the filter on the board, the board's part by
-    /// its bit-exact reference (what the board computes), columns pf-icp-board (with the
-    /// host's polish) and pf-icp-board-filter (the board's pose alone).
+    /// Also run PF-ICP with the filter and its polish on the board, the board's part by its
+    /// bit-exact reference (what the board computes): columns pf-icp-board (then the
+    /// host's polish) and pf-icp-board-filter (the board's pose alone), in the realistic
+    /// suite and in the paper suite's success rates.
     #[arg(long)]
     board_reference: bool,
-    /// Realistic suite, with --board-reference: scan points the on-board filter weighs
-    /// each particle over [default: the register command's].
+    /// With --board-reference: scan points the on-board filter weighs each particle over
+    /// [default: the register command's].
     #[arg(long, requires = "board_reference")]
     board_points: Option<usize>,
     /// Realistic suite: export every case (model, scan, truth, symmetries) to this folder
@@ -631,10 +632,21 @@ fn eval(a: &EvalArgs) -> Result<()> {
         scan_points: a.scan_points,
         seed: a.seed,
         success: !a.no_success,
+        board: a.board_reference,
+        board_points: board_points(a)?,
         ..Default::default()
     };
     pficp::eval::run(&opts)?;
     Ok(())
+}
+
+/// `--board-points`, checked.
+fn board_points(a: &EvalArgs) -> Result<usize> {
+    let n = a.board_points.unwrap_or(pficp::board::on_board::DEFAULT_BOARD_POINTS);
+    if n == 0 || n > pficp::board::MAX_POINTS {
+        bail!("--board-points must be 1 to {} (got {n})", pficp::board::MAX_POINTS);
+    }
+    Ok(n)
 }
 
 fn eval_realistic(a: &EvalArgs) -> Result<()> {
@@ -666,12 +678,9 @@ fn eval_realistic(a: &EvalArgs) -> Result<()> {
         out_dir: Some(a.out.clone()),
         export: a.export.clone(),
         board: a.board_reference,
-        board_points: a.board_points.unwrap_or(pficp::board::on_board::DEFAULT_BOARD_POINTS),
+        board_points: board_points(a)?,
         ..Default::default()
     };
-    if opts.board_points == 0 || opts.board_points > pficp::board::MAX_POINTS {
-        bail!("--board-points must be 1 to {} (got {})", pficp::board::MAX_POINTS, opts.board_points);
-    }
     let report = realistic::run(&opts)?;
     print!("{}", report.render());
     note(format_args!("wrote {}", a.out.join("realistic.json").display()));

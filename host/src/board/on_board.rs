@@ -419,6 +419,21 @@ pub fn finish(
     }
 }
 
+/// PF-ICP with the filter and its polish on the board, the board's part by its bit-exact
+/// reference ([`OnBoardPlan::emulate`], what the board computes and returns to the bit):
+/// the software mode's emulation of `pficp register --board`, for the experiments'
+/// `pf-icp-board` columns. [`PfIcpResult::filter_pose`] is the board's pose alone.
+pub fn emulate_registration(
+    nn: &NearestNeighbours,
+    scan: &[Point3<f64>],
+    settings: &PfIcpSettings,
+    board_points: usize,
+) -> Result<PfIcpResult, BoardError> {
+    let plan = plan(nn, scan, settings, board_points, crate::board::MAX_POINTS)?;
+    let reply = ResultReply::of(&plan.emulate());
+    Ok(finish(&plan, nn, scan, settings, &reply, Duration::ZERO))
+}
+
 /// What the board did during one on-board registration.
 #[derive(Clone, Debug)]
 pub struct OnBoardReport {

@@ -52,7 +52,19 @@ pub struct EvalOptions {
     pub plots: bool,
     /// Methods in the success-rate table.
     pub methods: Vec<Method>,
+    /// Also PF-ICP with the filter on the board in the success-rate table, the board's part
+    /// by its bit-exact reference ([`BOARD_COLUMN`], [`BOARD_FILTER_COLUMN`]).
+    pub board: bool,
+    /// Scan points the on-board filter weighs each particle over, with `board`.
+    pub board_points: usize,
 }
+
+/// Name of the on-board column: the board's filter and its on-board polish, then the host's
+/// polish (`pficp register --board`'s pose).
+pub const BOARD_COLUMN: &str = "pf-icp-board";
+/// Name of the column of the board's pose alone: its filter and its on-board polish, no
+/// polish on the host.
+pub const BOARD_FILTER_COLUMN: &str = "pf-icp-board-filter";
 
 impl Default for EvalOptions {
     fn default() -> Self {
@@ -66,6 +78,8 @@ impl Default for EvalOptions {
             success: true,
             plots: true,
             methods: Method::ALL.to_vec(),
+            board: false,
+            board_points: crate::board::on_board::DEFAULT_BOARD_POINTS,
         }
     }
 }
@@ -136,7 +150,7 @@ pub fn run(opts: &EvalOptions) -> anyhow::Result<EvalReport> {
             report.comparison_tables.push(t);
         }
     }
-    if opts.success && opts.trials > 0 && !opts.methods.is_empty() {
+    if opts.success && opts.trials > 0 && (!opts.methods.is_empty() || opts.board) {
         let s = success::run(opts);
         println!("{}", s.render());
         report.success = Some(s);

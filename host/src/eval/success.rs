@@ -11,13 +11,14 @@
 //! so the counts are a function of the seed.
 
 use super::text_table::TextTable;
-use super::{judge, median, mix, paper_order, EvalOptions, Judged};
+use super::{judge, median, mix, paper_order, EvalOptions, Judged, BOARD_COLUMN, BOARD_FILTER_COLUMN};
 use crate::cloud::bbox_diagonal;
 use crate::datasets::{make, random_truth, ModelId, Sampling, ScanSpec};
+use crate::geometry::Pose;
 use crate::nn::NearestNeighbours;
 use crate::pf_icp::PfIcpSettings;
 use crate::progress::Progress;
-use crate::registration::methods::{MethodSettings, Tolerance};
+use crate::registration::methods::{MethodSettings, PoseError, Tolerance};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
@@ -107,6 +108,15 @@ pub struct SuccessReport {
     pub median_seconds: Vec<f64>,
 }
 
+/// The table's columns: the methods, then the board's two when asked for.
+fn columns(opts: &EvalOptions) -> Vec<String> {
+    let mut v: Vec<String> = opts.methods.iter().map(|m| m.name().to_string()).collect();
+    if opts.board {
+        v.extend([BOARD_COLUMN.to_string(), BOARD_FILTER_COLUMN.to_string()]);
+    }
+    v
+}
+
 fn row(id: ModelId, noise_fraction: f64, opts: &EvalOptions, bar: &Progress) -> SuccessRow {
     let model_index = ModelId::ALL.iter().position(|&m| m == id).unwrap_or(0) as u64;
     let model_seed = mix(opts.seed, model_index + 1);
@@ -127,22 +137,50 @@ fn row(id: ModelId, noise_fraction: f64, opts: &EvalOptions, bar: &Progress) -> 
             &ScanSpec { sampling: Sampling::Independent { points: opts.scan_points }, noise, seed },
         );
         let settings = MethodSettings { pf: PfIcpSettings { seed, ..Default::default() } };
-        let results = opts
+        let result = |method: &str, pose: &Pose, seconds: f64| {
+            let e = PoseError::between(pose, &truth, diag);
+            TrialMethodResult {
+                method: method.to_string(),
+                success: Tolerance::SUCCESS.accepts(pose, &truth, diag),
+                rotation_error_deg: e.rotation_deg,
+                max_euler_error_deg: e.max_euler_deg,
+                translation_error_frac: e.translation_frac,
+                scale_error_frac: e.scale_frac,
+                seconds,
+            }
+        };
+        let mut results: Vec<TrialMethodResult> = opts
             .methods
             .iter()
             .map(|&m| {
-                let Judged { outcome, success, error: e } = judge(m, &nn, &ds.scan, &settings, &truth, diag);
-                TrialMethodResult {
-                    method: m.name().to_string(),
-                    success,
-                    rotation_error_deg: e.rotation_deg,
-                    max_euler_error_deg: e.max_euler_deg,
-                    translation_error_frac: e.translation_frac,
-                    scale_error_frac: e.scale_frac,
-                    seconds: outcome.elapsed.as_secs_f64(),
-                }
+                let Judged { outcome, .. } = judge(m, &nn, &ds.scan, &settings, &truth, diag);
+                result(m.name(), &outcome.registration.pose, outcome.elapsed.as_secs_f64())
             })
             .collect();
+        if opts.board {
+            let t = Instant::now();
+            match crate::board::on_board::emulate_registration(&nn, &ds.scan, &settings.pf, opts.board_points) {
+                Ok(pf) => {
+                    let seconds = t.elapsed().as_secs_f64();
+                    results.push(result(BOARD_COLUMN, &pf.registration.pose, seconds));
+                    results.push(result(BOARD_FILTER_COLUMN, &pf.filter_pose, seconds));
+                }
+                // A model the board cannot hold: a failure of both columns, with no errors.
+                Err(_) => {
+                    for method in [BOARD_COLUMN, BOARD_FILTER_COLUMN] {
+                        results.push(TrialMethodResult {
+                            method: method.to_string(),
+                            success: false,
+                            rotation_error_deg: f64::NAN,
+                            max_euler_error_deg: f64::NAN,
+                            translation_error_frac: f64::NAN,
+                            scale_error_frac: f64::NAN,
+                            seconds: t.elapsed().as_secs_f64(),
+                        });
+                    }
+                }
+            }
+        }
         trials.push(TrialRecord { seed, truth: paper_order(&truth.to_params()), noise, results });
         bar.inc();
         if t + 1 == opts.trials {
@@ -155,15 +193,14 @@ fn row(id: ModelId, noise_fraction: f64, opts: &EvalOptions, bar: &Progress) -> 
             ));
         }
     }
-    let cells = opts
-        .methods
-        .iter()
+    let cells = columns(opts)
+        .into_iter()
         .enumerate()
         .map(|(j, m)| {
             let successes = trials.iter().filter(|t| t.results[j].success).count();
             let times: Vec<f64> = trials.iter().map(|t| t.results[j].seconds).collect();
             SuccessCell {
-                method: m.name().to_string(),
+                method: m,
                 successes,
                 trials: trials.len(),
                 rate: successes as f64 / trials.len().max(1) as f64,
@@ -186,7 +223,7 @@ pub fn run(opts: &EvalOptions) -> SuccessReport {
         }
     }
     bar.clear();
-    let median_seconds = (0..opts.methods.len())
+    let median_seconds = (0..columns(opts).len())
         .map(|j| {
             let times: Vec<f64> =
                 rows.iter().flat_map(|r| r.trials.iter().map(move |t| t.results[j].seconds)).collect();
@@ -197,7 +234,7 @@ pub fn run(opts: &EvalOptions) -> SuccessReport {
         trials: opts.trials,
         model_points: opts.model_points,
         scan_points: opts.scan_points,
-        methods: opts.methods.iter().map(|m| m.name().to_string()).collect(),
+        methods: columns(opts),
         rows,
         median_seconds,
     }

@@ -45,7 +45,6 @@ use crate::pf_icp::PfIcpSettings;
 use crate::progress::Progress;
 use crate::registration::methods::{run as run_method, Method, MethodSettings};
 use anyhow::Context;
-use nalgebra::Point3;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -207,10 +206,7 @@ pub struct RealisticReport {
     pub families: Vec<FamilyReport>,
 }
 
-/// Name of the on-board column (the board's filter and the host's polish).
-pub const BOARD_COLUMN: &str = "pf-icp-board";
-/// Name of the column of the board's pose alone (no polish).
-pub const BOARD_FILTER_COLUMN: &str = "pf-icp-board-filter";
+pub use super::{BOARD_COLUMN, BOARD_FILTER_COLUMN};
 
 fn method_columns(opts: &RealisticOptions) -> Vec<String> {
     let mut v: Vec<String> = opts.methods.iter().map(|m| m.name().to_string()).collect();
@@ -219,20 +215,6 @@ fn method_columns(opts: &RealisticOptions) -> Vec<String> {
         v.push(BOARD_FILTER_COLUMN.to_string());
     }
     v
-}
-
-/// PF-ICP with the filter on the board, the board's part by its bit-exact reference.
-fn on_board_reference(
-    nn: &NearestNeighbours,
-    scan: &[Point3<f64>],
-    settings: &PfIcpSettings,
-    board_points: usize,
-) -> anyhow::Result<crate::pf_icp::PfIcpResult> {
-    use crate::board::on_board::{finish, plan};
-    let plan = plan(nn, scan, settings, board_points, crate::board::MAX_POINTS)?;
-    let out = plan.emulate();
-    let reply = pficp_fpga::messages::ResultReply::of(&out);
-    Ok(finish(&plan, nn, scan, settings, &reply, std::time::Duration::ZERO))
 }
 
 /// Case `index` of `family` in the options' split.
@@ -292,7 +274,7 @@ pub fn run(opts: &RealisticOptions) -> anyhow::Result<RealisticReport> {
                 .collect();
             if opts.board {
                 let t = Instant::now();
-                let pf = on_board_reference(&nn, &c.scan, &settings.pf, opts.board_points)
+                let pf = crate::board::on_board::emulate_registration(&nn, &c.scan, &settings.pf, opts.board_points)
                     .with_context(|| format!("case {}", c.id))?;
                 let seconds = t.elapsed().as_secs_f64();
                 let sc = score(&pf.registration.pose, &c);
