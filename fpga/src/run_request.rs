@@ -88,10 +88,27 @@ impl RunRequest {
     }
 }
 
-/// Clocks of the polish's programs between two passes, at most (the gate, the solve, the
-/// update and the drift check on the serial datapath): an allowance for the host's
-/// deadlines only, not yet checked against a measured count (docs/polish.md, next steps).
-pub const PROGRAM_CLOCKS_BOUND: u64 = 100_000;
+/// Clocks of the control's own between two passes, at most, beside its programs: the
+/// pose's load (12 clocks) and read back (13), and a few clocks of state a program.
+pub const CONTROL_CLOCKS: u64 = 64;
+
+/// Clocks between two passes of the polish, at most: the most its programs take between
+/// two passes (between two gated passes: the solve, the update, the next gate and the
+/// clear; the other gaps run fewer programs), by their instructions' bounds
+/// ([`crate::polish::program::program_clocks_bound`], checked against the Verilated
+/// datapath), and [`CONTROL_CLOCKS`].
+pub fn program_clocks_bound() -> u64 {
+    use crate::polish::program::program_clocks_bound as bound;
+    use crate::polish::programs::Entry;
+    let of = |entries: &[Entry]| entries.iter().map(|e| bound(&e.program())).sum::<u64>();
+    let gaps = [
+        of(&[Entry::Start, Entry::Clear]),
+        of(&[Entry::Gate, Entry::Clear]),
+        of(&[Entry::Solve, Entry::Update, Entry::Gate, Entry::Clear]),
+        of(&[Entry::Solve, Entry::Update, Entry::Drift]),
+    ];
+    gaps.into_iter().max().unwrap_or(0) + CONTROL_CLOCKS
+}
 
 /// Clocks a pass spends on a point beyond the pipeline's evaluation of it, at most: the
 /// pass's 52 clocks for an inlier, the skid and the launch.
@@ -106,7 +123,7 @@ pub fn polish_clocks_bound(p: &PolishRequest, model_points: usize, lanes: usize)
     let starts = 1 + p.hypotheses.len() as u64;
     let passes = starts * (p.steps.min(MAX_STEPS) as u64 + 2);
     let point = crate::surface_residual::evaluation_clocks_bound(1, model_points, lanes.max(1)) + PASS_POINT_CLOCKS;
-    passes * (p.points as u64 * point + PROGRAM_CLOCKS_BOUND)
+    passes * (p.points as u64 * point + program_clocks_bound())
 }
 
 /// What the polish chose.

@@ -10,7 +10,7 @@ use pficp_fpga::messages::{self, ResultReply, RunState, StatusReply};
 use pficp_fpga::pf::example_surface;
 use pficp_fpga::polish::GridSearch;
 use pficp_fpga::protocol::{Command, Frame};
-use pficp_fpga::run_request::{example_request, execute, RunOutcome, RunRequest};
+use pficp_fpga::run_request::{example_request, execute, polish_clocks_bound, RunOutcome, RunRequest};
 use pficp_fpga::surface::{self, FxNormal};
 use pficp_sim::serial::SerialBoard;
 
@@ -87,6 +87,7 @@ fn the_board_runs_the_filter_and_returns_the_reference_pose() {
     assert_eq!((r.code, r.data.first()), (0xff, Some(&4)), "{r:?}");
     let r = exchange(&mut b, &req(Command::Run, 6, cfg.encode()));
     assert_eq!(r.code, Command::Run as u8 | 0x80);
+    let run_at = b.clocks();
     // While it runs: Status answers (progress).
     let mut polls = 0;
     let mut seq = 7u8;
@@ -95,6 +96,14 @@ fn the_board_runs_the_filter_and_returns_the_reference_pose() {
         seq = seq.wrapping_add(1);
         let st = StatusReply::decode(&r.data).unwrap();
         if st.state == RunState::Done {
+            // Within the host's deadline: the filter's bound and the polish's (the Done seen
+            // at a poll, so the run itself took no more than this).
+            let lanes = BoardConfig::FAST_SIM.lanes;
+            let bound =
+                pficp::board::run_clocks_bound(24, 12, 30, 80, lanes) + polish_clocks_bound(&cfg.polish, 80, lanes);
+            let took = b.clocks() - run_at;
+            println!("Run to Done seen: {took} clocks, the host's bound {bound}");
+            assert!(took <= bound, "{took} clocks, the bound {bound}");
             break;
         }
         assert_eq!(st.state, RunState::Running);

@@ -11,7 +11,7 @@
 //! sums of up to 4,096 rows through the `add` port, as the pass will, and solves them.
 
 use pficp_fpga::polish::cases::{gram, program_cases, random_rows};
-use pficp_fpga::polish::program::REGISTERS;
+use pficp_fpga::polish::program::{program_clocks_bound, REGISTERS};
 use pficp_fpga::polish::programs::{inlier_adds, rom, run, solve_inputs, Entry};
 use pficp_fpga::splitmix::SplitMix64;
 use pficp_sim::{ProgramInputs, VerilatedPolishProgram};
@@ -29,7 +29,8 @@ fn datapath() -> (VerilatedPolishProgram, ProgramInputs) {
     (rtl, idle)
 }
 
-/// Run `entry` and wait for it (at most `limit` clocks); its clocks.
+/// Run `entry` and wait for it (fails if it is still busy after `limit` clocks: the tests
+/// pass one more than its [`program_clocks_bound`]); its clocks.
 fn go(rtl: &mut VerilatedPolishProgram, idle: &ProgramInputs, entry: Entry, limit: u64, what: &str) -> u64 {
     rtl.step(&ProgramInputs { go: true, entry: rom().entry(entry as usize) as u16, ..*idle });
     let start = rtl.cycle();
@@ -62,7 +63,9 @@ fn the_verilated_programs_match_the_model_register_for_register() {
         for (addr, &v) in file.iter().enumerate() {
             rtl.step(&ProgramInputs { load: true, load_addr: addr as u8, load_data: v, ..idle });
         }
-        clocks.push((*entry, go(&mut rtl, &idle, *entry, 100_000, &what), failed));
+        let bound = program_clocks_bound(&entry.program());
+        let took = go(&mut rtl, &idle, *entry, bound + 1, &what);
+        clocks.push((*entry, took, failed));
         compare(&mut rtl, &idle, &want, failed, &what);
     }
     for e in Entry::ALL {
@@ -70,11 +73,12 @@ fn the_verilated_programs_match_the_model_register_for_register() {
         let stops = clocks.iter().filter(|c| c.0 == e && c.2).count();
         of.sort_unstable();
         eprintln!(
-            "{e:?}: {} runs ({stops} failed), clocks of the rest: min {}, median {}, max {}",
+            "{e:?}: {} runs ({stops} failed), clocks of the rest: min {}, median {}, max {} (bound {})",
             of.len() + stops,
             of[0],
             of[of.len() / 2],
-            of[of.len() - 1]
+            of[of.len() - 1],
+            program_clocks_bound(&e.program())
         );
     }
 }
@@ -102,7 +106,7 @@ fn sums_added_row_by_row_solve_as_the_model() {
         }
         rtl.step(&idle);
         let what = format!("seed {seed}, case {case} ({n_rows} rows x {repeat})");
-        go(&mut rtl, &idle, Entry::Solve, 100_000, &what);
+        go(&mut rtl, &idle, Entry::Solve, program_clocks_bound(&Entry::Solve.program()) + 1, &what);
         compare(&mut rtl, &idle, &want, failed, &what);
     }
 }

@@ -186,6 +186,49 @@ impl Op {
     }
 }
 
+/// Clocks the RTL's add takes at most (`alu`, then `flush` until no segment carry is
+/// pending: a carry crosses the three segment boundaries one a clock, then a clock to see
+/// none is left).
+const ADD_CLOCKS: u64 = 1 + 4;
+
+impl Op {
+    /// The most clocks the RTL (`crate::rtl::polish::program::PolishProgram`) takes for
+    /// this instruction, from its `fetch` to its `write` (or its stop test), whatever the
+    /// operands: `fetch`, `operand` and `exec`, then
+    /// - an add, a subtract, a stop test: one add and `write` (or the test);
+    /// - a shift right by `k`: an add, `k` shift clocks, the end of `round` and `write`;
+    /// - a constant shifted by `k`: `k` shift clocks and the add's issue, an add, `write`;
+    /// - a product: a multiplier bit a clock over at most [`REG_BITS`] bits and the clock
+    ///   that ends it, a flush, `k - 1` shift clocks and the rounding add, `write`;
+    /// - a quotient: the dividend's `k` shift clocks and the add's issue, an add (its
+    ///   magnitude), `div_start`, two clocks a quotient bit over [`REG_BITS`] bits, the
+    ///   sign's add, `write`;
+    /// - a clamp or a saturation: up to three adds with their tests, `write`.
+    ///
+    /// The Verilated test (`sim/tests/polish_program.rs`) checks every measured program
+    /// against the sum of its instructions' bounds ([`program_clocks_bound`]).
+    pub const fn clocks_bound(self) -> u64 {
+        const DECODE: u64 = 3;
+        const WRITE: u64 = 1;
+        DECODE
+            + WRITE
+            + match self {
+                Op::Add { .. } | Op::Sub { .. } | Op::StopBelow { .. } => ADD_CLOCKS,
+                Op::Shr { k, .. } => ADD_CLOCKS + k as u64 + 1,
+                Op::Const { k, .. } => k as u64 + 1 + ADD_CLOCKS,
+                Op::Mul { k, .. } => REG_BITS as u64 + 1 + (ADD_CLOCKS - 1) + k as u64 + ADD_CLOCKS,
+                Op::Div { k, .. } => k as u64 + 1 + ADD_CLOCKS + 1 + 2 * REG_BITS as u64 + ADD_CLOCKS,
+                Op::Clamp { .. } | Op::Sat { .. } => 3 * (ADD_CLOCKS + 1),
+            }
+    }
+}
+
+/// The most clocks the RTL takes to run `program` from `go` to idle: its instructions'
+/// [`Op::clocks_bound`] and the clock of `go`.
+pub fn program_clocks_bound(program: &[Op]) -> u64 {
+    1 + program.iter().map(|op| op.clocks_bound()).sum::<u64>()
+}
+
 /// A program's ROM words: each instruction's encoding, the last one flagged.
 pub fn rom_words(program: &[Op]) -> Vec<u32> {
     assert!(!program.is_empty() && program.len() <= PROGRAM_WORDS);
