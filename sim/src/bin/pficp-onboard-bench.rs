@@ -24,7 +24,8 @@
 //! (not timed here: the host's stages are the software mode's).
 //!
 //! `pficp-onboard-bench [--model-points 2000] [--scan-points 1000] [--board-points 300]
-//! [--particles 50] [--iterations 50] [--runs 3] [--seed 1] [--all-iterations]`; run in
+//! [--particles 50] [--iterations 50] [--runs 3] [--seed 1] [--all-iterations]
+//! [--polish-steps S] [--polish-points N]`; run in
 //! release. The filter stops at the Run's thresholds (the host's, on the surface residual) or
 //! at the iteration cap; `--all-iterations` zeroes the thresholds, so every iteration runs.
 
@@ -69,6 +70,13 @@ struct Args {
     /// Run every iteration (the Run's stop thresholds zeroed): the filter's worst case.
     #[arg(long)]
     all_iterations: bool,
+    /// The on-board polish's Gauss-Newton steps a start [default: the host's].
+    #[arg(long)]
+    polish_steps: Option<u8>,
+    /// Stored scan points the on-board polish runs over [default: the host's, every stored
+    /// point].
+    #[arg(long)]
+    polish_points: Option<u16>,
 }
 
 /// Send one request; run until its reply's delimiter; check the bytes so far.
@@ -185,6 +193,18 @@ fn main() -> Result<()> {
     let mut plan = on_board::plan(&nn, &ds.scan, &settings, a.board_points, 4096)?;
     if a.all_iterations {
         (plan.config.thr_cost, plan.config.thr_max) = (0, 0);
+    }
+    if let Some(steps) = a.polish_steps {
+        if steps > pficp_fpga::run_request::MAX_STEPS {
+            bail!("--polish-steps must be at most {}", pficp_fpga::run_request::MAX_STEPS);
+        }
+        plan.polish.steps = steps;
+    }
+    if let Some(points) = a.polish_points {
+        if points == 0 || points > plan.polish.points {
+            bail!("--polish-points must be 1 to {}", plan.polish.points);
+        }
+        plan.polish.points = points;
     }
     let config = BoardConfig::default();
     let mut b = SerialBoard::new(config).with_reference();

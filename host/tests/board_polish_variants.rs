@@ -1,0 +1,162 @@
+//! What the on-board polish's parameters buy, on the shipped storage layout: for each case
+//! of the realistic benchmark's dev split, the board's filter runs once (its bit-exact
+//! reference, `OnBoardPlan::emulate_filter`), then the polish's reference
+//! (`pficp_fpga::polish::polish_best_over` over the stored scan, as the board runs it) from
+//! the filter's pose and a choice of the prior's hypotheses, with a number of steps, over
+//! all stored points or at most `N` of them (the filter's sample, then every k-th of the
+//! rest). A two-phase variant polishes every start over the filter's 300-point sample, then
+//! its winner again over every stored point. The software mode, the shipped board alone
+//! and the board with the host's polish are scored beside them.
+//!
+//! The board's time for a setting is the on-board bench's (`pficp-onboard-bench
+//! --polish-steps S --polish-points N`). The tables are in docs/polish.md ("Shipped").
+//!
+//! Slow (about 4 minutes for 100 cases a family): ignored by default. Run it with
+//! `PFICP_CASES=100 PFICP_SEED=2 cargo test --release -p pficp-host --test
+//! board_polish_variants -- --ignored --nocapture` (`PFICP_CASES` cases a family, default
+//! 32; `PFICP_SEED` the benchmark's seed, default 1; always the dev split: this is for
+//! choosing, not for reporting).
+
+use pficp::board::fixed::{normalised_pose, original_pose, quantise_pose, restore_pose};
+use pficp::board::on_board::{self, plan, OnBoardPlan};
+use pficp::eval::realistic::{case, score, Family, Split};
+use pficp::geometry::Pose;
+use pficp::nn::NearestNeighbours;
+use pficp::pf_icp::{self, PfIcpSettings};
+use pficp_fpga::format::{FxPoint, FxPose};
+use pficp_fpga::messages::ResultReply;
+use rayon::prelude::*;
+use std::time::Duration;
+
+fn env_or(name: &str, default: u64) -> u64 {
+    std::env::var(name).ok().and_then(|v| v.parse().ok()).unwrap_or(default)
+}
+
+/// One setting of the polish.
+struct Variant {
+    name: &'static str,
+    /// The prior's hypotheses (indices) that start beside the filter's pose.
+    hypotheses: &'static [usize],
+    steps: u32,
+    /// Most stored points the polish runs over (0: all).
+    points: usize,
+    /// Every start over the filter's sample first, then the winner over all.
+    two_phase: bool,
+}
+
+const fn v(name: &'static str, hypotheses: &'static [usize], steps: u32, points: usize) -> Variant {
+    Variant { name, hypotheses, steps, points, two_phase: false }
+}
+
+const H2: &[usize] = &[0, 1];
+const H4: &[usize] = &[0, 1, 2, 3];
+const H7: &[usize] = &[0, 1, 2, 3, 4, 5, 6];
+const H15: &[usize] = &[0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14];
+
+const VARIANTS: [Variant; 11] = [
+    v("3 starts, 5 steps, all points (shipped)", H2, 5, 0),
+    v("3 starts, 8 steps", H2, 8, 0),
+    v("3 starts, 10 steps", H2, 10, 0),
+    v("3 starts, 15 steps", H2, 15, 0),
+    v("3 starts, 5 steps, at most 500 points", H2, 5, 500),
+    v("3 starts, 8 steps, at most 600 points", H2, 8, 600),
+    v("3 starts, 10 steps, at most 600 points", H2, 10, 600),
+    v("5 starts, 5 steps", H4, 5, 0),
+    v("8 starts, 5 steps", H7, 5, 0),
+    v("16 starts, 5 steps", H15, 5, 0),
+    Variant {
+        name: "16 starts over the sample, the winner over all, 5 + 5 steps",
+        hypotheses: H15,
+        steps: 5,
+        points: 0,
+        two_phase: true,
+    },
+];
+
+fn on_board_pose(plan: &OnBoardPlan, pose: &Pose) -> FxPose {
+    quantise_pose(&normalised_pose(pose, &plan.scan_norm, &plan.model_norm))
+}
+
+fn restored(plan: &OnBoardPlan, pose: &FxPose) -> Pose {
+    original_pose(&restore_pose(pose).expect("the polish keeps a similarity"), &plan.scan_norm, &plan.model_norm)
+}
+
+/// The stored points a variant polishes over: all, or the filter's sample and every k-th
+/// of the rest (as `on_board::plan` thins the rest to fit).
+fn points_of(plan: &OnBoardPlan, most: usize) -> Vec<FxPoint> {
+    let stored = plan.stored_scan();
+    if most == 0 || most >= stored.len() {
+        return stored;
+    }
+    let room = most.saturating_sub(plan.scan.len()).max(1);
+    let stride = plan.rest.len().div_ceil(room).max(1);
+    plan.scan.iter().chain(plan.rest.iter().step_by(stride).take(room)).copied().collect()
+}
+
+#[test]
+#[ignore = "minutes in release; prints the tables of docs/polish.md"]
+fn the_polish_settings_on_the_dev_split() {
+    let cases = env_or("PFICP_CASES", 32) as usize;
+    let seed = env_or("PFICP_SEED", 1);
+    println!("dev split, seed {seed}, {cases} cases a family");
+    let columns = VARIANTS.len() + 3;
+    let mut totals = vec![0usize; columns];
+    let mut all = 0;
+    for family in Family::ALL {
+        // Per case: software, each variant, the shipped board alone, board + host polish.
+        let rows: Vec<Vec<bool>> = (0..cases)
+            .into_par_iter()
+            .map(|i| {
+                let c = case(family, i, Split::Dev, seed);
+                let nn = NearestNeighbours::new(&c.model);
+                let settings = PfIcpSettings { seed: c.seed, ..Default::default() };
+                let soft = pf_icp::register(&nn, &c.scan, &settings).registration.pose;
+                let plan = plan(&nn, &c.scan, &settings, on_board::DEFAULT_BOARD_POINTS, pficp::board::MAX_POINTS)
+                    .expect("a plan");
+                let filter = plan.emulate_filter();
+                let search = pficp_fpga::polish::GridSearch { grid: &plan.grid, normals: &plan.normals };
+                let hyps = &plan.prior.hypotheses;
+                let mut ok = vec![score(&soft, &c).success];
+                for var in &VARIANTS {
+                    let starts: Vec<FxPose> = std::iter::once(filter.pose)
+                        .chain(
+                            var.hypotheses.iter().filter_map(|&i| hyps.get(i)).map(|h| on_board_pose(&plan, &h.pose)),
+                        )
+                        .collect();
+                    let pts = points_of(&plan, var.points);
+                    let pose = if var.two_phase {
+                        let (_, first, _) =
+                            pficp_fpga::polish::polish_best_over(&search, &plan.scan, &starts, var.steps)
+                                .expect("a start");
+                        pficp_fpga::polish::polish_best_over(&search, &pts, &[first.pose], var.steps)
+                            .expect("a start")
+                            .1
+                            .pose
+                    } else {
+                        pficp_fpga::polish::polish_best_over(&search, &pts, &starts, var.steps).expect("a start").1.pose
+                    };
+                    ok.push(score(&restored(&plan, &pose), &c).success);
+                }
+                let reply = ResultReply::of(&plan.emulate());
+                let fin = on_board::finish(&plan, &nn, &c.scan, &settings, &reply, Duration::ZERO);
+                ok.push(score(&fin.filter_pose, &c).success);
+                ok.push(score(&fin.registration.pose, &c).success);
+                ok
+            })
+            .collect();
+        let counts: Vec<usize> = (0..columns).map(|k| rows.iter().filter(|r| r[k]).count()).collect();
+        println!("{}: {counts:?}", family.name());
+        for (t, c) in totals.iter_mut().zip(&counts) {
+            *t += c;
+        }
+        all += rows.len();
+    }
+    let names = std::iter::once("software")
+        .chain(VARIANTS.iter().map(|v| v.name))
+        .chain(["board alone as shipped (plan.emulate)", "board + host polish"]);
+    for (name, t) in names.zip(&totals) {
+        println!("| {name} | {t}/{all} |");
+    }
+    // The variant that repeats the shipped setting must score as the shipped board does.
+    assert_eq!(totals[1], totals[VARIANTS.len() + 1], "the shipped variant differs from plan.emulate");
+}
