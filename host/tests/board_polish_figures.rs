@@ -1,5 +1,6 @@
-//! Why the board's pose alone misses where the software's succeeds, and what the on-board
-//! polish (`pficp_fpga::polish`, its bit-exact reference; no RTL yet) would change: on the
+//! Why the board's filter alone misses where the software's succeeds, and what the on-board
+//! polish (`pficp_fpga::polish`, its bit-exact reference) changes (the exploration of stops
+//! 25 to 27; the shipped setting's figures are `board_accuracy` and `board_polish_variants`): on the
 //! realistic benchmark's quick set (8 cases a family, seed 1) and on models 1 to 3 (Table 1
 //! truths, 2,000 model points, an independent 1,000-point scan, seeds 1 to 10), the
 //! successes of

@@ -37,7 +37,10 @@ struct Variant {
     name: &'static str,
     /// The prior's hypotheses (indices) that start beside the filter's pose.
     hypotheses: &'static [usize],
+    /// Steps of the hypotheses' polish.
     steps: u32,
+    /// Steps of the filter's pose's polish.
+    first_steps: u32,
     /// Most stored points the polish runs over (0: all).
     points: usize,
     /// Every start over the filter's sample first, then the winner over all.
@@ -45,7 +48,12 @@ struct Variant {
 }
 
 const fn v(name: &'static str, hypotheses: &'static [usize], steps: u32, points: usize) -> Variant {
-    Variant { name, hypotheses, steps, points, two_phase: false }
+    Variant { name, hypotheses, steps, first_steps: steps, points, two_phase: false }
+}
+
+/// The filter's pose polished with `first_steps`, the hypotheses with `steps`.
+const fn uneven(name: &'static str, first_steps: u32, steps: u32) -> Variant {
+    Variant { name, hypotheses: H2, steps, first_steps, points: 0, two_phase: false }
 }
 
 const H2: &[usize] = &[0, 1];
@@ -53,7 +61,7 @@ const H4: &[usize] = &[0, 1, 2, 3];
 const H7: &[usize] = &[0, 1, 2, 3, 4, 5, 6];
 const H15: &[usize] = &[0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14];
 
-const VARIANTS: [Variant; 11] = [
+const VARIANTS: [Variant; 15] = [
     v("3 starts, 5 steps, all points (shipped)", H2, 5, 0),
     v("3 starts, 8 steps", H2, 8, 0),
     v("3 starts, 10 steps", H2, 10, 0),
@@ -68,10 +76,43 @@ const VARIANTS: [Variant; 11] = [
         name: "16 starts over the sample, the winner over all, 5 + 5 steps",
         hypotheses: H15,
         steps: 5,
+        first_steps: 5,
         points: 0,
         two_phase: true,
     },
+    uneven("3 starts, the filter's pose 8 steps, the hypotheses 3", 8, 3),
+    uneven("3 starts, the filter's pose 10 steps, the hypotheses 3", 10, 3),
+    uneven("3 starts, the filter's pose 8 steps, the hypotheses 5", 8, 5),
+    uneven("3 starts, the filter's pose 10 steps, the hypotheses 2", 10, 2),
 ];
+
+/// [`pficp_fpga::polish::polish_best_over`] with the first start's steps apart (the same
+/// rules: a first start beyond the drift bounds stays unpolished, another is dropped; the
+/// lowest cost wins, the earlier on a tie).
+fn polish_best_uneven(
+    search: &impl pficp_fpga::polish::Search,
+    scan: &[FxPoint],
+    starts: &[FxPose],
+    first_steps: u32,
+    steps: u32,
+) -> FxPose {
+    use pficp_fpga::polish::{polish_over, within_drift};
+    starts
+        .iter()
+        .enumerate()
+        .filter_map(|(i, start)| {
+            let p = polish_over(search, scan, start, if i == 0 { first_steps } else { steps }).pose;
+            let pose = match (within_drift(start, &p), i) {
+                (true, _) => p,
+                (false, 0) => *start,
+                (false, _) => return None,
+            };
+            Some((i, pose, search.evaluate(scan, &pose).cost))
+        })
+        .min_by(|a, b| a.2.cmp(&b.2).then(a.0.cmp(&b.0)))
+        .expect("a start")
+        .1
+}
 
 fn on_board_pose(plan: &OnBoardPlan, pose: &Pose) -> FxPose {
     quantise_pose(&normalised_pose(pose, &plan.scan_norm, &plan.model_norm))
@@ -132,6 +173,8 @@ fn the_polish_settings_on_the_dev_split() {
                             .expect("a start")
                             .1
                             .pose
+                    } else if var.first_steps != var.steps && starts.len() > 1 {
+                        polish_best_uneven(&search, &pts, &starts, var.first_steps, var.steps)
                     } else {
                         pficp_fpga::polish::polish_best_over(&search, &pts, &starts, var.steps).expect("a start").1.pose
                     };
