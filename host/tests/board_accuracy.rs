@@ -39,15 +39,12 @@ fn models() -> Counts {
     };
     let report = success::run(&opts);
     println!("{}", report.render());
-    let mut counts = [0; 3];
-    let mut total = 0;
-    for row in &report.rows {
-        for (k, name) in COLUMNS.iter().enumerate() {
-            counts[k] += row.cells.iter().find(|c| c.method == *name).expect("a column").successes;
-        }
-        total += row.cells[0].trials;
-    }
-    (counts, total)
+    tally(
+        report
+            .rows
+            .iter()
+            .map(|r| (r.cells.iter().map(|c| (c.method.as_str(), c.successes)).collect(), r.cells[0].trials)),
+    )
 }
 
 fn realistic_set() -> Counts {
@@ -63,13 +60,24 @@ fn realistic_set() -> Counts {
     };
     let report = realistic::run(&opts).expect("the realistic benchmark");
     print!("{}", report.render());
+    tally(
+        report
+            .families
+            .iter()
+            .map(|f| (f.cells.iter().map(|c| (c.method.as_str(), c.successes)).collect(), f.cells[0].cases)),
+    )
+}
+
+/// [`COLUMNS`]' successes and the cases over rows of (each column's name and successes, the
+/// row's cases).
+fn tally<'a>(rows: impl Iterator<Item = (Vec<(&'a str, usize)>, usize)>) -> Counts {
     let mut counts = [0; 3];
     let mut total = 0;
-    for f in &report.families {
+    for (cells, cases) in rows {
         for (k, name) in COLUMNS.iter().enumerate() {
-            counts[k] += f.cells.iter().find(|c| c.method == *name).expect("a column").successes;
+            counts[k] += cells.iter().find(|c| c.0 == *name).expect("a column").1;
         }
-        total += f.cells[0].cases;
+        total += cases;
     }
     (counts, total)
 }
