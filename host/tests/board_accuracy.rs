@@ -37,7 +37,7 @@ fn models() -> Counts {
         plots: false,
         ..Default::default()
     };
-    let report = success::run(&opts);
+    let report = success::run(&opts).expect("the success rates");
     println!("{}", report.render());
     tally(
         report

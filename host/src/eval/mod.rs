@@ -151,7 +151,7 @@ pub fn run(opts: &EvalOptions) -> anyhow::Result<EvalReport> {
         }
     }
     if opts.success && opts.trials > 0 && (!opts.methods.is_empty() || opts.board) {
-        let s = success::run(opts);
+        let s = success::run(opts)?;
         println!("{}", s.render());
         report.success = Some(s);
     }
