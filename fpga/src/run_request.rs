@@ -111,19 +111,26 @@ pub fn program_clocks_bound() -> u64 {
 }
 
 /// Clocks a pass spends on a point beyond the pipeline's evaluation of it, at most: the
-/// pass's 52 clocks for an inlier, the skid and the launch.
-pub const PASS_POINT_CLOCKS: u64 = 64;
+/// pass's front, 14 clocks for an inlier and one to take the next, the queue's two clocks
+/// and the launch.
+pub const PASS_POINT_CLOCKS: u64 = 32;
+
+/// Clocks from a pass's last point to its end, at most: the product stage's last row (13),
+/// the engine's seven quiet clocks, the flush of the pass's accumulators into the
+/// registers (37) and the hand-offs between them.
+pub const PASS_END_CLOCKS: u64 = 64;
 
 /// An upper bound on the board's clocks for the polish of `p` over a model of
 /// `model_points` on `lanes` lanes: each start takes at most `steps + 2` passes (the
-/// statistics, the steps, the cost) and as many program runs; a pass lets one point at a
-/// time into the pipeline, so a point takes at most one evaluation of one point
-/// ([`crate::surface_residual::evaluation_clocks_bound`]) and [`PASS_POINT_CLOCKS`].
+/// statistics, the steps, the cost) and as many program runs; a point takes at most one
+/// evaluation of one point ([`crate::surface_residual::evaluation_clocks_bound`]; the pass
+/// lets several into the pipeline, which only overlaps them) and [`PASS_POINT_CLOCKS`],
+/// and a pass ends within [`PASS_END_CLOCKS`] of its last point.
 pub fn polish_clocks_bound(p: &PolishRequest, model_points: usize, lanes: usize) -> u64 {
     let starts = 1 + p.hypotheses.len() as u64;
     let passes = starts * (p.steps.min(MAX_STEPS) as u64 + 2);
     let point = crate::surface_residual::evaluation_clocks_bound(1, model_points, lanes.max(1)) + PASS_POINT_CLOCKS;
-    passes * (p.points as u64 * point + program_clocks_bound())
+    passes * (p.points as u64 * point + PASS_END_CLOCKS + program_clocks_bound())
 }
 
 /// What the polish chose.

@@ -1,8 +1,8 @@
 //! `PolishBench` (the pass, a `PipeMul` and the program's datapath, wired as the board will
 //! wire them) in rust_hdl's simulator against [`pficp_fpga::polish::PassSums::add_point`]
 //! with [`pficp_fpga::polish::jacobian`]: the passes of `polish::cases::pass_cases` (gated
-//! and not, rows saturating both ways), fed back to back and with gaps; after each pass the
-//! 38 registers the pass adds to equal the model's sums, and after the solve that follows
+//! and not, rows saturating both ways), fed back to back and with gaps; after each pass and
+//! its flush the 38 registers the pass adds to equal the model's sums, and after the solve that follows
 //! (the program run on `go`) every register and the failed flag equal the model's.
 #![cfg(feature = "rtl")]
 
@@ -66,9 +66,16 @@ fn a_pass_adds_the_models_sums_and_the_solve_takes_them() {
                     wait_clock_cycle!(sim, clock, x);
                 }
             }
-            // The last point's adds.
-            for _ in 0..60 {
+            // The flush: the accumulators into the registers, `idle` once they are in.
+            x.flush.next = true;
+            wait_clock_cycle!(sim, clock, x);
+            x.flush.next = false;
+            wait_clock_cycle!(sim, clock, x);
+            let mut waited = 0;
+            while !x.idle.val() {
                 wait_clock_cycle!(sim, clock, x);
+                waited += 1;
+                sim_assert!(sim, waited < 100, x);
             }
             for addr in (0..35).chain([SUM_R2, FOUND, INLIERS].map(|r| r as usize)) {
                 x.read_addr.next = (addr as u64).into();

@@ -183,6 +183,8 @@ pub const POLISH_BENCH_PORTS: &[PortSpec] = &[
     ("in_n", true, 48),
     ("in_s", true, 13),
     ("ready", false, 1),
+    ("flush", true, 1),
+    ("idle", false, 1),
     ("load", true, 1),
     ("load_addr", true, 6),
     ("load_data", true, 128),

@@ -374,6 +374,8 @@ pub struct BenchInputs {
     pub in_n: [i16; 3],
     /// Its signed residual (13 bits).
     pub in_s: i64,
+    /// The pass's points are all in: flush its accumulators.
+    pub flush: bool,
     /// While the program is idle: write `load_data` to `load_addr`.
     pub load: bool,
     /// Register to load.
@@ -393,6 +395,8 @@ pub struct BenchInputs {
 pub struct BenchOutputs {
     /// The pass takes a point.
     pub ready: bool,
+    /// The pass is idle and flushed.
+    pub idle: bool,
     /// The register read.
     pub read_data: i128,
     /// The program is running.
@@ -409,12 +413,12 @@ pub struct VerilatedPolishBench {
 verilated_common!(VerilatedPolishBench, BenchInputs);
 
 /// Output words of the polish bench, one name per `u64` (wide ports repeat).
-pub(crate) const POLISH_BENCH_OUTPUT_WORDS: [&str; 5] = ports::output_words(ports::POLISH_BENCH_PORTS);
+pub(crate) const POLISH_BENCH_OUTPUT_WORDS: [&str; 6] = ports::output_words(ports::POLISH_BENCH_PORTS);
 
 impl VerilatedPolishBench {
     /// The blocks after power-up (idle, registers zero).
     pub fn new() -> Self {
-        VerilatedPolishBench { core: Core::new(POLISH_BENCH, 0, 15, &POLISH_BENCH_OUTPUT_WORDS) }
+        VerilatedPolishBench { core: Core::new(POLISH_BENCH, 0, 16, &POLISH_BENCH_OUTPUT_WORDS) }
     }
 
     /// Drive the input ports (masked to the port widths).
@@ -428,6 +432,7 @@ impl VerilatedPolishBench {
             pficp_fpga::format::pack_point(i.in_q),
             pficp_fpga::format::pack_point(i.in_n),
             i.in_s as u64,
+            i.flush as u64,
             i.load as u64,
             i.load_addr as u64,
             i.load_data as u64,
@@ -440,12 +445,13 @@ impl VerilatedPolishBench {
 
     /// The output ports now.
     pub fn outputs(&self) -> BenchOutputs {
-        let o = self.core.outputs::<5>();
+        let o = self.core.outputs::<6>();
         BenchOutputs {
             ready: o[0] != 0,
-            read_data: (o[1] as u128 | (o[2] as u128) << 64) as i128,
-            busy: o[3] != 0,
-            failed: o[4] != 0,
+            idle: o[1] != 0,
+            read_data: (o[2] as u128 | (o[3] as u128) << 64) as i128,
+            busy: o[4] != 0,
+            failed: o[5] != 0,
         }
     }
 }

@@ -2,7 +2,7 @@
 //! datapath, the Verilog that `pficp_fpga::rtl::polish_bench_verilog` generates) against
 //! the model: the passes of `polish::cases::pass_cases` (seed `PFICP_COSIM_SEED`, default
 //! 1; `PFICP_POLISH_POINTS` points a pass, default 200), fed back to back and with gaps;
-//! after each pass the 38 registers it adds to equal `PassSums::add_point`'s sums, and
+//! after each pass and its flush the 38 registers it adds to equal `PassSums::add_point`'s sums, and
 //! after the solve on them every register and the failed flag equal
 //! `polish::programs::run`'s. rust_hdl's simulator runs the same block on fewer points
 //! (`fpga/tests/polish_pass.rs`).
@@ -47,14 +47,14 @@ fn verilated_passes_add_the_models_sums_and_solve_as_the_model() {
                 rtl.step(&feed);
             }
         }
-        while !rtl.outputs().ready {
+        // The flush: the accumulators into the registers, `idle` once they are in.
+        rtl.step(&BenchInputs { flush: true, ..feed });
+        let flushed = rtl.cycle();
+        while !rtl.outputs().idle {
             rtl.step(&feed);
+            assert!(rtl.cycle() - flushed < 100, "{what}: the flush never ends");
         }
         let clocks = rtl.cycle() - start;
-        // The last point's adds land within a few clocks of `ready`.
-        for _ in 0..8 {
-            rtl.step(&feed);
-        }
         feed = idle;
         for addr in (0..35).chain([SUM_R2, FOUND, INLIERS].map(|r| r as usize)) {
             rtl.step(&BenchInputs { read_addr: addr as u8, ..feed });

@@ -271,8 +271,8 @@ fn board_of<const P: usize>(config: &crate::board::BoardConfig) -> String {
 /// it). The pipeline's `cost` (its sum of squared distances) is not the board's cost: the
 /// residual stage after it sums the residuals. The residual stage's `nn_s` goes to the
 /// polish's pass without its top bit (13 bits hold every signed residual of a found point),
-/// and the polish's datapath's `read_data` above the 32 bits its control reads. Their wire
-/// declarations get a targeted `UNUSEDSIGNAL` waiver ([`waive_unused_wires`]), nothing else.
+/// and the polish's datapath's `read_data` above the 32 bits its control reads. Their wire declarations get a targeted `UNUSEDSIGNAL` waiver
+/// ([`waive_unused_wires`]), nothing else.
 pub fn waive_probe_ports(v: &str) -> String {
     waive_unused_wires(
         v,

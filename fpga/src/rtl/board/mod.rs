@@ -7,6 +7,8 @@
 //! - [`engine`]: `CommandEngine<P>`, command execution, scan store, pipeline and weights;
 //! - [`request_check`]: `RequestCheck`, a request's busy, command, length and capacity checks;
 //! - [`scan_feeder`]: `ScanFeeder`, the scan store's points into the pipeline;
+//! - [`pass_queue`]: `PassQueue`, the polish pass's found points between the pipeline and
+//!   the pass;
 //! - [`sequencer`]: `PfSequencer`, the on-board particle filter, and its arithmetic blocks;
 //! - [`top`]: `BoardTop<P>`, pins, reset synchroniser, LEDs.
 //!
@@ -17,6 +19,7 @@ pub mod crc;
 pub mod digest;
 pub mod engine;
 pub mod frame_rx;
+pub mod pass_queue;
 pub mod reply_tx;
 pub mod request_check;
 pub mod scan_feeder;

@@ -31,8 +31,12 @@ pub struct PolishBench {
     pub in_n: Signal<In, Bits<48>>,
     /// Its signed residual (13 bits).
     pub in_s: Signal<In, Bits<13>>,
-    /// The pass is idle: a point may come.
+    /// The pass's front is free: a point may come.
     pub ready: Signal<Out, Bit>,
+    /// The pass's points are all in: flush ([`PolishPass::flush`]).
+    pub flush: Signal<In, Bit>,
+    /// The pass is idle and flushed ([`PolishPass::idle`]).
+    pub idle: Signal<Out, Bit>,
     /// While the program is idle: write `load_data` to register `load_addr`.
     pub load: Signal<In, Bit>,
     /// Register to load.
@@ -70,6 +74,8 @@ impl PolishBench {
             in_n: Default::default(),
             in_s: Default::default(),
             ready: Default::default(),
+            flush: Default::default(),
+            idle: Default::default(),
             load: Default::default(),
             load_addr: Default::default(),
             load_data: Default::default(),
@@ -109,6 +115,8 @@ impl Logic for PolishBench {
         self.pass.in_n.next = self.in_n.val();
         self.pass.in_s.next = self.in_s.val();
         self.ready.next = self.pass.ready.val();
+        self.pass.flush.next = self.flush.val();
+        self.idle.next = self.pass.idle.val();
         self.mul.go.next = self.pass.mul_go.val();
         self.mul.a.next = self.pass.mul_a.val();
         self.mul.b.next = self.pass.mul_b.val();

@@ -2,8 +2,9 @@
 //! ([`PolishControl`]), the program's datapath ([`PolishProgram`]) and the pass
 //! ([`PolishPass`]), wired to one another. Outside it: the multiplier (`mul_*`, the
 //! sequencer's on the board), the pass service (`pass_go` at `pose`; the found points at
-//! `in_*` while `ready`; `pass_done` with the cost once the last point's adds are in) and
-//! the start poses (`start_pose` for `start_index`).
+//! `in_*` while `ready`; `pass_done` with the cost once the last point is in) and the start
+//! poses (`start_pose` for `start_index`). The unit holds `pass_done` back from the control
+//! while the pass flushes its accumulators into the datapath's registers.
 
 use super::{PolishControl, PolishPass, PolishProgram};
 use rust_hdl::prelude::*;
@@ -29,7 +30,7 @@ pub struct PolishUnit {
     pub pass_go: Signal<Out, Bit>,
     /// The pass's pose; once done, the winner's.
     pub pose: Signal<Out, Bits<216>>,
-    /// The pass is over and its last point's adds are in.
+    /// The pass is over: its last point is in.
     pub pass_done: Signal<In, Bit>,
     /// The pass's cost.
     pub pass_cost: Signal<In, Bits<48>>,
@@ -62,6 +63,8 @@ pub struct PolishUnit {
     control: PolishControl,
     prog: PolishProgram,
     pass: PolishPass,
+    /// A pass is over, its flush not yet.
+    fwait: DFF<Bit>,
 }
 
 impl PolishUnit {
@@ -95,6 +98,7 @@ impl PolishUnit {
             control: PolishControl::new(),
             prog: PolishProgram::polish(),
             pass: PolishPass::new(),
+            fwait: Default::default(),
         }
     }
 }
@@ -122,7 +126,21 @@ impl Logic for PolishUnit {
         self.control.start_pose.next = self.start_pose.val();
         self.pass_go.next = self.control.pass_go.val();
         self.pose.next = self.control.pose.val();
-        self.control.pass_done.next = self.pass_done.val();
+        // A pass's end: the pass flushes, then the control hears of it.
+        self.fwait.clock.next = self.clock.val();
+        self.fwait.d.next = self.fwait.q.val();
+        self.pass.flush.next = self.pass_done.val();
+        if self.pass_done.val() {
+            self.fwait.d.next = true;
+        }
+        self.control.pass_done.next = false;
+        if self.fwait.q.val() && self.pass.idle.val() {
+            self.control.pass_done.next = true;
+            self.fwait.d.next = false;
+        }
+        if self.reset.val() {
+            self.fwait.d.next = false;
+        }
         self.control.pass_cost.next = self.pass_cost.val();
         self.busy.next = self.control.busy.val();
         self.done.next = self.control.done.val();

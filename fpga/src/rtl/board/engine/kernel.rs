@@ -2,6 +2,9 @@
 
 use super::*;
 
+// A literal in the kernel (`#[hdl_gen]` takes no paths): the credits.
+const _: () = assert!(super::super::pass_queue::PASS_QUEUE == 8);
+
 impl<const P: usize> Logic for CommandEngine<P> {
     #[hdl_gen]
     fn update(&mut self) {
@@ -9,7 +12,8 @@ impl<const P: usize> Logic for CommandEngine<P> {
         dff_setup!(self, clock, err_led, faddr, fcount, inbuf, outbuf, ecount, hdr, model_count, scan_count, idx);
         dff_setup!(self, clock, waddr, eval_mode, start_r, wi, ncost, dig_sr, dig_restart);
         dff_setup!(self, clock, pol_count, pol_steps, pol_starts, hyp1, hyp2, hcnt, pol_arm, pol_ready, run_r);
-        dff_setup!(self, clock, pass_req, pol_pass, outst, skid_v, skid_q, skid_n, skid_s, pc_seen, pc_cost, quiet);
+        dff_setup!(self, clock, pass_req, pol_pass, outst, occ, pc_seen, pc_cost, quiet);
+        self.found.clock.next = self.clock.val();
         self.polish.clock.next = self.clock.val();
         self.model_digest.clock.next = self.clock.val();
         self.nn.clock.next = self.clock.val();
@@ -65,8 +69,9 @@ impl<const P: usize> Logic for CommandEngine<P> {
         self.feeder.from_index.next = 0.into();
         self.feeder.to_index.next = self.scan_count.q.val();
         self.feeder.ready.next = self.nn.scan_ready.val();
-        // During a pass one point at a time: none while a result is due or waits in the skid.
-        self.feeder.hold.next = self.pol_pass.q.val() && (self.outst.q.val().any() || self.skid_v.q.val());
+        // During a pass on credit: a point in only while the points in the pipeline and in
+        // the queue are fewer than its entries.
+        self.feeder.hold.next = self.pol_pass.q.val() && ((self.outst.q.val() + self.occ.q.val()) >= 8);
         self.feeder.read_data.next = self.scan_store.read_data.val();
         self.scan_store.read_address.next = self.feeder.read_address.val();
         self.nn.scan_valid.next = self.feeder.valid.val();
@@ -155,23 +160,29 @@ impl<const P: usize> Logic for CommandEngine<P> {
             } else if !self.feeder.issued.val() && self.surf.nn_valid.val() {
                 self.outst.d.next = self.outst.q.val() - 1;
             }
-            if self.surf.nn_valid.val() && (self.surf.nn_dist.val() < self.cap_d2.val()) {
-                self.skid_v.d.next = true;
-                self.skid_q.d.next = self.surf.nn_point.val();
-                self.skid_n.d.next = self.surf.nn_normal.val();
-                self.skid_s.d.next = self.surf.nn_s.val().get_bits::<13>(0);
-            }
             if self.surf.cost_valid.val() {
                 self.pc_seen.d.next = true;
                 self.pc_cost.d.next = self.surf.cost.val();
             }
         }
-        self.polish.in_valid.next = self.skid_v.q.val() && self.polish.ready.val();
-        self.polish.in_q.next = self.skid_q.q.val();
-        self.polish.in_n.next = self.skid_n.q.val();
-        self.polish.in_s.next = self.skid_s.q.val();
-        if self.skid_v.q.val() && self.polish.ready.val() {
-            self.skid_v.d.next = false;
+        // The queue: a found result in, the head to the pass while it takes points.
+        self.found.reset.next = self.reset.val();
+        self.found.write.next =
+            self.pol_pass.q.val() && self.surf.nn_valid.val() && (self.surf.nn_dist.val() < self.cap_d2.val());
+        self.found.data_in.next = bit_cast::<109, 48>(self.surf.nn_point.val())
+            | (bit_cast::<109, 48>(self.surf.nn_normal.val()) << 48)
+            | (bit_cast::<109, 13>(self.surf.nn_s.val().get_bits::<13>(0)) << 96);
+        self.polish.in_valid.next = self.pol_pass.q.val() && self.found.valid.val() && self.polish.ready.val();
+        self.polish.in_q.next = self.found.data_out.val().get_bits::<48>(0);
+        self.polish.in_n.next = self.found.data_out.val().get_bits::<48>(48);
+        self.polish.in_s.next = self.found.data_out.val().get_bits::<13>(96);
+        self.found.take.next = self.polish.in_valid.val();
+        if self.found.write.val() && !self.found.take.val() {
+            self.occ.d.next = self.occ.q.val() + 1;
+        } else if !self.found.write.val() && self.found.take.val() {
+            self.occ.d.next = self.occ.q.val() - 1;
+        }
+        if self.polish.in_valid.val() {
             self.quiet.d.next = 0.into();
         } else if self.polish.ready.val() && (self.quiet.q.val() != 7) {
             self.quiet.d.next = self.quiet.q.val() + 1;
@@ -180,7 +191,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
         self.polish.pass_cost.next = self.pc_cost.q.val();
         if self.pol_pass.q.val()
             && self.pc_seen.q.val()
-            && !self.skid_v.q.val()
+            && !self.occ.q.val().any()
             && !self.outst.q.val().any()
             && self.polish.ready.val()
             && (self.quiet.q.val() == 7)
@@ -688,8 +699,8 @@ impl<const P: usize> Logic for CommandEngine<P> {
             self.pol_ready.d.next = false;
             self.pass_req.d.next = false;
             self.pol_pass.d.next = false;
-            self.skid_v.d.next = false;
             self.pc_seen.d.next = false;
+            self.occ.d.next = 0.into();
         }
     }
 }

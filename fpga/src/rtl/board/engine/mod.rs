@@ -13,10 +13,15 @@
 //! it the sequencer's multiplier, gives it its starts (the filter's pose, then the Run's
 //! hypotheses) and serves its passes: the pipeline at the unit's pose over the first
 //! `points` stored scan points, one point let in at a time (the feeder's `hold`) and its
-//! found result (distance below `CAP_D2`) handed to the pass through a one-entry skid, so
-//! the pipeline's latency overlaps the pass's 52 clocks an inlier.
+//! found result (distance below `CAP_D2`) handed to the pass through a queue of
+//! [`PASS_QUEUE`] entries ([`PassQueue`]). Points are let in on credit (the points in the pipeline and in
+//! the queue at most `PASS_QUEUE`), so the pipeline's latency overlaps the pass's 14 clocks
+//! an inlier.
 
 use super::digest::ModelDigest;
+use super::pass_queue::PassQueue;
+#[cfg(doc)]
+use super::pass_queue::PASS_QUEUE;
 use super::reply_tx::ReplySender;
 use super::request_check::RequestCheck;
 use super::scan_feeder::ScanFeeder;
@@ -202,12 +207,10 @@ pub struct CommandEngine<const P: usize> {
     pass_req: DFF<Bit>,
     pol_pass: DFF<Bit>,
     /// The pass's points let into the pipeline whose results are not out yet.
-    outst: DFF<Bits<2>>,
-    /// A found result waiting for the pass: image, normal, signed residual.
-    skid_v: DFF<Bit>,
-    skid_q: DFF<Bits<48>>,
-    skid_n: DFF<Bits<48>>,
-    skid_s: DFF<Bits<13>>,
+    outst: DFF<Bits<5>>,
+    /// Found results waiting for the pass; how many (written, not yet taken).
+    found: PassQueue,
+    occ: DFF<Bits<5>>,
     /// The pass's cost is in.
     pc_seen: DFF<Bit>,
     pc_cost: DFF<Bits<48>>,
@@ -335,10 +338,8 @@ impl<const P: usize> CommandEngine<P> {
             pass_req: Default::default(),
             pol_pass: Default::default(),
             outst: Default::default(),
-            skid_v: Default::default(),
-            skid_q: Default::default(),
-            skid_n: Default::default(),
-            skid_s: Default::default(),
+            found: Default::default(),
+            occ: Default::default(),
             pc_seen: Default::default(),
             pc_cost: Default::default(),
             quiet: Default::default(),
