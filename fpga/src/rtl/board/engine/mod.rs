@@ -12,16 +12,14 @@
 //! After the filter the engine runs the polish ([`PolishUnit`], docs/polish.md): it lends
 //! it the sequencer's multiplier, gives it its starts (the filter's pose, then the Run's
 //! hypotheses) and serves its passes: the pipeline at the unit's pose over the first
-//! `points` stored scan points, one point let in at a time (the feeder's `hold`) and its
-//! found result (distance below `CAP_D2`) handed to the pass through a queue of
-//! [`PASS_QUEUE`] entries ([`PassQueue`]). Points are let in on credit (the points in the pipeline and in
-//! the queue at most `PASS_QUEUE`), so the pipeline's latency overlaps the pass's 14 clocks
-//! an inlier.
+//! `points` stored scan points, each found result (distance below `CAP_D2`) handed to the
+//! pass through a queue ([`PassQueue`], [`PASS_QUEUE`](super::pass_queue::PASS_QUEUE)
+//! entries). Points are let in on credit (the feeder's `hold` while the points in the
+//! pipeline and in the queue are as many as the queue's entries), so the pipeline's
+//! latency overlaps the pass's 15 clocks an inlier.
 
 use super::digest::ModelDigest;
 use super::pass_queue::PassQueue;
-#[cfg(doc)]
-use super::pass_queue::PASS_QUEUE;
 use super::reply_tx::ReplySender;
 use super::request_check::RequestCheck;
 use super::scan_feeder::ScanFeeder;
