@@ -16,8 +16,9 @@
 //! Slow (about 4 minutes for 100 cases a family): ignored by default. Run it with
 //! `PFICP_CASES=100 PFICP_SEED=2 cargo test --release -p pficp-host --test
 //! board_polish_variants -- --ignored --nocapture` (`PFICP_CASES` cases a family, default
-//! 32; `PFICP_SEED` the benchmark's seed, default 1; always the dev split: this is for
-//! choosing, not for reporting).
+//! 32; `PFICP_SEED` the benchmark's seed, default 1; `PFICP_VARIANTS=19,20` only those
+//! variants and the shipped one; always the dev split: this is for choosing, not for
+//! reporting).
 
 use pficp::board::fixed::{normalised_pose, original_pose, quantise_pose, restore_pose};
 use pficp::board::on_board::{self, plan, OnBoardPlan};
@@ -69,7 +70,7 @@ const H4: &[usize] = &[0, 1, 2, 3];
 const H7: &[usize] = &[0, 1, 2, 3, 4, 5, 6];
 const H15: &[usize] = &[0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14];
 
-const VARIANTS: [Variant; 19] = [
+const VARIANTS: [Variant; 24] = [
     v("3 starts, 10 steps, all points (shipped)", H2, 10, 0),
     v("3 starts, 5 steps (stops 31 and 32)", H2, 5, 0),
     v("3 starts, 8 steps", H2, 8, 0),
@@ -85,6 +86,11 @@ const VARIANTS: [Variant; 19] = [
     two_phase("8 starts over the sample, the winner over all, 3 + 10 steps", H7, 3, 10),
     two_phase("16 starts over the sample, the winner over all, 2 + 10 steps", H15, 2, 10),
     two_phase("16 starts over the sample, the winner over all, 3 + 10 steps", H15, 3, 10),
+    v("8 starts, 10 steps", H7, 10, 0),
+    v("16 starts, 10 steps", H15, 10, 0),
+    two_phase("8 starts over the sample, the winner over all, 5 + 10 steps", H7, 5, 10),
+    two_phase("16 starts over the sample, the winner over all, 5 + 10 steps", H15, 5, 10),
+    two_phase("16 starts over the sample, the winner over all, 8 + 10 steps", H15, 8, 10),
     uneven("3 starts, the filter's pose 8 steps, the hypotheses 3", 8, 3),
     uneven("3 starts, the filter's pose 10 steps, the hypotheses 3", 10, 3),
     uneven("3 starts, the filter's pose 8 steps, the hypotheses 5", 8, 5),
@@ -139,6 +145,15 @@ fn points_of(plan: &OnBoardPlan, most: usize) -> Vec<FxPoint> {
     plan.scan.iter().chain(plan.rest.iter().step_by(stride).take(room)).copied().collect()
 }
 
+/// Whether variant `i` runs: all, or those `PFICP_VARIANTS` lists (indices, comma-separated;
+/// the shipped variant 0 always).
+fn selected(i: usize) -> bool {
+    match std::env::var("PFICP_VARIANTS") {
+        Ok(list) => i == 0 || list.split(',').any(|v| v.trim().parse() == Ok(i)),
+        Err(_) => true,
+    }
+}
+
 #[test]
 #[ignore = "minutes in release; prints the tables of docs/polish.md"]
 fn the_polish_settings_on_the_dev_split() {
@@ -163,7 +178,11 @@ fn the_polish_settings_on_the_dev_split() {
                 let search = pficp_fpga::polish::GridSearch { grid: &plan.grid, normals: &plan.normals };
                 let hyps = &plan.prior.hypotheses;
                 let mut ok = vec![score(&soft, &c).success];
-                for var in &VARIANTS {
+                for (vi, var) in VARIANTS.iter().enumerate() {
+                    if !selected(vi) {
+                        ok.push(false);
+                        continue;
+                    }
                     let starts: Vec<FxPose> = std::iter::once(filter.pose)
                         .chain(
                             var.hypotheses.iter().filter_map(|&i| hyps.get(i)).map(|h| on_board_pose(&plan, &h.pose)),
@@ -202,8 +221,10 @@ fn the_polish_settings_on_the_dev_split() {
     let names = std::iter::once("software")
         .chain(VARIANTS.iter().map(|v| v.name))
         .chain(["board alone as shipped (plan.emulate)", "board + host polish"]);
-    for (name, t) in names.zip(&totals) {
-        println!("| {name} | {t}/{all} |");
+    for (k, (name, t)) in names.zip(&totals).enumerate() {
+        if k == 0 || k > VARIANTS.len() || selected(k - 1) {
+            println!("| {name} | {t}/{all} |");
+        }
     }
     // The variant that repeats the shipped setting must score as the shipped board does.
     assert_eq!(totals[1], totals[VARIANTS.len() + 1], "the shipped variant differs from plan.emulate");

@@ -196,13 +196,17 @@ impl Op {
     /// this instruction, from its `fetch` to its `write` (or its stop test), whatever the
     /// operands: `fetch`, `operand` and `exec`, then
     /// - an add, a subtract, a stop test: one add and `write` (or the test);
-    /// - a shift right by `k`: an add, `k` shift clocks, the end of `round` and `write`;
-    /// - a constant shifted by `k`: `k` shift clocks and the add's issue, an add, `write`;
-    /// - a product: a multiplier bit a clock over at most [`REG_BITS`] bits and the clock
-    ///   that ends it, a flush, `k - 1` shift clocks and the rounding add, `write`;
-    /// - a quotient: the dividend's `k` shift clocks and the add's issue, an add (its
-    ///   magnitude), `div_start`, two clocks a quotient bit over [`REG_BITS`] bits, the
-    ///   sign's add, `write`;
+    /// - a shift right by `k`: an add, [`shift_clocks`]`(k, 0)` shift clocks, the end of
+    ///   `round` and `write`;
+    /// - a constant shifted by `k`: [`shift_clocks`]`(k, 0)` shift clocks and the add's
+    ///   issue, an add, `write`;
+    /// - a product: two multiplier bits a clock over at most [`REG_BITS`] bits and the
+    ///   clock that ends it, a flush, [`shift_clocks`]`(k, 1)` shift clocks and the rounding add,
+    ///   `write`;
+    /// - a quotient: the dividend's [`shift_clocks`]`(k, 0)` shift clocks and the add's
+    ///   issue, an add (its magnitude), `div_start`, the skip's last clock (leading zeros
+    ///   skip eight a clock), the first bit's low half, a clock a quotient bit over at most
+    ///   [`REG_BITS`] bits, the sign's add, `write`;
     /// - a clamp or a saturation: up to three adds with their tests, `write`.
     ///
     /// The Verilated test (`sim/tests/polish_program.rs`) checks every measured program
@@ -214,13 +218,28 @@ impl Op {
             + WRITE
             + match self {
                 Op::Add { .. } | Op::Sub { .. } | Op::StopBelow { .. } => ADD_CLOCKS,
-                Op::Shr { k, .. } => ADD_CLOCKS + k as u64 + 1,
-                Op::Const { k, .. } => k as u64 + 1 + ADD_CLOCKS,
-                Op::Mul { k, .. } => REG_BITS as u64 + 1 + (ADD_CLOCKS - 1) + k as u64 + ADD_CLOCKS,
-                Op::Div { k, .. } => k as u64 + 1 + ADD_CLOCKS + 1 + 2 * REG_BITS as u64 + ADD_CLOCKS,
+                Op::Shr { k, .. } => ADD_CLOCKS + shift_clocks(k, 0) + 1,
+                Op::Const { k, .. } => shift_clocks(k, 0) + 1 + ADD_CLOCKS,
+                Op::Mul { k, .. } => REG_BITS as u64 / 2 + 1 + (ADD_CLOCKS - 1) + shift_clocks(k, 1) + 1 + ADD_CLOCKS,
+                Op::Div { k, .. } => shift_clocks(k, 0) + 1 + ADD_CLOCKS + 1 + 1 + 1 + REG_BITS as u64 + ADD_CLOCKS,
                 Op::Clamp { .. } | Op::Sat { .. } => 3 * (ADD_CLOCKS + 1),
             }
     }
+}
+
+/// Clocks the RTL's shift right takes from `k` bits down to `stop` left: eight bits a
+/// clock while more than eight remain, then one a clock. Its shift left, which takes eight
+/// when eight remain, takes no more.
+pub const fn shift_clocks(k: u8, stop: u8) -> u64 {
+    let (mut left, mut clocks) = (k as u64, 0);
+    while left > 8 {
+        left -= 8;
+        clocks += 1;
+    }
+    if left > stop as u64 {
+        clocks += left - stop as u64;
+    }
+    clocks
 }
 
 /// The most clocks the RTL takes to run `program` from `go` to idle: its instructions'

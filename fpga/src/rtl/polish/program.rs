@@ -12,13 +12,17 @@
 //!   is left; the 129-bit result's sign in `sign`. The operand selects and inversions are
 //!   registers (`sa`, `sb`, `ia`, `ib`, `ci`) set by the state before, so no decode sits in
 //!   front of the chain;
-//! - **the multiply on the same adder**, a multiplier bit a clock with the segment carries
-//!   left pending, over the signed multiplier's bits until the rest is all zeros or all
-//!   ones (then one subtract), one flush at the end;
+//! - **the multiply on the same adder**, radix 4 (Booth): two multiplier bits a clock,
+//!   `acc` plus 0, `x`, `2 x`, `-x` or `-2 x` with the segment carries left pending, until
+//!   the rest of the signed multiplier gives only zero digits, one flush at the end;
 //! - **a restoring divider** over a divisor of at most 64 bits
 //!   ([`crate::polish::program::DIVISOR_BITS`]): the 65-bit trial subtract in two 33-bit
-//!   halves, two clocks a quotient bit, the dividend shifting out of `acc` as the quotient
-//!   shifts in;
+//!   halves, a clock a quotient bit (the next bit's low half computed for either outcome
+//!   beside this bit's high half; the first bit's low half a clock of its own), the
+//!   dividend shifting out of `acc` as the quotient shifts in; the dividend's leading zeros
+//!   eight a clock (`DivSkip`);
+//! - **shifts eight bits a clock** while eight or more remain, then one a clock (a
+//!   product's rounding, a shift right, a constant's or a dividend's shift left);
 //! - **the add port's own 48-bit adder** ([`crate::polish::program::add_port`]), one add a
 //!   clock.
 //!
@@ -46,7 +50,7 @@ pub enum ProgramState {
     /// Add the pending segment carries into `acc` until none is left; then the state in
     /// `ret`.
     Flush,
-    /// Multiply, a multiplier bit a clock into `acc` with the segment carries pending.
+    /// Multiply, two multiplier bits a clock into `acc` with the segment carries pending.
     Mul,
     /// Arithmetic right shifts (a multiply's rounding, a shift).
     Round,
@@ -55,9 +59,11 @@ pub enum ProgramState {
     /// The dividend's magnitude is in `acc`: start the division (the quotient shifts into
     /// `acc` as the dividend shifts out).
     DivStart,
-    /// A quotient bit's trial subtract, the low half.
+    /// Eight leading zero bits of the dividend a clock (their quotient bits are zero).
+    DivSkip,
+    /// The first quotient bit's trial subtract, the low half.
     DivLo,
-    /// The high half; the quotient bit.
+    /// A quotient bit's high half and the bit; the next bit's low half.
     DivHi,
     /// `x - B - 1` is done: above the bound (the result is `B`), or test the low bound.
     ClampTest,
@@ -153,12 +159,15 @@ pub struct PolishProgram {
     sum: Signal<Local, Bits<128>>,
     carries: Signal<Local, Bits<3>>,
     acc_sra: Signal<Local, Bits<128>>,
-    // The multiplier: the rest all ones (subtract x, the last step); the next clock's
-    // multiplier and its tests.
-    all_ones: Signal<Local, Bit>,
+    acc_sra8: Signal<Local, Bits<128>>,
+    // The multiplier (radix 4, Booth): the next clock's multiplier, the bit below it, and
+    // their tests.
     ny: Signal<Local, Bits<128>>,
     my: Signal<Local, Bits<128>>,
+    myp: Signal<Local, Bit>,
     my_ones: Signal<Local, Bit>,
+    my_zeros: Signal<Local, Bit>,
+    my_neg: Signal<Local, Bit>,
     // The divider: the shifted remainder, the halves of the trial subtract, a divisor
     // wider than 64 bits.
     rem2: Signal<Local, Bits<65>>,
@@ -166,6 +175,9 @@ pub struct PolishProgram {
     not_y_hi: Signal<Local, Bits<32>>,
     div_lo: Signal<Local, Bits<34>>,
     div_hi: Signal<Local, Bits<33>>,
+    div_next_sub: Signal<Local, Bits<34>>,
+    div_next_keep: Signal<Local, Bits<34>>,
+    div_sub: Signal<Local, Bit>,
     wide: Signal<Local, Bit>,
     // The add port's sum.
     add_sum: Signal<Local, Bits<48>>,
@@ -245,15 +257,21 @@ impl PolishProgram {
             sum: Default::default(),
             carries: Default::default(),
             acc_sra: Default::default(),
-            all_ones: Default::default(),
+            acc_sra8: Default::default(),
             ny: Default::default(),
             my: Default::default(),
+            myp: Default::default(),
             my_ones: Default::default(),
+            my_zeros: Default::default(),
+            my_neg: Default::default(),
             rem2: Default::default(),
             not_y_lo: Default::default(),
             not_y_hi: Default::default(),
             div_lo: Default::default(),
             div_hi: Default::default(),
+            div_next_sub: Default::default(),
+            div_next_keep: Default::default(),
+            div_sub: Default::default(),
             wide: Default::default(),
             add_sum: Default::default(),
         }
@@ -295,6 +313,10 @@ impl Logic for PolishProgram {
         self.busy.next = self.state.q.val() != ProgramState::Idle;
         self.failed.next = self.fail.q.val();
         self.acc_sra.next = (self.acc.q.val() >> 1).replace_bit(127, self.acc.q.val().get_bit(127));
+        self.acc_sra8.next = self.acc.q.val() >> 8;
+        if self.acc.q.val().get_bit(127) {
+            self.acc_sra8.next = (self.acc.q.val() >> 8) | ((!bits::<128>(0)) << 120);
+        }
 
         // The adder, from registers only.
         self.alu_a.next = 0.into();
@@ -316,6 +338,9 @@ impl Logic for PolishProgram {
         }
         if self.sb.q.val() == 1 {
             self.alu_b.next = self.x.q.val();
+        }
+        if self.sb.q.val() == 3 {
+            self.alu_b.next = self.x.q.val() << 1;
         }
         if self.ib.q.val() {
             self.alu_b.next = !self.alu_b.val();
@@ -340,18 +365,21 @@ impl Logic for PolishProgram {
             | (bit_cast::<3, 1>(self.s1.val().get_bits::<1>(32)) << 1)
             | (bit_cast::<3, 1>(self.s2.val().get_bits::<1>(32)) << 2);
 
-        // The multiplier for the next clock: the second operand entering, else y shifted
-        // (zero after the all-ones step).
-        self.all_ones.next = !(!self.y.q.val()).any();
-        self.ny.next = (self.y.q.val() >> 1).replace_bit(127, self.y.q.val().get_bit(127));
-        if self.all_ones.val() {
-            self.ny.next = 0.into();
-        }
+        // The multiplier for the next clock: the second operand entering (no bit below),
+        // else y shifted two bits and its last bit out below.
+        self.ny.next = (self.y.q.val() >> 2)
+            .replace_bit(127, self.y.q.val().get_bit(127))
+            .replace_bit(126, self.y.q.val().get_bit(127));
         self.my.next = self.ny.val();
+        self.myp.next = self.y.q.val().get_bit(1);
         if self.state.q.val() == ProgramState::Exec {
             self.my.next = self.opb.val();
+            self.myp.next = false;
         }
         self.my_ones.next = !(!self.my.val()).any();
+        self.my_zeros.next = !self.my.val().any();
+        // A negative digit (-1 or -2: the top bit set, not all three).
+        self.my_neg.next = self.my.val().get_bit(1) && !(self.my.val().get_bit(0) && self.myp.val());
 
         // The divider: the remainder shifted, the dividend's next bit in (the dividend
         // shifts out of `acc`).
@@ -366,6 +394,21 @@ impl Logic for PolishProgram {
             + bit_cast::<33, 32>(self.not_y_hi.val())
             + bit_cast::<33, 1>(self.lo_c.q.val().into());
         self.wide.next = self.y.q.val().get_bits::<64>(64).any();
+        // The divisor goes (the remainder becomes the trial's difference).
+        self.div_sub.next = self.div_hi.val().get_bit(32) && !self.wide.val();
+        // The next quotient bit's low half, for either outcome of this one: from the
+        // difference's low half (`lo`) or the shifted remainder's, the dividend's next bit
+        // (`acc`'s bit 126) in.
+        self.div_next_sub.next = bit_cast::<34, 33>(
+            (bit_cast::<33, 32>(self.lo.q.val().get_bits::<32>(0)) << 1)
+                | bit_cast::<33, 1>(self.acc.q.val().get_bits::<1>(126)),
+        ) + bit_cast::<34, 33>(self.not_y_lo.val())
+            + 1;
+        self.div_next_keep.next = bit_cast::<34, 33>(
+            (bit_cast::<33, 32>(self.rem2.val().get_bits::<32>(0)) << 1)
+                | bit_cast::<33, 1>(self.acc.q.val().get_bits::<1>(126)),
+        ) + bit_cast::<34, 33>(self.not_y_lo.val())
+            + 1;
         self.add_sum.next = self.rf.read_data.val().get_bits::<48>(0) + self.add_v.q.val();
 
         self.rf.read_address.next = self.ins.q.val().get_bits::<6>(16);
@@ -501,7 +544,7 @@ impl Logic for PolishProgram {
                 } else {
                     self.acc.d.next = self.sum.val();
                     self.car.d.next = self.carries.val();
-                    self.x.d.next = self.x.q.val() << 1;
+                    self.x.d.next = self.x.q.val() << 2;
                     self.y.d.next = self.ny.val();
                 }
             }
@@ -512,6 +555,9 @@ impl Logic for PolishProgram {
                     self.sel_a.next = 2.into();
                     self.cin.next = self.acc.q.val().get_bit(0);
                     self.issue.next = true;
+                } else if self.cnt.q.val() > 8 {
+                    self.cnt.d.next = self.cnt.q.val() - 8;
+                    self.acc.d.next = self.acc_sra8.val();
                 } else if self.cnt.q.val().any() {
                     self.cnt.d.next = self.cnt.q.val() - 1;
                     self.acc.d.next = self.acc_sra.val();
@@ -520,7 +566,10 @@ impl Logic for PolishProgram {
                 }
             }
             ProgramState::ShiftLeft => {
-                if self.cnt.q.val().any() {
+                if self.cnt.q.val() > 7 {
+                    self.cnt.d.next = self.cnt.q.val() - 8;
+                    self.x.d.next = self.x.q.val() << 8;
+                } else if self.cnt.q.val().any() {
                     self.cnt.d.next = self.cnt.q.val() - 1;
                     self.x.d.next = self.x.q.val() << 1;
                 } else {
@@ -537,7 +586,22 @@ impl Logic for PolishProgram {
             ProgramState::DivStart => {
                 self.rem.d.next = 0.into();
                 self.cnt.d.next = 128.into();
-                self.state.d.next = ProgramState::DivLo;
+                self.state.d.next = ProgramState::DivSkip;
+            }
+            ProgramState::DivSkip => {
+                // Leading zeros of the dividend with the remainder zero and a divisor from 1
+                // to 2^64 - 1: eight quotient bits of zero a clock, the remainder staying
+                // zero (at least one bit left for `DivHi`'s sign).
+                if (self.cnt.q.val() > 8)
+                    && !self.acc.q.val().get_bits::<8>(120).any()
+                    && self.y.q.val().get_bits::<64>(0).any()
+                    && !self.wide.val()
+                {
+                    self.cnt.d.next = self.cnt.q.val() - 8;
+                    self.acc.d.next = self.acc.q.val() << 8;
+                } else {
+                    self.state.d.next = ProgramState::DivLo;
+                }
             }
             ProgramState::DivLo => {
                 self.lo.d.next = self.div_lo.val().get_bits::<33>(0);
@@ -546,10 +610,10 @@ impl Logic for PolishProgram {
             }
             ProgramState::DivHi => {
                 // No borrow: the divisor goes, the quotient bit is 1 (always, for a divisor
-                // wider than 64 bits: a quotient of all ones, as for zero). After the last
-                // bit, the quotient's sign: acc or ~acc + 1.
+                // wider than 64 bits: a quotient of all ones, as for zero); the next bit's
+                // low half is ready for either outcome, so the next bit is `DivHi` again.
+                // After the last bit, the quotient's sign: acc or ~acc + 1.
                 self.cnt.d.next = self.cnt.q.val() - 1;
-                self.state.d.next = ProgramState::DivLo;
                 if self.cnt.q.val() == 1 {
                     self.sel_a.next = 2.into();
                     self.inva.next = self.neg.q.val();
@@ -557,13 +621,17 @@ impl Logic for PolishProgram {
                     self.issue.next = true;
                 }
                 self.rem.d.next = self.rem2.val();
+                self.lo.d.next = self.div_next_keep.val().get_bits::<33>(0);
+                self.lo_c.d.next = self.div_next_keep.val().get_bit(33);
                 self.acc.d.next = self.acc.q.val() << 1;
                 if self.div_hi.val().get_bit(32) || self.wide.val() {
                     self.acc.d.next = (self.acc.q.val() << 1) | bits::<128>(1);
                 }
-                if self.div_hi.val().get_bit(32) && !self.wide.val() {
+                if self.div_sub.val() {
                     self.rem.d.next = (bit_cast::<65, 32>(self.div_hi.val().get_bits::<32>(0)) << 33)
                         | bit_cast::<65, 33>(self.lo.q.val());
+                    self.lo.d.next = self.div_next_sub.val().get_bits::<33>(0);
+                    self.lo_c.d.next = self.div_next_sub.val().get_bit(33);
                 }
             }
             ProgramState::ClampTest => {
@@ -624,15 +692,19 @@ impl Logic for PolishProgram {
         if ((self.state.q.val() == ProgramState::Exec) && (self.kind.val() == 2))
             || ((self.state.q.val() == ProgramState::Mul) && !self.mdone.q.val())
         {
-            self.mdone.d.next = !self.my.val().any();
+            // Booth's digit of the next clock's two bits and the bit below: 0, x, 2 x, -x
+            // (~x + 1) or -2 x; done once the rest gives only zero digits.
+            self.mdone.d.next = (self.my_zeros.val() && !self.myp.val()) || (self.my_ones.val() && self.myp.val());
             self.sa.d.next = 2.into();
             self.sb.d.next = 2.into();
-            if self.my.val().get_bit(0) || self.my_ones.val() {
+            if self.my.val().get_bit(0) != self.myp.val() {
                 self.sb.d.next = 1.into();
+            } else if self.my.val().get_bit(1) != self.my.val().get_bit(0) {
+                self.sb.d.next = 3.into();
             }
             self.ia.d.next = false;
-            self.ib.d.next = self.my_ones.val();
-            self.ci.d.next = self.my_ones.val();
+            self.ib.d.next = self.my_neg.val();
+            self.ci.d.next = self.my_neg.val();
         }
         if self.reset.val() {
             self.state.d.next = ProgramState::Idle;
