@@ -21,8 +21,9 @@
 //!   beside this bit's high half; the first bit's low half a clock of its own), the
 //!   dividend shifting out of `acc` as the quotient shifts in; the dividend's leading zeros
 //!   eight a clock (`DivSkip`);
-//! - **shifts eight bits a clock** while eight or more remain, then one a clock (a
-//!   product's rounding, a shift right, a constant's or a dividend's shift left);
+//! - **shifts eight bits a clock** while more than eight remain (a shift left: eight or
+//!   more), then one a clock (a product's rounding, a shift right, a constant's or a
+//!   dividend's shift left);
 //! - **the add port's own 48-bit adder** ([`crate::polish::program::add_port`]), one add a
 //!   clock.
 //!
