@@ -1,21 +1,25 @@
-//! The Run request of protocol 5 (docs/protocol.md, "Run"): the on-board filter's
+//! The Run request of protocol 6 (docs/protocol.md, "Run"): the on-board filter's
 //! configuration ([`PfConfig`]) and the on-board polish after it ([`PolishRequest`]), and
 //! what the board does with it ([`execute`]): the filter over the first `scan_count`
-//! stored scan points (SetSizes), then [`crate::polish::polish_best_over`] over the first
+//! stored scan points (SetSizes), then [`crate::polish::polish_winner_over`] over the first
 //! `points` stored points from the filter's pose and the request's hypotheses.
 //!
 //! Layout: the filter's 150 bytes ([`PfConfig::encode`]) with its sixth byte the number of
-//! starts (its low two bits; 0 is taken as 1), then the polish word (6 bytes: `points` u16,
-//! `steps` in the low four bits of the next byte, three zero bytes), then `starts - 1`
+//! starts (its low four bits; 0 is taken as 1), then the polish word (6 bytes: `points` u16,
+//! `steps` in the low four bits of the next byte, `winner_steps` in the low four bits of
+//! the next, two zero bytes), then `starts - 1`
 //! hypothesis poses of 27 bytes ([`crate::messages::pose_bytes`]).
 
 use crate::format::{FxPose, MAX_POINTS};
 use crate::messages::{pose_bytes, pose_from_bytes, POSE_BYTES};
 use crate::pf::{ConfigError, PfConfig, PfOutcome, RUN_BYTES, RUN_WORD_BYTES};
-use crate::polish::{polish_best_over, Search};
+use crate::polish::{polish_winner_over, Search};
 
-/// Most starts of the polish: the filter's pose and two hypotheses.
-pub const MAX_STARTS: usize = 3;
+/// Most starts of the polish: the filter's pose and fourteen hypotheses (the Run's starts
+/// field is four bits; the board keeps the hypotheses in a 16-word RAM).
+pub const MAX_STARTS: usize = 15;
+/// Bits of the Run's starts field (the low bits of [`STARTS_BYTE`]).
+pub const STARTS_BITS: u32 = 4;
 /// Most Gauss-Newton steps a start (four bits).
 pub const MAX_STEPS: u8 = 15;
 /// Data bytes of a Run request with one start (no hypothesis).
@@ -24,14 +28,14 @@ pub const RUN_BASE_BYTES: usize = RUN_BYTES + RUN_WORD_BYTES;
 pub const STARTS_BYTE: usize = 5;
 
 /// The data bytes of a Run request with `starts` starts (as the board takes the count:
-/// the low two bits, 0 as 1).
+/// the low four bits, 0 as 1).
 pub fn run_bytes(starts_byte: u8) -> usize {
     RUN_BASE_BYTES + POSE_BYTES * (starts_of(starts_byte) - 1)
 }
 
-/// The starts a Run's sixth byte asks for: its low two bits, 0 taken as 1.
+/// The starts a Run's sixth byte asks for: its low four bits, 0 taken as 1.
 pub fn starts_of(b: u8) -> usize {
-    ((b & 3) as usize).max(1)
+    ((b & ((1 << STARTS_BITS) - 1)) as usize).max(1)
 }
 
 /// The polish the board runs after its filter.
@@ -42,6 +46,9 @@ pub struct PolishRequest {
     pub points: u16,
     /// Gauss-Newton steps a start (0 ..= [`MAX_STEPS`]; the board takes the low four bits).
     pub steps: u8,
+    /// Further steps for the winner among the starts, from its pose (0 ..= [`MAX_STEPS`];
+    /// 0: none; the low four bits).
+    pub winner_steps: u8,
     /// The starts after the filter's pose (at most `MAX_STARTS - 1`).
     pub hypotheses: Vec<FxPose>,
 }
@@ -63,7 +70,8 @@ impl RunRequest {
         out[STARTS_BYTE] = 1 + self.polish.hypotheses.len() as u8;
         out.extend(self.polish.points.to_le_bytes());
         out.push(self.polish.steps & MAX_STEPS);
-        out.extend([0; RUN_WORD_BYTES - 3]);
+        out.push(self.polish.winner_steps & MAX_STEPS);
+        out.extend([0; RUN_WORD_BYTES - 4]);
         for h in &self.polish.hypotheses {
             out.extend_from_slice(&pose_bytes(h));
         }
@@ -84,7 +92,8 @@ impl RunRequest {
             return Err(ConfigError::Points(points));
         }
         let hypotheses = d[RUN_BASE_BYTES..].chunks_exact(POSE_BYTES).map(pose_from_bytes).collect();
-        Ok(RunRequest { filter, polish: PolishRequest { points, steps: d[RUN_BYTES + 2] & MAX_STEPS, hypotheses } })
+        let (steps, winner_steps) = (d[RUN_BYTES + 2] & MAX_STEPS, d[RUN_BYTES + 3] & MAX_STEPS);
+        Ok(RunRequest { filter, polish: PolishRequest { points, steps, winner_steps, hypotheses } })
     }
 }
 
@@ -122,13 +131,18 @@ pub const PASS_END_CLOCKS: u64 = 64;
 
 /// An upper bound on the board's clocks for the polish of `p` over a model of
 /// `model_points` on `lanes` lanes: each start takes at most `steps + 2` passes (the
-/// statistics, the steps, the cost) and as many program runs; a point takes at most one
+/// statistics, the steps, the cost) and as many program runs, the winner's further polish
+/// `winner_steps + 2`; a point takes at most one
 /// evaluation of one point ([`crate::surface_residual::evaluation_clocks_bound`]; the pass
 /// lets several into the pipeline, which only overlaps them) and [`PASS_POINT_CLOCKS`],
 /// and a pass ends within [`PASS_END_CLOCKS`] of its last point.
 pub fn polish_clocks_bound(p: &PolishRequest, model_points: usize, lanes: usize) -> u64 {
     let starts = 1 + p.hypotheses.len() as u64;
-    let passes = starts * (p.steps.min(MAX_STEPS) as u64 + 2);
+    let winner = match p.winner_steps.min(MAX_STEPS) {
+        0 => 0,
+        w => w as u64 + 2,
+    };
+    let passes = starts * (p.steps.min(MAX_STEPS) as u64 + 2) + winner;
     let point = crate::surface_residual::evaluation_clocks_bound(1, model_points, lanes.max(1)) + PASS_POINT_CLOCKS;
     passes * (p.points as u64 * point + PASS_END_CLOCKS + program_clocks_bound())
 }
@@ -164,20 +178,26 @@ pub fn execute(
 ) -> RunOutcome {
     let filter = crate::pf::run(&request.filter, evaluate);
     let starts: Vec<FxPose> = std::iter::once(filter.pose).chain(request.polish.hypotheses.iter().copied()).collect();
-    let (winner, polished, cost) =
-        polish_best_over(search, polish_scan, &starts, request.polish.steps as u32).expect("one start at least");
+    let (winner, polished, cost) = polish_winner_over(
+        search,
+        polish_scan,
+        &starts,
+        request.polish.steps as u32,
+        request.polish.winner_steps as u32,
+    )
+    .expect("one start at least");
     RunOutcome { filter, polish: PolishOutcome { winner: winner as u8, pose: polished.pose, cost } }
 }
 
 /// A request for tests and examples: [`crate::pf::example_config`]'s filter, then a polish
 /// of 2 steps over `points` stored points from the filter's pose and one hypothesis (the
-/// identity moved by 64 LSB along x).
+/// identity moved by 64 LSB along x), and one more step for the winner.
 pub fn example_request(particles: u16, iterations: u16, seed: u32, points: u16) -> RunRequest {
     let one = 1 << crate::format::MATRIX_FRAC;
     let moved = FxPose { m: [one, 0, 0, 0, one, 0, 0, 0, one], t: [64, 0, 0] };
     RunRequest {
         filter: crate::pf::example_config(particles, iterations, seed),
-        polish: PolishRequest { points, steps: 2, hypotheses: vec![moved] },
+        polish: PolishRequest { points, steps: 2, winner_steps: 1, hypotheses: vec![moved] },
     }
 }
 
@@ -200,7 +220,12 @@ mod tests {
         let pose = |k: i32| FxPose { m: [k, -k, 2, -2, 131071, -131072, 0, 5, -5], t: [7, -7, 100 + k] };
         RunRequest {
             filter,
-            polish: PolishRequest { points: 1000, steps: 5, hypotheses: (0..hyps as i32).map(pose).collect() },
+            polish: PolishRequest {
+                points: 1000,
+                steps: 5,
+                winner_steps: hyps as u8 % 3,
+                hypotheses: (0..hyps as i32).map(pose).collect(),
+            },
         }
     }
 
@@ -209,14 +234,14 @@ mod tests {
         for h in 0..MAX_STARTS {
             let r = request(h);
             let d = r.encode();
-            assert_eq!(d.len(), [156, 183, 210][h]);
+            assert_eq!(d.len(), 156 + 27 * h);
             assert_eq!(d.len(), run_bytes(d[STARTS_BYTE]));
             assert_eq!(RunRequest::decode(&d), Ok(r));
             assert_eq!(RunRequest::decode(&d[..d.len() - 1]), Err(ConfigError::Length(d.len() - 1)));
         }
         // Starts 0 is taken as 1: the length of one start.
         let mut d = request(0).encode();
-        d[STARTS_BYTE] = 4;
+        d[STARTS_BYTE] = 16;
         assert_eq!(RunRequest::decode(&d).map(|r| r.polish.hypotheses.len()), Ok(0));
         for bad in [0u16, 4097] {
             let mut d = request(1).encode();

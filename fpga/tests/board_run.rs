@@ -24,9 +24,12 @@ fn run_cfg(particles: u16, iterations: u16, seed: u32) -> PfConfig {
 }
 
 /// A Run of `cfg` with a polish over the first 16 stored scan points, 2 steps, from the
-/// filter's pose and one hypothesis (a small shift).
+/// filter's pose and one hypothesis (a small shift), then 1 step for the winner.
 fn request(cfg: PfConfig) -> RunRequest {
-    RunRequest { filter: cfg, polish: PolishRequest { points: 16, steps: 2, hypotheses: vec![shift([40, 0, -40])] } }
+    RunRequest {
+        filter: cfg,
+        polish: PolishRequest { points: 16, steps: 2, winner_steps: 1, hypotheses: vec![shift([40, 0, -40])] },
+    }
 }
 
 /// [`request`] of [`run_cfg`].
@@ -195,12 +198,23 @@ fn run_checks() {
     r.polish.hypotheses.push(shift([0, 9, 0]));
     ok(&mut b, req(RUN, 8, r.encode()));
     assert_eq!(b.run_outcome(), Some(&direct_run(&b, &r)));
-    // The high bits of the starts byte, of temper_exp and of the steps are ignored, exactly
-    // as RunRequest::decode takes them; 0 starts are 1.
+    // The most starts, fifteen (the field's four bits), one step each and two for the winner.
+    let mut r = run_req(2, 1, 4);
+    r.polish.steps = 1;
+    r.polish.winner_steps = 2;
+    r.polish.hypotheses = (0..14).map(|k| shift([8 * k, -4 * k, 0])).collect();
+    let data = r.encode();
+    assert_eq!(data.len(), pficp_fpga::run_request::run_bytes(15));
+    ok(&mut b, req(RUN, 8, data.clone()));
+    assert_eq!(b.run_outcome(), Some(&direct_run(&b, &r)));
+    rejects(&mut b, req(RUN, 8, data[..data.len() - 27].to_vec()), BadLength);
+    // The high bits of the starts byte, of temper_exp, of the steps and of the winner's
+    // steps are ignored, exactly as RunRequest::decode takes them; 0 starts are 1.
     let mut odd = run_req(5, 2, 3).encode();
-    odd[5] = 0xa6;
+    odd[5] = 0xa2;
     odd[4] |= 0xc0;
     odd[152] |= 0xf0;
+    odd[153] |= 0xe0;
     ok(&mut b, req(RUN, 9, odd.clone()));
     let r = RunRequest::decode(&odd).unwrap();
     assert_eq!(r, run_req(5, 2, 3));
@@ -208,7 +222,7 @@ fn run_checks() {
     let mut zero = run_req(5, 2, 3);
     zero.polish.hypotheses.clear();
     let mut data = zero.encode();
-    data[5] = 0xfc;
+    data[5] = 0xf0;
     ok(&mut b, req(RUN, 9, data));
     assert_eq!(b.run_outcome(), Some(&direct_run(&b, &zero)));
 }

@@ -140,7 +140,7 @@ fn the_unit_chooses_and_polishes_as_the_model() {
     let drifts: Vec<bool> =
         starts.iter().map(|s| within_drift(s, &polish(&grid, &normals, &scan, s, steps).pose)).collect();
     assert_eq!(drifts, [false, true, false], "the case covers a kept and a dropped start beyond the bounds");
-    let (best, p, cost) = polish_best(&grid, &normals, &scan, &starts, steps).expect("a winner");
+    let (best, p, cost) = polish_best(&grid, &normals, &scan, &starts, steps, 0).expect("a winner");
     assert_eq!((best, p.steps), (1, steps), "a later start wins after its steps");
     let want_passes = model_passes(&grid, &normals, &scan, &starts, steps);
     let ((i, rtl_pose, rtl_cost), passes) =
@@ -164,7 +164,7 @@ fn a_failed_gate_and_a_failed_solve_end_the_steps_as_in_the_model() {
     for s in &starts {
         assert_eq!(polish(&grid, &normals, &scan, s, 3).steps, 0, "no step taken");
     }
-    let (best, p, cost) = polish_best(&grid, &normals, &scan, &starts, 3).expect("a winner");
+    let (best, p, cost) = polish_best(&grid, &normals, &scan, &starts, 3, 0).expect("a winner");
     let want_passes = model_passes(&grid, &normals, &scan, &starts, 3);
     let ((i, rtl_pose, rtl_cost), passes) =
         run_unit(Arc::new(grid), Arc::new(normals), Arc::new(scan), starts.clone(), 3);

@@ -44,7 +44,7 @@ fn run_config(particles: u16, iterations: u16, seed: u32) -> RunRequest {
         thr_cost: 0,
         thr_max: 0,
     };
-    RunRequest { filter, polish: PolishRequest { points: 30, steps: 2, hypotheses: vec![] } }
+    RunRequest { filter, polish: PolishRequest { points: 30, steps: 2, winner_steps: 1, hypotheses: vec![] } }
 }
 
 #[test]

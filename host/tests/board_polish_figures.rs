@@ -88,7 +88,7 @@ fn poses(
         .map(|(i, p)| if i == 0 { out.pose } else { on_board_pose(&plan, p) })
         .collect();
     let (_, best, _) =
-        pficp_fpga::polish::polish_best(&plan.grid, &plan.normals, &whole, &starts, steps()).expect("a start");
+        pficp_fpga::polish::polish_best(&plan.grid, &plan.normals, &whole, &starts, steps(), 0).expect("a start");
     (
         [software, alone, polished(&plan.scan), polished(&whole), restored(&plan, &best.pose), host],
         out.best.cost < at_truth.cost,

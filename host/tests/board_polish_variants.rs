@@ -5,7 +5,9 @@
 //! the filter's pose and a choice of the prior's hypotheses, with a number of steps, over
 //! all stored points or at most `N` of them (the filter's sample, then every k-th of the
 //! rest). A two-phase variant polishes every start over the filter's 300-point sample, then
-//! its winner again over every stored point (each phase with its own steps). The software
+//! its winner again over every stored point (each phase with its own steps); a halving
+//! variant polishes every start over every stored point, then the best one or two again (the
+//! shipped setting: eight starts, 5 steps, the winner 5 more). The software
 //! mode, the shipped board alone and the board with the host's polish are scored beside
 //! them.
 //!
@@ -48,30 +50,45 @@ struct Variant {
     points: usize,
     /// Every start over the filter's sample first, then the winner over all.
     two_phase: bool,
+    /// Successive halving: every start `first_steps` over the variant's points, then the
+    /// best `keep` of them by cost `steps` more (0: not this kind).
+    keep: usize,
 }
 
 const fn v(name: &'static str, hypotheses: &'static [usize], steps: u32, points: usize) -> Variant {
-    Variant { name, hypotheses, steps, first_steps: steps, points, two_phase: false }
+    Variant { name, hypotheses, steps, first_steps: steps, points, two_phase: false, keep: 0 }
+}
+
+/// Every start polished with `first` steps over every stored point, the best `keep` of them
+/// by cost again with `steps` more (a new polish from the first phase's pose), the lowest
+/// cost wins.
+const fn halving(name: &'static str, hypotheses: &'static [usize], first: u32, keep: usize, steps: u32) -> Variant {
+    Variant { name, hypotheses, steps, first_steps: first, points: 0, two_phase: false, keep }
 }
 
 /// Every start polished with `screen` steps over the filter's sample, the winner again with
 /// `steps` over all the variant's points.
 const fn two_phase(name: &'static str, hypotheses: &'static [usize], screen: u32, steps: u32) -> Variant {
-    Variant { name, hypotheses, steps, first_steps: screen, points: 0, two_phase: true }
+    Variant { name, hypotheses, steps, first_steps: screen, points: 0, two_phase: true, keep: 0 }
 }
 
 /// The filter's pose polished with `first_steps`, the hypotheses with `steps`.
 const fn uneven(name: &'static str, first_steps: u32, steps: u32) -> Variant {
-    Variant { name, hypotheses: H2, steps, first_steps, points: 0, two_phase: false }
+    Variant { name, hypotheses: H2, steps, first_steps, points: 0, two_phase: false, keep: 0 }
 }
 
 const H2: &[usize] = &[0, 1];
 const H4: &[usize] = &[0, 1, 2, 3];
 const H7: &[usize] = &[0, 1, 2, 3, 4, 5, 6];
+const H1_2: &[usize] = &[1, 2];
+const H1_3: &[usize] = &[1, 2, 3];
+const H3: &[usize] = &[0, 1, 2];
+const H1_4: &[usize] = &[1, 2, 3, 4];
+const H5: &[usize] = &[0, 1, 2, 3, 4];
 const H15: &[usize] = &[0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14];
 
-const VARIANTS: [Variant; 24] = [
-    v("3 starts, 10 steps, all points (shipped)", H2, 10, 0),
+const VARIANTS: [Variant; 34] = [
+    halving("8 starts, 5 steps over all, the winner 5 more (shipped)", H7, 5, 1, 5),
     v("3 starts, 5 steps (stops 31 and 32)", H2, 5, 0),
     v("3 starts, 8 steps", H2, 8, 0),
     v("3 starts, 15 steps", H2, 15, 0),
@@ -95,7 +112,44 @@ const VARIANTS: [Variant; 24] = [
     uneven("3 starts, the filter's pose 10 steps, the hypotheses 3", 10, 3),
     uneven("3 starts, the filter's pose 8 steps, the hypotheses 5", 8, 5),
     uneven("3 starts, the filter's pose 10 steps, the hypotheses 2", 10, 2),
+    v("3 starts, hypotheses 2 and 3 (not the filter's start), 10 steps", H1_2, 10, 0),
+    v("4 starts, hypotheses 2 to 4 (not the filter's start), 10 steps", H1_3, 10, 0),
+    v("4 starts, 10 steps", H3, 10, 0),
+    v("5 starts, 10 steps", H4, 10, 0),
+    v("5 starts, hypotheses 2 to 5 (not the filter's start), 10 steps", H1_4, 10, 0),
+    v("6 starts, 10 steps", H5, 10, 0),
+    v("3 starts, 10 steps, all points (stop 33)", H2, 10, 0),
+    halving("8 starts, 5 steps over all, the best two 5 more", H7, 5, 2, 5),
+    halving("16 starts, 3 steps over all, the best two 7 more", H15, 3, 2, 7),
+    halving("8 starts, 4 steps over all, the best two 6 more", H7, 4, 2, 6),
 ];
+
+/// Every start's polish with `steps` by the rules of
+/// [`pficp_fpga::polish::polish_best_over`] (a first start beyond the drift bounds stays
+/// unpolished, another is dropped), as (cost, index, pose), lowest cost first.
+fn ranked(
+    search: &impl pficp_fpga::polish::Search,
+    scan: &[FxPoint],
+    starts: &[FxPose],
+    steps: u32,
+) -> Vec<(u64, usize, FxPose)> {
+    use pficp_fpga::polish::{polish_over, within_drift};
+    let mut out: Vec<(u64, usize, FxPose)> = starts
+        .iter()
+        .enumerate()
+        .filter_map(|(i, start)| {
+            let p = polish_over(search, scan, start, steps).pose;
+            let pose = match (within_drift(start, &p), i) {
+                (true, _) => p,
+                (false, 0) => *start,
+                (false, _) => return None,
+            };
+            Some((search.evaluate(scan, &pose).cost, i, pose))
+        })
+        .collect();
+    out.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.cmp(&b.1)));
+    out
+}
 
 /// [`pficp_fpga::polish::polish_best_over`] with the first start's steps apart (the same
 /// rules: a first start beyond the drift bounds stays unpolished, another is dropped; the
@@ -189,7 +243,14 @@ fn the_polish_settings_on_the_dev_split() {
                         )
                         .collect();
                     let pts = points_of(&plan, var.points);
-                    let pose = if var.two_phase {
+                    let pose = if var.keep > 0 {
+                        let kept: Vec<FxPose> = ranked(&search, &pts, &starts, var.first_steps)
+                            .iter()
+                            .take(var.keep)
+                            .map(|r| r.2)
+                            .collect();
+                        pficp_fpga::polish::polish_best_over(&search, &pts, &kept, var.steps).expect("a start").1.pose
+                    } else if var.two_phase {
                         let (_, first, _) =
                             pficp_fpga::polish::polish_best_over(&search, &plan.scan, &starts, var.first_steps)
                                 .expect("a start");

@@ -333,8 +333,12 @@ fn fuzz_client(cases: usize, seed: u64) -> (BTreeMap<&'static str, usize>, Durat
                     thr_cost: 0,
                     thr_max: 0,
                 };
-                let polish =
-                    PolishRequest { points: rng.gen_range(1..40), steps: rng.gen_range(0..3), hypotheses: vec![] };
+                let polish = PolishRequest {
+                    points: rng.gen_range(1..40),
+                    steps: rng.gen_range(0..3),
+                    winner_steps: rng.gen_range(0..2),
+                    hypotheses: vec![],
+                };
                 outcome(&client.run(&RunRequest { filter: cfg, polish }))
             }
         };

@@ -194,7 +194,7 @@ fn run_config() -> RunRequest {
         thr_cost: 0,
         thr_max: 0,
     };
-    RunRequest { filter, polish: PolishRequest { points: 30, steps: 1, hypotheses: vec![] } }
+    RunRequest { filter, polish: PolishRequest { points: 30, steps: 1, winner_steps: 0, hypotheses: vec![] } }
 }
 
 #[test]

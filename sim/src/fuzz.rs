@@ -100,7 +100,8 @@ impl FrameFuzzer {
     }
 
     /// A small Run request: a small filter, then a polish of 0 to 2 steps over up to the
-    /// fuzzer's largest scan (beyond the sizes in use at times) from 1 to 3 starts.
+    /// fuzzer's largest scan (beyond the sizes in use at times) from 1 to 4 starts, and 0 to
+    /// 2 further steps for the winner.
     pub fn run_request(&mut self) -> Vec<u8> {
         let cfg = PfConfig {
             particles: 1 + self.below(MAX_RUN_PARTICLES as u64) as u16,
@@ -116,7 +117,8 @@ impl FrameFuzzer {
         let polish = PolishRequest {
             points: 1 + self.below(MAX_SCAN as u64) as u16,
             steps: self.below(3) as u8,
-            hypotheses: (0..self.below(3)).map(|_| self.pose()).collect(),
+            winner_steps: self.below(3) as u8,
+            hypotheses: (0..self.below(4)).map(|_| self.pose()).collect(),
         };
         self.request(Command::Run, RunRequest { filter: cfg, polish }.encode())
     }

@@ -201,8 +201,9 @@ pub const POLISH_UNIT_PORTS: &[PortSpec] = &[
     ("clock", true, 1),
     ("reset", true, 1),
     ("go", true, 1),
-    ("starts", true, 2),
+    ("starts", true, 4),
     ("steps", true, 4),
+    ("winner_steps", true, 4),
     ("start_pose", true, 216),
     ("pass_done", true, 1),
     ("pass_cost", true, 48),
@@ -211,7 +212,7 @@ pub const POLISH_UNIT_PORTS: &[PortSpec] = &[
     ("in_n", true, 48),
     ("in_s", true, 13),
     ("mul_product", true, 44),
-    ("start_index", false, 2),
+    ("start_index", false, 4),
     ("pass_go", false, 1),
     ("pose", false, 216),
     ("ready", false, 1),
@@ -220,7 +221,7 @@ pub const POLISH_UNIT_PORTS: &[PortSpec] = &[
     ("mul_b", false, 18),
     ("busy", false, 1),
     ("done", false, 1),
-    ("best_index", false, 2),
+    ("best_index", false, 4),
     ("best_cost", false, 48),
 ];
 

@@ -469,10 +469,12 @@ pub struct UnitInputs {
     pub reset: bool,
     /// While idle: polish `starts` starts with `steps` steps each.
     pub go: bool,
-    /// Starts (1 to 3).
+    /// Starts (1 to 15; 0 taken as 1).
     pub starts: u8,
     /// Steps a start.
     pub steps: u8,
+    /// The winner's further steps (0: none).
+    pub winner_steps: u8,
     /// The pose of start `start_index` ([`pficp_fpga::format::FxPose::pack`]).
     pub start_pose: [u64; 4],
     /// The pass is over.
@@ -531,7 +533,7 @@ pub(crate) const POLISH_UNIT_OUTPUT_WORDS: [&str; 14] = ports::output_words(port
 impl VerilatedPolishUnit {
     /// The unit after power-up (idle, no result).
     pub fn new() -> Self {
-        VerilatedPolishUnit { core: Core::new(POLISH_UNIT, 0, 15, &POLISH_UNIT_OUTPUT_WORDS) }
+        VerilatedPolishUnit { core: Core::new(POLISH_UNIT, 0, 16, &POLISH_UNIT_OUTPUT_WORDS) }
     }
 
     /// Drive the input ports (masked to the port widths).
@@ -542,6 +544,7 @@ impl VerilatedPolishUnit {
             i.go as u64,
             i.starts as u64,
             i.steps as u64,
+            i.winner_steps as u64,
             p[0],
             p[1],
             p[2],

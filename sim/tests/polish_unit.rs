@@ -3,8 +3,10 @@
 //! around it, as `fpga/tests/polish_control.rs` does in rust_hdl's simulator (the start
 //! poses at `start_index`; on `pass_go` the found points of the scan at the unit's `pose`,
 //! then `pass_done` with the pass's cost) and is the multiplier (the product of a pair three
-//! clocks after the clock that issues it, as the sequencer's `PipeMul`). The winner, its
-//! polished pose and cost, and every pass's pose must equal the model's.
+//! clocks after the clock that issues it, as the sequencer's `PipeMul`). As on the board, a
+//! hypothesis's pose comes a clock after `start_index` names it (the engine's RAM), the
+//! filter's (start 0) at once. The winner, its polished pose and cost (after the winner's
+//! further steps), and every pass's pose must equal the model's.
 
 use pficp_fpga::format::{FxPoint, FxPose};
 use pficp_fpga::grid::Grid;
@@ -36,11 +38,19 @@ fn run_unit(
     scan: &[FxPoint],
     starts: &[FxPose],
     steps: u8,
+    winner_steps: u8,
 ) -> ((usize, FxPose, u64), Vec<FxPose>, u64) {
     let mut u = VerilatedPolishUnit::new();
     let mut i = UnitInputs { reset: true, ..Default::default() };
     u.step(&i);
-    i = UnitInputs { go: true, starts: starts.len() as u8, steps, start_pose: starts[0].pack(), ..Default::default() };
+    i = UnitInputs {
+        go: true,
+        starts: starts.len() as u8,
+        steps,
+        winner_steps,
+        start_pose: starts[0].pack(),
+        ..Default::default()
+    };
     u.step(&i);
     i.go = false;
     let mut products: VecDeque<(u64, u64)> = VecDeque::new();
@@ -48,6 +58,8 @@ fn run_unit(
     // The pass being served: its found points left, its cost, clocks since the last point.
     let mut serving: Option<(VecDeque<Found>, u64, u32)> = None;
     let mut clock = 0u64;
+    // The hypothesis RAM's read: the word `start_index` named a clock before.
+    let mut read = starts[0].pack();
     loop {
         let o = u.outputs();
         if o.done && !o.busy {
@@ -62,7 +74,8 @@ fn run_unit(
         while products.front().is_some_and(|&(due, _)| due <= clock) {
             i.mul_product = products.pop_front().unwrap().1;
         }
-        i.start_pose = starts[(o.start_index as usize).min(starts.len() - 1)].pack();
+        i.start_pose = if o.start_index == 0 { starts[0].pack() } else { read };
+        read = starts[(o.start_index as usize).min(starts.len() - 1)].pack();
         i.in_valid = false;
         i.pass_done = false;
         if o.pass_go {
@@ -98,10 +111,29 @@ fn the_verilated_unit_chooses_and_polishes_as_the_model() {
     // As `polish_control.rs`: a first start dragged beyond the drift bounds (kept
     // unpolished), one near the truth (the winner), one at 1.6 times the scale (dropped).
     let starts = vec![pose(1.0, 1.5, [0.0; 3]), pose(0.9, 0.2, [0.05, 0.0, 0.0]), pose(1.6, 0.1, [0.0; 3])];
-    for steps in [0u8, 1, 2] {
-        let (best, p, cost) = polish_best(&grid, &normals, &scan, &starts, steps as u32).expect("a winner");
-        let ((i, rtl_pose, rtl_cost), passes, clocks) = run_unit(&grid, &normals, &scan, &starts, steps);
-        eprintln!("{steps} steps: winner {i} (model {best}), {} passes, {clocks} clocks", passes.len());
-        assert_eq!((i, rtl_pose, rtl_cost), (best, p.pose, cost), "{steps} steps");
+    for (steps, winner_steps) in [(0u8, 0u8), (1, 0), (2, 0), (1, 2)] {
+        let (best, p, cost) =
+            polish_best(&grid, &normals, &scan, &starts, steps as u32, winner_steps as u32).expect("a winner");
+        let ((i, rtl_pose, rtl_cost), passes, clocks) = run_unit(&grid, &normals, &scan, &starts, steps, winner_steps);
+        eprintln!(
+            "{steps} steps, {winner_steps} for the winner: winner {i} (model {best}), {} passes, {clocks} clocks",
+            passes.len()
+        );
+        assert_eq!((i, rtl_pose, rtl_cost), (best, p.pose, cost), "{steps} steps, {winner_steps} for the winner");
     }
+    // Six starts (the hypotheses from the board's RAM beyond the first two), the winner late
+    // in the order, and its further polish.
+    let six = vec![
+        pose(1.0, 1.5, [0.0; 3]),
+        pose(1.6, 0.1, [0.0; 3]),
+        pose(1.0, 0.6, [0.1, 0.0, 0.0]),
+        pose(1.2, 0.3, [0.0; 3]),
+        pose(0.95, 0.1, [0.02, 0.0, 0.0]),
+        pose(0.8, 0.4, [0.0; 3]),
+    ];
+    let (best, p, cost) = polish_best(&grid, &normals, &scan, &six, 1, 1).expect("a winner");
+    let ((i, rtl_pose, rtl_cost), passes, clocks) = run_unit(&grid, &normals, &scan, &six, 1, 1);
+    eprintln!("six starts, 1 + 1 steps: winner {i} (model {best}), {} passes, {clocks} clocks", passes.len());
+    assert!(best >= 3, "the winner ({best}) comes from the RAM beyond the first two hypotheses");
+    assert_eq!((i, rtl_pose, rtl_cost), (best, p.pose, cost), "six starts");
 }

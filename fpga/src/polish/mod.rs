@@ -286,18 +286,43 @@ pub fn within_drift(start: &FxPose, polished: &FxPose) -> bool {
 /// [`within_drift`] is dropped (the first start then stays unpolished, with no steps); the
 /// rest are scored by the board's cost over `scan` at their pose (the sum of the capped
 /// residuals, [`crate::surface::evaluate`]) and the lowest wins, the earlier start on a
-/// tie. Returns the winner's index, its polish and its cost; `None` without starts.
+/// tie. Then, with `winner_steps` above 0, the winner is polished again from its pose
+/// ([`polish_winner_over`]). Returns the winner's index, its polish and its cost; `None`
+/// without starts.
 pub fn polish_best(
     grid: &Grid,
     normals: &[FxNormal],
     scan: &[FxPoint],
     starts: &[FxPose],
     steps: u32,
+    winner_steps: u32,
 ) -> Option<(usize, Polished, u64)> {
-    polish_best_over(&GridSearch { grid, normals }, scan, starts, steps)
+    polish_winner_over(&GridSearch { grid, normals }, scan, starts, steps, winner_steps)
 }
 
-/// [`polish_best`] over any [`Search`]: what the board runs after its filter.
+/// What the board runs after its filter: the choice among `starts` with `steps` steps each
+/// ([`polish_best_over`]), then, with `winner_steps` above 0, the winner's pose polished
+/// again as a start of its own (a statistics pass, `winner_steps` steps, the drift bounds
+/// from that pose: beyond them it stays as it was) and costed again. Many starts with a few
+/// steps each and the winner's further steps cost less than every start's steps in full
+/// (docs/polish.md, "Eight starts, the winner polished further"). Returns the winner's
+/// index, its final polish (its steps the second polish's) and its final cost.
+pub fn polish_winner_over(
+    search: &impl Search,
+    scan: &[FxPoint],
+    starts: &[FxPose],
+    steps: u32,
+    winner_steps: u32,
+) -> Option<(usize, Polished, u64)> {
+    let (winner, polished, cost) = polish_best_over(search, scan, starts, steps)?;
+    if winner_steps == 0 {
+        return Some((winner, polished, cost));
+    }
+    let (_, again, cost) = polish_best_over(search, scan, &[polished.pose], winner_steps)?;
+    Some((winner, again, cost))
+}
+
+/// [`polish_best`]'s choice (without the winner's further steps) over any [`Search`].
 pub fn polish_best_over(
     search: &impl Search,
     scan: &[FxPoint],
@@ -534,11 +559,27 @@ mod tests {
         // A start in another basin (a quarter turn) loses to one near the truth.
         let far = pose(1.0, 1.5, [0.0; 3]);
         let near = pose(1.01, 0.02, [0.0; 3]);
-        let (i, p, cost) = polish_best(&grid, &normals, &scan, &[far, near], 5).unwrap();
+        let (i, p, cost) = polish_best(&grid, &normals, &scan, &[far, near], 5, 0).unwrap();
         assert_eq!(i, 1);
         assert_eq!(cost, crate::surface::evaluate(&grid, &normals, &scan, &p.pose).cost);
-        assert_eq!(polish_best(&grid, &normals, &scan, &[near, near], 5).unwrap().0, 0);
-        assert!(polish_best(&grid, &normals, &scan, &[], 5).is_none());
+        assert_eq!(polish_best(&grid, &normals, &scan, &[near, near], 5, 0).unwrap().0, 0);
+        assert!(polish_best(&grid, &normals, &scan, &[], 5, 0).is_none());
+        assert!(polish_best(&grid, &normals, &scan, &[], 5, 3).is_none());
+    }
+
+    #[test]
+    fn the_winner_polished_further_is_a_second_polish_from_its_pose() {
+        let (grid, normals) = surface();
+        let scan = scan(&grid);
+        let starts = [pose(1.0, 1.5, [0.0; 3]), pose(0.9, 0.2, [0.05, 0.0, 0.0])];
+        let (i, first, _) = polish_best(&grid, &normals, &scan, &starts, 1, 0).unwrap();
+        let (j, again, cost) = polish_best(&grid, &normals, &scan, &starts, 1, 3).unwrap();
+        assert_eq!(i, j, "the winner's index is the choice's");
+        let want = polish(&grid, &normals, &scan, &first.pose, 3);
+        assert!(within_drift(&first.pose, &want.pose));
+        assert!(want.steps > 0 && want.pose != first.pose, "the further steps move the pose");
+        assert_eq!(again, want);
+        assert_eq!(cost, crate::surface::evaluate(&grid, &normals, &scan, &want.pose).cost);
     }
 
     #[test]

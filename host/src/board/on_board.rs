@@ -36,10 +36,16 @@ use std::time::{Duration, Instant};
 /// set (none of them makes the board's pose alone match it).
 pub const DEFAULT_BOARD_POINTS: usize = 300;
 
-/// Gauss-Newton steps of the on-board polish a start (docs/polish.md, "The pass at 14
-/// clocks an inlier": on three dev seeds 10 steps bring the board's pose alone closest to
-/// the software mode of the settings the Run can ask for, within the bench's 0.1 s).
-pub const POLISH_STEPS: u8 = 10;
+/// Starts of the on-board polish: the filter's pose and the first seven of the hypotheses
+/// the host's conclusion compares (docs/polish.md, "Eight starts, the winner polished
+/// further": on three dev seeds eight starts with 5 steps each and the winner's 5 more
+/// bring the board's pose alone level with the software mode, within the bench's 0.1 s).
+pub const POLISH_STARTS: usize = 8;
+/// Gauss-Newton steps of the on-board polish a start.
+pub const POLISH_STEPS: u8 = 5;
+/// Further steps for the winner among the starts, from its pose.
+pub const POLISH_WINNER_STEPS: u8 = 5;
+const _: () = assert!(POLISH_STARTS <= MAX_STARTS);
 
 /// Steps of the on-board registration, for progress reports.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -276,7 +282,8 @@ fn rest_of(scan: &[Point3<f64>], sample: &[Point3<f64>], room: usize) -> Vec<Poi
 }
 
 /// The polish the board runs after its filter: [`POLISH_STEPS`] steps over the `points`
-/// stored scan points, from the filter's pose and the first `MAX_STARTS - 1` of the
+/// stored scan points, then [`POLISH_WINNER_STEPS`] for the winner, from the filter's pose
+/// and the first `POLISH_STARTS - 1` of the
 /// hypotheses the host's conclusion would compare with it
 /// ([`crate::pf_icp::conclusion::candidates`]), as the board holds poses.
 pub fn polish_request(
@@ -288,10 +295,15 @@ pub fn polish_request(
     let hypotheses = crate::pf_icp::conclusion::candidates(&prior.start, &prior.hypotheses)
         .iter()
         .skip(1)
-        .take(MAX_STARTS - 1)
+        .take(POLISH_STARTS - 1)
         .map(|p| quantise_pose(&normalised_pose(p, scan_norm, model_norm)))
         .collect();
-    PolishRequest { points: points.min(MAX_POINTS) as u16, steps: POLISH_STEPS, hypotheses }
+    PolishRequest {
+        points: points.min(MAX_POINTS) as u16,
+        steps: POLISH_STEPS,
+        winner_steps: POLISH_WINNER_STEPS,
+        hypotheses,
+    }
 }
 
 impl OnBoardPlan {

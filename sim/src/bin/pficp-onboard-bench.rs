@@ -25,7 +25,7 @@
 //!
 //! `pficp-onboard-bench [--model-points 2000] [--scan-points 1000] [--board-points 300]
 //! [--particles 50] [--iterations 50] [--runs 3] [--seed 1] [--all-iterations]
-//! [--polish-steps S] [--polish-points N]`; run in
+//! [--polish-steps S] [--winner-steps W] [--polish-starts N] [--polish-points N]`; run in
 //! release. The filter stops at the Run's thresholds (the host's, on the surface residual) or
 //! at the iteration cap; `--all-iterations` zeroes the thresholds, so every iteration runs.
 
@@ -73,6 +73,13 @@ struct Args {
     /// The on-board polish's Gauss-Newton steps a start [default: the host's].
     #[arg(long)]
     polish_steps: Option<u8>,
+    /// The winner's further steps [default: the host's].
+    #[arg(long)]
+    winner_steps: Option<u8>,
+    /// The polish's starts: the filter's pose and the first `N - 1` of the host's hypotheses
+    /// [default: the host's].
+    #[arg(long)]
+    polish_starts: Option<usize>,
     /// Stored scan points the on-board polish runs over [default: the host's, every stored
     /// point].
     #[arg(long)]
@@ -200,6 +207,18 @@ fn main() -> Result<()> {
         }
         plan.polish.steps = steps;
     }
+    if let Some(steps) = a.winner_steps {
+        if steps > pficp_fpga::run_request::MAX_STEPS {
+            bail!("--winner-steps must be at most {}", pficp_fpga::run_request::MAX_STEPS);
+        }
+        plan.polish.winner_steps = steps;
+    }
+    if let Some(starts) = a.polish_starts {
+        if starts == 0 || starts > 1 + plan.polish.hypotheses.len() {
+            bail!("--polish-starts must be 1 to {} here", 1 + plan.polish.hypotheses.len());
+        }
+        plan.polish.hypotheses.truncate(starts - 1);
+    }
     if let Some(points) = a.polish_points {
         if points == 0 || points > plan.polish.points {
             bail!("--polish-points must be 1 to {}", plan.polish.points);
@@ -223,13 +242,14 @@ fn main() -> Result<()> {
     let alone_err = PoseError::between(&fin.filter_pose, &truth, diag);
     println!(
         "model-1, {} model points, {} scan points ({} weighed on the board, {} polished over in {} steps from {} \
-         starts), {} particles, {} iterations cap; {compared} board bytes equal to the reference (simulated in {:.1} s)",
+         starts, the winner {} more), {} particles, {} iterations cap; {compared} board bytes equal to the reference (simulated in {:.1} s)",
         a.model_points,
         a.scan_points,
         plan.scan.len(),
         plan.polish.points,
         plan.polish.steps,
         1 + plan.polish.hypotheses.len(),
+        plan.polish.winner_steps,
         a.particles,
         a.iterations,
         wall.elapsed().as_secs_f64()

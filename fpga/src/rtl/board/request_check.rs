@@ -87,11 +87,11 @@ pub struct RequestCheck {
     nearest_body: Constant<Bits<11>>,
     max_nearest: Constant<Bits<16>>,
     run_body1: Constant<Bits<11>>,
-    run_body2: Constant<Bits<11>>,
-    run_body3: Constant<Bits<11>>,
     // Registered a clock after `h` (the engine's Decode state), for timing.
     times6: DFF<Bits<20>>,
     times27: DFF<Bits<20>>,
+    /// A Run's length by its starts: one pose a start after the first.
+    run_len: DFF<Bits<11>>,
     sum17: DFF<Bits<17>>,
     new_count: DFF<Bits<10>>,
     // The outputs, registered (a clock after the sums).
@@ -117,8 +117,8 @@ pub struct RequestCheck {
     c_is_run: Signal<Local, Bit>,
     c_is_status: Signal<Local, Bit>,
     c_is_result: Signal<Local, Bit>,
-    /// A Run's length by its starts.
-    run_len: Signal<Local, Bits<11>>,
+    /// A Run's hypotheses: its starts less one (0 starts taken as 1).
+    hyps: Signal<Local, Bits<11>>,
 }
 
 impl Default for RequestCheck {
@@ -127,8 +127,10 @@ impl Default for RequestCheck {
     }
 }
 
-/// The widths of the kernel's arithmetic: `times6` and `times27` are shifts and adds.
+/// The widths of the kernel's arithmetic: `times6`, `times27` and `run_len` are shifts and
+/// adds; a Run's starts are the sixth byte's low four bits.
 const _: () = assert!(POINT_BYTES == 6 && POSE_BYTES == 27 && MAX_POINTS <= 4096 && MAX_PARTICLES <= 512);
+const _: () = assert!(crate::run_request::STARTS_BITS == 4);
 const _: () = assert!(FLAG_FIRST == 1 && FLAG_LAST == 2);
 // A LoadTable's length is `2 count` plus the header (a shift); the busy class's code range
 // ends at Result, LoadTable is added to it by name.
@@ -190,9 +192,8 @@ impl RequestCheck {
             nearest_body: c11(NEAREST_REQUEST_BYTES),
             max_nearest: Constant::new(Bits::<16>::from(MAX_NEAREST as u64)),
             run_body1: c11(run_bytes(1)),
-            run_body2: c11(run_bytes(2)),
-            run_body3: c11(run_bytes(3)),
             run_len: Default::default(),
+            hyps: Default::default(),
             times6: Default::default(),
             times27: Default::default(),
             sum17: Default::default(),
@@ -226,7 +227,7 @@ impl RequestCheck {
 impl Logic for RequestCheck {
     #[hdl_gen]
     fn update(&mut self) {
-        dff_setup!(self, clock, times6, times27, sum17, new_count, code_r, busy_r);
+        dff_setup!(self, clock, times6, times27, run_len, sum17, new_count, code_r, busy_r);
         dff_setup!(self, clock, identify_r, load_r, sizes_r, evaluate_r, nearest_r, run_r, status_r, result_r);
         // `6 n` and `27 n` as shifts and adds; an Evaluate's particle count after it.
         self.times6.d.next = (bit_cast::<20, 16>(self.hi.val()) << 2) + (bit_cast::<20, 16>(self.hi.val()) << 1);
@@ -268,13 +269,16 @@ impl Logic for RequestCheck {
             && (self.cmd.val() <= self.c_result.val())
             && !self.c_is_status.val())
             || self.c_is_table.val();
-        // A Run's length: one pose a start after the first (0 starts taken as 1).
-        self.run_len.next = self.run_body1.val();
-        if self.n.val().get_bits::<2>(0) == 2 {
-            self.run_len.next = self.run_body2.val();
-        } else if self.n.val().get_bits::<2>(0) == 3 {
-            self.run_len.next = self.run_body3.val();
+        // A Run's length: one pose (27 bytes) a start after the first (0 starts taken as 1).
+        self.hyps.next = 0.into();
+        if self.n.val().get_bits::<4>(0).any() {
+            self.hyps.next = bit_cast::<11, 4>(self.n.val().get_bits::<4>(0) - 1);
         }
+        self.run_len.d.next = self.run_body1.val()
+            + (self.hyps.val() << 4)
+            + (self.hyps.val() << 3)
+            + (self.hyps.val() << 1)
+            + self.hyps.val();
         self.c_code.next = 0.into();
         if self.c_is_identify.val() || self.c_is_status.val() {
             if self.dlen.val().any() {
@@ -337,7 +341,7 @@ impl Logic for RequestCheck {
                 self.c_code.next = self.e_capacity.val();
             }
         } else if self.c_is_run.val() {
-            if self.dlen.val() != self.run_len.val() {
+            if self.dlen.val() != self.run_len.q.val() {
                 self.c_code.next = self.e_length.val();
             } else if !self.lo.val().any()
                 || (self.lo.val() > self.max_particles16.val())

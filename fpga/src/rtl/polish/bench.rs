@@ -147,12 +147,14 @@ pub struct PolishUnitBench {
     pub reset: Signal<In, Bit>,
     /// While idle: polish.
     pub go: Signal<In, Bit>,
-    /// Starts (1 to 3).
-    pub starts: Signal<In, Bits<2>>,
+    /// Starts (1 to 15; 0 taken as 1).
+    pub starts: Signal<In, Bits<4>>,
     /// Steps a start.
     pub steps: Signal<In, Bits<4>>,
+    /// The winner's further steps (0: none).
+    pub winner_steps: Signal<In, Bits<4>>,
     /// The start taken next.
-    pub start_index: Signal<Out, Bits<2>>,
+    pub start_index: Signal<Out, Bits<4>>,
     /// Its pose.
     pub start_pose: Signal<In, Bits<216>>,
     /// Ask for a pass at `pose`.
@@ -178,7 +180,7 @@ pub struct PolishUnitBench {
     /// A result is held.
     pub done: Signal<Out, Bit>,
     /// The winning start.
-    pub best_index: Signal<Out, Bits<2>>,
+    pub best_index: Signal<Out, Bits<4>>,
     /// Its cost.
     pub best_cost: Signal<Out, Bits<48>>,
     unit: PolishUnit,
@@ -194,6 +196,7 @@ impl PolishUnitBench {
             go: Default::default(),
             starts: Default::default(),
             steps: Default::default(),
+            winner_steps: Default::default(),
             start_index: Default::default(),
             start_pose: Default::default(),
             pass_go: Default::default(),
@@ -231,6 +234,7 @@ impl Logic for PolishUnitBench {
         self.unit.go.next = self.go.val();
         self.unit.starts.next = self.starts.val();
         self.unit.steps.next = self.steps.val();
+        self.unit.winner_steps.next = self.winner_steps.val();
         self.start_index.next = self.unit.start_index.val();
         self.unit.start_pose.next = self.start_pose.val();
         self.pass_go.next = self.unit.pass_go.val();

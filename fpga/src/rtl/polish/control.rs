@@ -7,7 +7,10 @@
 //!   gated pass, `Solve` (a failure ends the steps), `Update`, the pose read back;
 //! - `Drift`: a failure drops the start, or for the first start keeps its pose unpolished;
 //! - a pass at the final pose for its cost (the residual stage's sum); the lowest cost
-//!   wins, the earlier start on a tie.
+//!   wins, the earlier start on a tie;
+//! - with `winner_steps` above 0, the winner's pose once more as a start of its own
+//!   (`second`), with `winner_steps` steps; its drift failure keeps the winner's pose; its
+//!   pose and cost are the result ([`crate::polish::polish_winner_over`]).
 //!
 //! A pass is a service of the board around the block: `pass_go` asks for one over the whole
 //! scan at `pose` (held until `pass_done`), the points go to the pass block with `gated`
@@ -25,6 +28,11 @@ pub enum ControlState {
     Idle,
     /// Take the start pose at `start_index`.
     Begin,
+    /// Take the winner's pose as the start of its further polish.
+    Second,
+    /// A clock for the next start's pose to follow `start_index` (the board reads it from
+    /// a RAM); then `Begin`.
+    Fetch,
     /// Load the pose's twelve fields at `POSE`; then `Start`.
     Load,
     /// Start the program at `entry`.
@@ -64,12 +72,14 @@ pub struct PolishControl {
     pub reset: Signal<In, Bit>,
     /// While idle: polish `starts` starts with up to `steps` steps each.
     pub go: Signal<In, Bit>,
-    /// Starts (1 to 3).
-    pub starts: Signal<In, Bits<2>>,
+    /// Starts (1 to 15; 0 taken as 1).
+    pub starts: Signal<In, Bits<4>>,
     /// Steps a start (0 to 15).
     pub steps: Signal<In, Bits<4>>,
+    /// The winner's further steps (0: none; up to 15).
+    pub winner_steps: Signal<In, Bits<4>>,
     /// The start the control takes next.
-    pub start_index: Signal<Out, Bits<2>>,
+    pub start_index: Signal<Out, Bits<4>>,
     /// The pose of start `start_index` (as the pipeline's pose word), held while the start
     /// runs (a failed drift check takes it again).
     pub start_pose: Signal<In, Bits<216>>,
@@ -110,16 +120,19 @@ pub struct PolishControl {
     /// A result is held (from the end of a polish to the next `go`).
     pub done: Signal<Out, Bit>,
     /// The winning start (its polished pose is `pose` once done).
-    pub best_index: Signal<Out, Bits<2>>,
+    pub best_index: Signal<Out, Bits<4>>,
     /// Its cost.
     pub best_cost: Signal<Out, Bits<48>>,
     state: DFF<ControlState>,
     after: DFF<ControlState>,
     pass_after: DFF<ControlState>,
     entry: DFF<Bits<9>>,
-    index: DFF<Bits<2>>,
-    count: DFF<Bits<2>>,
+    index: DFF<Bits<4>>,
+    count: DFF<Bits<4>>,
     step_max: DFF<Bits<4>>,
+    /// The winner's further steps, and whether they are running.
+    more: DFF<Bits<4>>,
+    second: DFF<Bit>,
     step: DFF<Bits<4>>,
     k: DFF<Bits<4>>,
     /// The pose: the pass's, rotated by a field a clock through a load or a read back, and
@@ -131,7 +144,7 @@ pub struct PolishControl {
     tau: DFF<Bits<32>>,
     have: DFF<Bit>,
     held: DFF<Bit>,
-    b_index: DFF<Bits<2>>,
+    b_index: DFF<Bits<4>>,
     b_pose: DFF<Bits<216>>,
     b_cost: DFF<Bits<48>>,
     e_start: Constant<Bits<9>>,
@@ -164,6 +177,7 @@ impl PolishControl {
             go: Default::default(),
             starts: Default::default(),
             steps: Default::default(),
+            winner_steps: Default::default(),
             start_index: Default::default(),
             start_pose: Default::default(),
             pass_go: Default::default(),
@@ -192,6 +206,8 @@ impl PolishControl {
             index: Default::default(),
             count: Default::default(),
             step_max: Default::default(),
+            more: Default::default(),
+            second: Default::default(),
             step: Default::default(),
             k: Default::default(),
             cur: Default::default(),
@@ -228,8 +244,8 @@ impl Logic for PolishControl {
     #[hdl_gen]
     fn update(&mut self) {
         dff_setup!(
-            self, clock, state, after, pass_after, entry, index, count, step_max, step, k, cur, keep, cost, gate_on,
-            tau, have, held, b_index, b_pose, b_cost
+            self, clock, state, after, pass_after, entry, index, count, step_max, more, second, step, k, cur, keep,
+            cost, gate_on, tau, have, held, b_index, b_pose, b_cost
         );
         self.start_index.next = self.index.q.val();
         self.pose.next = self.cur.q.val();
@@ -267,10 +283,22 @@ impl Logic for PolishControl {
                         self.count.d.next = 1.into();
                     }
                     self.step_max.d.next = self.steps.val();
+                    self.more.d.next = self.winner_steps.val();
+                    self.second.d.next = false;
                     self.have.d.next = false;
                     self.held.d.next = false;
                     self.state.d.next = ControlState::Begin;
                 }
+            }
+            ControlState::Fetch => {
+                self.state.d.next = ControlState::Begin;
+            }
+            ControlState::Second => {
+                self.cur.d.next = self.b_pose.q.val();
+                self.keep.d.next = true;
+                self.k.d.next = 0.into();
+                self.step.d.next = 0.into();
+                self.state.d.next = ControlState::Load;
             }
             ControlState::Begin => {
                 self.cur.d.next = self.start_pose.val();
@@ -374,30 +402,47 @@ impl Logic for PolishControl {
                 self.pass_after.d.next = ControlState::Costed;
                 self.state.d.next = ControlState::Pass;
                 if self.prog_failed.val() {
-                    // The start's pose, still at `start_pose` (it follows `start_index`).
+                    // The start's pose, still at `start_pose` (it follows `start_index`), or
+                    // the winner's in its further polish.
                     self.cur.d.next = self.start_pose.val();
-                    if self.index.q.val().any() {
+                    if self.second.q.val() {
+                        self.cur.d.next = self.b_pose.q.val();
+                    } else if self.index.q.val().any() {
                         self.keep.d.next = false;
                         self.state.d.next = ControlState::Costed;
                     }
                 }
             }
             ControlState::Costed => {
-                if self.better.val() {
-                    self.have.d.next = true;
-                    self.b_index.d.next = self.index.q.val();
+                if self.second.q.val() {
+                    // The winner's further polish: its pose (in `cur`) and cost are the result.
                     self.b_pose.d.next = self.cur.q.val();
                     self.b_cost.d.next = self.cost.q.val();
-                }
-                self.index.d.next = self.index.q.val() + 1;
-                self.state.d.next = ControlState::Begin;
-                if (self.index.q.val() + 1) == self.count.q.val() {
-                    // The winner's pose into `cur` (it is there if this start won).
-                    if !self.better.val() {
-                        self.cur.d.next = self.b_pose.q.val();
-                    }
                     self.held.d.next = true;
                     self.state.d.next = ControlState::Idle;
+                } else {
+                    if self.better.val() {
+                        self.have.d.next = true;
+                        self.b_index.d.next = self.index.q.val();
+                        self.b_pose.d.next = self.cur.q.val();
+                        self.b_cost.d.next = self.cost.q.val();
+                    }
+                    self.index.d.next = self.index.q.val() + 1;
+                    self.state.d.next = ControlState::Fetch;
+                    if (self.index.q.val() + 1) == self.count.q.val() {
+                        if self.more.q.val().any() {
+                            self.second.d.next = true;
+                            self.step_max.d.next = self.more.q.val();
+                            self.state.d.next = ControlState::Second;
+                        } else {
+                            // The winner's pose into `cur` (it is there if this start won).
+                            if !self.better.val() {
+                                self.cur.d.next = self.b_pose.q.val();
+                            }
+                            self.held.d.next = true;
+                            self.state.d.next = ControlState::Idle;
+                        }
+                    }
                 }
             }
         }

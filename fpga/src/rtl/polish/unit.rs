@@ -18,12 +18,14 @@ pub struct PolishUnit {
     pub reset: Signal<In, Bit>,
     /// While idle: polish `starts` starts with up to `steps` steps each.
     pub go: Signal<In, Bit>,
-    /// Starts (1 to 3).
-    pub starts: Signal<In, Bits<2>>,
+    /// Starts (1 to 15; 0 taken as 1).
+    pub starts: Signal<In, Bits<4>>,
     /// Steps a start.
     pub steps: Signal<In, Bits<4>>,
+    /// The winner's further steps (0: none).
+    pub winner_steps: Signal<In, Bits<4>>,
     /// The start the unit takes next.
-    pub start_index: Signal<Out, Bits<2>>,
+    pub start_index: Signal<Out, Bits<4>>,
     /// Its pose.
     pub start_pose: Signal<In, Bits<216>>,
     /// Ask for a pass over the scan at `pose`.
@@ -57,7 +59,7 @@ pub struct PolishUnit {
     /// A result is held.
     pub done: Signal<Out, Bit>,
     /// The winning start.
-    pub best_index: Signal<Out, Bits<2>>,
+    pub best_index: Signal<Out, Bits<4>>,
     /// Its cost.
     pub best_cost: Signal<Out, Bits<48>>,
     control: PolishControl,
@@ -76,6 +78,7 @@ impl PolishUnit {
             go: Default::default(),
             starts: Default::default(),
             steps: Default::default(),
+            winner_steps: Default::default(),
             start_index: Default::default(),
             start_pose: Default::default(),
             pass_go: Default::default(),
@@ -122,6 +125,7 @@ impl Logic for PolishUnit {
         self.control.go.next = self.go.val();
         self.control.starts.next = self.starts.val();
         self.control.steps.next = self.steps.val();
+        self.control.winner_steps.next = self.winner_steps.val();
         self.start_index.next = self.control.start_index.val();
         self.control.start_pose.next = self.start_pose.val();
         self.pass_go.next = self.control.pass_go.val();

@@ -11,7 +11,13 @@ impl<const P: usize> Logic for CommandEngine<P> {
         dff_setup!(self, clock, state, ret, dlen, cur_cmd, cur_seq, e_code, e_cmd, e_seq, pending, p_cmd, p_seq);
         dff_setup!(self, clock, err_led, faddr, fcount, inbuf, outbuf, ecount, hdr, model_count, scan_count, idx);
         dff_setup!(self, clock, waddr, eval_mode, start_r, wi, ncost, dig_sr, dig_restart);
-        dff_setup!(self, clock, pol_count, pol_steps, pol_starts, hyp1, hyp2, hcnt, pol_arm, pol_ready, run_r);
+        dff_setup!(self, clock, pol_count, pol_steps, pol_more, pol_starts, hcnt, pol_arm, pol_ready, run_r);
+        self.hyps.read_clock.next = self.clock.val();
+        self.hyps.write_clock.next = self.clock.val();
+        self.hyps.write_enable.next = false;
+        self.hyps.write_address.next = self.hcnt.q.val() + 1;
+        self.hyps.write_data.next = self.inbuf.q.val();
+        self.hyps.read_address.next = self.polish.start_index.val();
         dff_setup!(self, clock, pass_req, pol_pass, outst, occ, pc_seen, pc_cost, quiet);
         self.found.clock.next = self.clock.val();
         self.polish.clock.next = self.clock.val();
@@ -134,11 +140,10 @@ impl<const P: usize> Logic for CommandEngine<P> {
         self.polish.reset.next = self.reset.val();
         self.polish.starts.next = self.pol_starts.q.val();
         self.polish.steps.next = self.pol_steps.q.val();
+        self.polish.winner_steps.next = self.pol_more.q.val();
         self.polish.start_pose.next = self.filter.pose.val();
-        if self.polish.start_index.val() == 1 {
-            self.polish.start_pose.next = self.hyp1.q.val();
-        } else if self.polish.start_index.val() == 2 {
-            self.polish.start_pose.next = self.hyp2.q.val();
+        if self.polish.start_index.val().any() {
+            self.polish.start_pose.next = self.hyps.read_data.val();
         }
         // Started once the filter's `running` has fallen after the Run.
         self.run_r.d.next = self.filter.running.val();
@@ -384,8 +389,9 @@ impl<const P: usize> Logic for CommandEngine<P> {
                 } else {
                     self.pol_count.d.next = self.pw_count.val().get_bits::<13>(0);
                     self.pol_steps.d.next = self.inbuf.q.val().get_bits::<4>(184);
-                    self.pol_starts.d.next = self.hdr.q.val().get_bits::<2>(40);
-                    if !self.hdr.q.val().get_bits::<2>(40).any() {
+                    self.pol_more.d.next = self.inbuf.q.val().get_bits::<4>(192);
+                    self.pol_starts.d.next = self.hdr.q.val().get_bits::<4>(40);
+                    if !self.hdr.q.val().get_bits::<4>(40).any() {
                         self.pol_starts.d.next = 1.into();
                     }
                     self.hcnt.d.next = 0.into();
@@ -405,7 +411,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
                 }
             }
             EngState::RunHyp => {
-                if (bit_cast::<3, 2>(self.hcnt.q.val()) + 1) == bit_cast::<3, 2>(self.pol_starts.q.val()) {
+                if (bit_cast::<5, 4>(self.hcnt.q.val()) + 1) == bit_cast::<5, 4>(self.pol_starts.q.val()) {
                     self.filter.cfg_we.next = true;
                     self.filter.cfg_data.next = self.hdr.q.val();
                     self.state.d.next = EngState::RunGo;
@@ -416,11 +422,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
                 }
             }
             EngState::RunHypWrite => {
-                if self.hcnt.q.val().any() {
-                    self.hyp2.d.next = self.inbuf.q.val();
-                } else {
-                    self.hyp1.d.next = self.inbuf.q.val();
-                }
+                self.hyps.write_enable.next = true;
                 self.hcnt.d.next = self.hcnt.q.val() + 1;
                 self.state.d.next = EngState::RunHyp;
             }
@@ -472,7 +474,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
                 self.state.d.next = EngState::Emit;
             }
             EngState::ResBody4 => {
-                self.outbuf.d.next = bit_cast::<216, 2>(self.polish.best_index.val())
+                self.outbuf.d.next = bit_cast::<216, 4>(self.polish.best_index.val())
                     | (bit_cast::<216, 48>(self.polish.best_cost.val()) << 8);
                 self.ecount.d.next = self.n_polish_head.val();
                 self.ret.d.next = EngState::ResBody5;

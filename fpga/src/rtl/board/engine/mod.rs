@@ -188,14 +188,16 @@ pub struct CommandEngine<const P: usize> {
     hdr_end: Signal<Local, Bits<13>>,
     /// The polish after the filter.
     polish: PolishUnit,
-    /// The Run's polish: stored scan points a pass goes over, steps, starts (1 to 3).
+    /// The Run's polish: stored scan points a pass goes over, steps, the winner's further
+    /// steps, starts (1 to 15).
     pol_count: DFF<Bits<13>>,
     pol_steps: DFF<Bits<4>>,
-    pol_starts: DFF<Bits<2>>,
-    /// The Run's hypotheses (starts 1 and 2) and how many are in.
-    hyp1: DFF<Bits<216>>,
-    hyp2: DFF<Bits<216>>,
-    hcnt: DFF<Bits<2>>,
+    pol_more: DFF<Bits<4>>,
+    pol_starts: DFF<Bits<4>>,
+    /// The Run's hypotheses, start `k` at word `k` (1 to 14; read a clock after the
+    /// polish's `start_index` names it), and how many are in.
+    hyps: RAM<Bits<216>, 4>,
+    hcnt: DFF<Bits<4>>,
     /// A Run's polish is to follow its filter; the filter has ended (its `running` fell).
     pol_arm: DFF<Bit>,
     pol_ready: DFF<Bit>,
@@ -326,9 +328,9 @@ impl<const P: usize> CommandEngine<P> {
             polish: PolishUnit::new(),
             pol_count: Default::default(),
             pol_steps: Default::default(),
+            pol_more: Default::default(),
             pol_starts: Default::default(),
-            hyp1: Default::default(),
-            hyp2: Default::default(),
+            hyps: Default::default(),
             hcnt: Default::default(),
             pol_arm: Default::default(),
             pol_ready: Default::default(),
