@@ -173,8 +173,8 @@ fn verdict(sizes: (u16, u16), stored: usize, ran: bool, code: u8, d: &[u8]) -> R
         0x06 if model == 0 || scan == 0 || field(0) + field(2) > scan => Err(OverCapacity),
         0x06 => Ok(()),
         // 150 bytes of the filter, 6 of the polish, a pose a start after the first (the
-        // sixth byte's low two bits, 0 as 1).
-        0x07 if d.len() < 6 || d.len() != 156 + 27 * ((d[5] & 3).max(1) as usize - 1) => Err(BadLength),
+        // sixth byte's low four bits, 0 as 1).
+        0x07 if d.len() < 6 || d.len() != 156 + 27 * ((d[5] & 15).max(1) as usize - 1) => Err(BadLength),
         0x07 if field(0) == 0 || field(0) > 256 || field(2) == 0 || model == 0 || scan == 0 => Err(OverCapacity),
         0x07 if field(150) == 0 || field(150) > 4096 => Err(OverCapacity),
         0x07 => Ok(()),
@@ -435,7 +435,7 @@ fn random_request(r: &mut Rng, scan_count: u16) -> Frame {
             d.extend(le16(points));
             d.push(r.range(0, 2) as u8 | if r.chance(50) { 0xf0 } else { 0 });
             d.extend(r.bytes(3));
-            let starts = (d[5] & 3).max(1) as usize;
+            let starts = (d[5] & 15).max(1) as usize;
             d.extend(r.bytes(27 * (starts - 1)));
             d
         }

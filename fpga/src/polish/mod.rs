@@ -58,7 +58,7 @@
 //!
 //! **The loop** ([`polish`]): a statistics pass; then per step, while something was found:
 //! a pass gated by the previous one, and if at least 7 points passed and the solve gives a
-//! step, the update. [`polish_best`] chooses among starts.
+//! step, the update. [`polish_best`] chooses among starts and polishes the winner further.
 
 pub mod cases;
 pub mod program;

@@ -6,8 +6,8 @@
 //! prior as a Run request ([`pf_config`]) with the polish's starts ([`polish_request`]),
 //! polls Status, reads Result and polishes the board's pose with ICP on the whole scan. The
 //! filter itself (steps 6 to 8 of Algorithm 6) runs on the board, bit-exact with
-//! `pficp_fpga::pf::run`, and so does the polish after it (protocol 5,
-//! `pficp_fpga::run_request::execute`): the board's pose alone is the polished one.
+//! `pficp_fpga::pf::run`, and so does the polish after it (protocol 6: eight starts, the winner
+//! polished further; `pficp_fpga::run_request::execute`): the board's pose alone is the polished one.
 
 use super::fixed::{normalised_pose, original_pose, quantise_pose, Normalisation};
 use super::{
@@ -484,7 +484,7 @@ pub struct OnBoardResult {
 }
 
 /// Register `scan` to the model behind `nn` with PF-ICP, the whole particle filter and its
-/// polish on the board behind `client` (protocol 5: Run, Status, Result): the start and the
+/// polish on the board behind `client` (protocol 6: Run, Status, Result): the start and the
 /// covariance on the host ([`plan`]), the model uploaded unless resident, the scan stored
 /// (the `board_points` of the filter's sample first), Run, Status polled every `poll`
 /// (progress: [`OnBoardStep::Filter`] with the iterations done), Result, and the host's
