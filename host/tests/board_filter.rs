@@ -424,7 +424,7 @@ fn a_version_1_board_serves_the_host_driven_mode_only() {
 }
 
 #[test]
-fn the_on_board_filter_needs_protocol_5_and_the_host_driven_mode_takes_1_2_4_and_5() {
+fn the_on_board_filter_needs_protocol_6_and_the_host_driven_mode_takes_1_2_and_4_to_6() {
     let (ds, _) = reduced_model_1();
     let nn = NearestNeighbours::new(&ds.model);
     let settings = PfIcpSettings { clusters: 25, particles: 20, iterations: 4, seed: 5, ..Default::default() };
@@ -434,22 +434,34 @@ fn the_on_board_filter_needs_protocol_5_and_the_host_driven_mode_takes_1_2_4_and
     let mut client = board.client();
     let e = on_board_50(&mut client, &nn, &ds.scan, &settings).unwrap_err();
     let m = e.to_string();
-    assert!(m.contains("version 2") && m.contains("need 5") && m.contains("--host-driven") && !m.contains('\n'), "{m}");
+    assert!(m.contains("version 2") && m.contains("need 6") && m.contains("--host-driven") && !m.contains('\n'), "{m}");
+    assert_eq!(client.stats().requests, 1, "only Identify");
+    host_driven::register(&mut client, &nn, &ds.scan, &settings, &mut |_, _, _| {}).unwrap();
+    // A board saying it is of version `v` (its commands today's).
+    let board_of = |v: u16| {
+        PtyBoard::serve(support::intercepting_handler(move |f, b| {
+            (f.code == Command::Identify as u8).then(|| {
+                let mut id = Identity::decode(&b.execute(f).data).unwrap();
+                id.version = v;
+                Frame { code: 0x81, seq: f.seq, data: id.encode() }.encode()
+            })
+        }))
+    };
+    // Version 5 (a Run of at most 3 starts, no winner steps): the on-board filter refuses
+    // it before anything is uploaded; the host-driven mode serves it.
+    let mut board = board_of(5);
+    let mut client = board.client();
+    let e = on_board_50(&mut client, &nn, &ds.scan, &settings).unwrap_err();
+    assert!(e.to_string().contains("version 5") && e.to_string().contains("4 to 6"), "{e}");
     assert_eq!(client.stats().requests, 1, "only Identify");
     host_driven::register(&mut client, &nn, &ds.scan, &settings, &mut |_, _, _| {}).unwrap();
     // A board of a later version than the host: both modes refuse it.
-    let mut board = PtyBoard::serve(support::intercepting_handler(|f, b| {
-        (f.code == Command::Identify as u8).then(|| {
-            let mut id = Identity::decode(&b.execute(f).data).unwrap();
-            id.version = 6;
-            Frame { code: 0x81, seq: f.seq, data: id.encode() }.encode()
-        })
-    }));
+    let mut board = board_of(7);
     let mut client = board.client();
     let e = on_board_50(&mut client, &nn, &ds.scan, &settings).unwrap_err();
-    assert!(e.to_string().contains("version 6"), "{e}");
+    assert!(e.to_string().contains("version 7"), "{e}");
     let e = host_driven::register(&mut client, &nn, &ds.scan, &settings, &mut |_, _, _| {}).unwrap_err();
-    assert!(matches!(&e, BoardError::Limit(m) if m.contains("version 6") && m.contains("1, 2, 4 or 5")), "{e}");
+    assert!(matches!(&e, BoardError::Limit(m) if m.contains("version 7") && m.contains("1, 2 or 4 to 6")), "{e}");
 }
 
 #[test]

@@ -177,7 +177,7 @@ pub fn register_reporting(
     // point-to-point, which this host no longer models).
     if !(1..=VERSION).contains(&identity.version) || identity.version == 3 {
         return Err(BoardError::Limit(format!(
-            "the board speaks protocol version {}, this host {VERSION} (1, 2, 4 or {VERSION} for the host-driven mode; \
+            "the board speaks protocol version {}, this host {VERSION} (1, 2 or 4 to {VERSION} for the host-driven mode; \
              regenerate a version 3 board)",
             identity.version
         )));

@@ -504,7 +504,7 @@ pub fn register_on_board(
     if identity.version != VERSION {
         return Err(BoardError::Limit(format!(
             "the board speaks protocol version {}, this host {VERSION} (the on-board filter and its polish \
-             need {VERSION}; --host-driven works with versions 1, 2, 4 and {VERSION})",
+             need {VERSION}; --host-driven works with versions 1, 2 and 4 to {VERSION})",
             identity.version
         )));
     }
