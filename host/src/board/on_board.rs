@@ -6,8 +6,9 @@
 //! prior as a Run request ([`pf_config`]) with the polish's starts ([`polish_request`]),
 //! polls Status, reads Result and polishes the board's pose with ICP on the whole scan. The
 //! filter itself (steps 6 to 8 of Algorithm 6) runs on the board, bit-exact with
-//! `pficp_fpga::pf::run`, and so does the polish after it (protocol 6: eight starts, the winner
-//! polished further; `pficp_fpga::run_request::execute`): the board's pose alone is the polished one.
+//! `pficp_fpga::pf::run`, and so does the polish after it (protocol 6: [`POLISH_STARTS`]
+//! starts, the winner polished further; `pficp_fpga::run_request::execute`): the board's pose
+//! alone is the polished one.
 
 use super::fixed::{normalised_pose, original_pose, quantise_pose, Normalisation};
 use super::{
