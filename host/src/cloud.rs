@@ -175,17 +175,16 @@ pub fn centroid(points: &[Point3<f64>]) -> Point3<f64> {
     Point3::from(sum / points.len() as f64)
 }
 
+/// Axis-aligned bounding box (lowest and highest corner) of a non-empty slice of points.
+pub fn bbox(points: &[Point3<f64>]) -> (Point3<f64>, Point3<f64>) {
+    let first = points.first().map_or(Vector3::zeros(), |p| p.coords);
+    let (lo, hi) = points.iter().fold((first, first), |(lo, hi), p| (lo.inf(&p.coords), hi.sup(&p.coords)));
+    (Point3::from(lo), Point3::from(hi))
+}
+
 /// Axis-aligned bounding-box diagonal of a slice of points (0 if empty).
 pub fn bbox_diagonal(points: &[Point3<f64>]) -> f64 {
-    if points.is_empty() {
-        return 0.0;
-    }
-    let mut lo = points[0].coords;
-    let mut hi = lo;
-    for p in points {
-        lo = lo.inf(&p.coords);
-        hi = hi.sup(&p.coords);
-    }
+    let (lo, hi) = bbox(points);
     (hi - lo).norm()
 }
 

@@ -175,6 +175,82 @@ impl Pose {
     }
 }
 
+/// What the user knows of the scale (scan to model): the interval it lies in. `lo == hi`
+/// fixes it (6 degrees of freedom: the clouds' units agree when it is 1); [`ScaleBounds::FREE`]
+/// knows nothing. Every stage of PF-ICP keeps its scales inside (the search, the filter,
+/// the polish; the board's run through the host's prior and polish).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct ScaleBounds {
+    /// Smallest scale.
+    pub lo: f64,
+    /// Largest scale.
+    pub hi: f64,
+}
+
+impl Default for ScaleBounds {
+    fn default() -> Self {
+        Self::FREE
+    }
+}
+
+impl ScaleBounds {
+    /// Nothing known.
+    pub const FREE: ScaleBounds = ScaleBounds { lo: 0.0, hi: f64::INFINITY };
+
+    /// The scale is `s`.
+    pub fn fixed(s: f64) -> Self {
+        ScaleBounds { lo: s, hi: s }
+    }
+
+    /// The scale lies in `[lo, hi]`.
+    pub fn range(lo: f64, hi: f64) -> Self {
+        ScaleBounds { lo, hi }
+    }
+
+    /// The fixed scale, if the bounds fix it.
+    pub fn fixed_value(&self) -> Option<f64> {
+        (self.lo == self.hi).then_some(self.lo)
+    }
+
+    /// Whether anything is known.
+    pub fn is_free(&self) -> bool {
+        *self == Self::FREE
+    }
+
+    /// `s` moved into the bounds.
+    pub fn clamp(&self, s: f64) -> f64 {
+        s.max(self.lo).min(self.hi)
+    }
+
+    /// Whether `s` lies within the bounds.
+    pub fn contains(&self, s: f64) -> bool {
+        s >= self.lo && s <= self.hi
+    }
+
+    /// The tighter of these bounds and `[lo, hi]`, or the bounds themselves when the two do
+    /// not meet.
+    pub fn within(&self, lo: f64, hi: f64) -> ScaleBounds {
+        let (a, b) = (self.lo.max(lo), self.hi.min(hi));
+        if a <= b {
+            ScaleBounds { lo: a, hi: b }
+        } else {
+            *self
+        }
+    }
+
+    /// `pose` with its scale moved into the bounds, the image of `about` kept where it was
+    /// (the least-squares similarity for fixed pairs under the bound: the rotation does not
+    /// depend on the scale, and the cost is quadratic in it).
+    pub fn apply(&self, pose: &Pose, about: &Point3<f64>) -> Pose {
+        let s = self.clamp(pose.scale);
+        if s == pose.scale {
+            return *pose;
+        }
+        let image = pose.apply(about);
+        Pose { scale: s, rotation: pose.rotation, translation: image.coords - s * (pose.rotation * about.coords) }
+    }
+}
+
 /// Parameters about a pair of centres: `d = s R (m - c_scan) + c_model + t`, with
 /// `x = [t, s, phi, theta, psi]`. Rotating about the clouds' centroids instead of the
 /// origin decouples rotation from translation, which the particle filter samples per

@@ -359,6 +359,10 @@ enum FamilyArg {
     Parts,
     #[value(name = "hard-180")]
     Hard180,
+    Camera,
+    CameraAny,
+    CameraMetric,
+    CameraAnyMetric,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -672,6 +676,10 @@ fn eval_realistic(a: &EvalArgs) -> Result<()> {
                     FamilyArg::RealOutliers => Family::RealOutliers,
                     FamilyArg::Parts => Family::Parts,
                     FamilyArg::Hard180 => Family::Hard180,
+                    FamilyArg::Camera => Family::Camera,
+                    FamilyArg::CameraAny => Family::CameraAny,
+                    FamilyArg::CameraMetric => Family::CameraMetric,
+                    FamilyArg::CameraAnyMetric => Family::CameraAnyMetric,
                 })
                 .collect()
         },

@@ -52,7 +52,7 @@ fn realistic_set() -> Counts {
     let opts = RealisticOptions {
         cases: env_or("PFICP_CASES", 8),
         split,
-        families: Family::ALL.to_vec(),
+        families: Family::PLANE_CUT.to_vec(),
         methods: vec![Method::PfIcp],
         board: true,
         progress: false,

@@ -135,7 +135,7 @@ fn the_polish_on_the_board() {
     let mut below = 0;
     let mut starts = Vec::new();
     let mut cases = 0;
-    for family in Family::ALL {
+    for family in Family::PLANE_CUT {
         let rows: Vec<([bool; 6], bool, String, usize)> = (0..cases_a_family())
             .into_par_iter()
             .map(|i| {

@@ -7,7 +7,8 @@ use pficp::eval::realistic::{self, Family, RealisticOptions};
 
 #[test]
 fn quick_realistic_benchmark_keeps_its_success_floor() {
-    let opts = RealisticOptions { cases: 8, progress: false, ..Default::default() };
+    let opts =
+        RealisticOptions { cases: 8, families: Family::PLANE_CUT.to_vec(), progress: false, ..Default::default() };
     let report = realistic::run(&opts).expect("the benchmark runs");
     print!("{}", report.render());
     let mut total = 0;

@@ -401,6 +401,7 @@ pub fn finish(
         &plan.prior.hypotheses,
         None,
         settings.polish_iterations,
+        &settings.scale,
     );
     let polished = Registration {
         pose: conclusion.pose,

@@ -83,7 +83,7 @@ pub struct CovarianceTable {
 
 /// Algorithm 5 from the k-means start with `k` clusters.
 pub(crate) fn algorithm5(nn: &NearestNeighbours, scan: &[Point3<f64>], k: usize, seed: u64) -> Algorithm5Column {
-    let init = initial_pose(nn, scan, scan, k, seed, InitMode::Auto);
+    let init = initial_pose(nn, scan, scan, k, seed, InitMode::Auto, &crate::geometry::ScaleBounds::FREE);
     let settings = IcpSettings { max_iterations: SUBSET_ICP_ITERATIONS, ..Default::default() };
     let cov = approximate_icp_variance(nn, scan, &init.scan_clusters, &init.pose, SUBSETS, seed, &settings);
     Algorithm5Column {

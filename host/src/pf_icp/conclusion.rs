@@ -30,7 +30,7 @@
 //!    distances.
 
 use crate::cloud::{bbox_diagonal, centroid};
-use crate::geometry::{Centred, Pose};
+use crate::geometry::{Centred, Pose, ScaleBounds};
 use crate::pf_icp::hypotheses::{same_pose, Hypothesis};
 use crate::pf_icp::surface::{Surface, COST_CAP};
 use nalgebra::Point3;
@@ -148,7 +148,8 @@ pub fn candidates(filter_pose: &Pose, hypotheses: &[Hypothesis]) -> Vec<Pose> {
 }
 
 /// Conclude a registration: `filter_pose` from the filter, `hypotheses` of the search
-/// (best first), `particles` the filter's final set in `frame`'s parameters (if any).
+/// (best first), `particles` the filter's final set in `frame`'s parameters (if any); every
+/// polish keeps the scale within `bounds`.
 pub fn conclude(
     surface: &Surface,
     scan: &[Point3<f64>],
@@ -156,12 +157,14 @@ pub fn conclude(
     hypotheses: &[Hypothesis],
     particles: Option<(&Centred, &[Vec<f64>])>,
     polish_iterations: usize,
+    bounds: &ScaleBounds,
 ) -> Conclusion {
     let nn = surface.nn();
     let diag = bbox_diagonal(nn.points());
     let cap = COST_CAP * diag;
     let at = centroid(scan);
-    let starts = candidates(filter_pose, hypotheses);
+    // Every candidate starts inside the scale bounds (a fixed scale exactly).
+    let starts: Vec<Pose> = candidates(filter_pose, hypotheses).iter().map(|p| bounds.apply(p, &at)).collect();
     // A polish whose scale runs away from its start is a collapse onto part of the model
     // (every one-sided cost rewards it): that candidate is dropped (the filter's estimate
     // stays, unpolished).
@@ -173,7 +176,7 @@ pub fn conclude(
         .par_iter()
         .enumerate()
         .filter_map(|(i, p)| {
-            let q = surface.polish(&compared, p, polish_iterations);
+            let q = surface.polish(&compared, p, polish_iterations, bounds);
             let ratio = q.scale / p.scale;
             let q = if (SCALE_DRIFT.0..=SCALE_DRIFT.1).contains(&ratio) {
                 q
@@ -193,7 +196,7 @@ pub fn conclude(
     let (mut pose, costs) = (polished[best].0, polished[best].1.clone());
     if stride > 1 {
         // The winner on the whole scan.
-        let q = surface.polish(scan, &pose, polish_iterations);
+        let q = surface.polish(scan, &pose, polish_iterations, bounds);
         if (SCALE_DRIFT.0..=SCALE_DRIFT.1).contains(&(q.scale / pose.scale)) {
             pose = q;
         }
@@ -213,7 +216,7 @@ pub fn conclude(
 
     // Uncertainty: curvature, inflated, plus the particles' spread.
     let image = pose.apply(&at);
-    let curv = surface.curvature(scan, &pose, &image);
+    let curv = surface.curvature(scan, &pose, &image, bounds.fixed_value().is_some());
     let k2 = COVARIANCE_INFLATION * COVARIANCE_INFLATION * curv.residual_variance;
     let mut cov = curv.degeneracy.inverse * k2;
     // The filter's last particle set (unweighted) describes the answer only when the answer

@@ -27,7 +27,7 @@ use crate::cloud::{bbox_diagonal, centroid};
 use crate::geometry::Pose;
 use crate::nn::NearestNeighbours;
 use crate::pf_icp::hypotheses::same_pose;
-use crate::registration::svd_match::{match_pairs, ScaleRule};
+use crate::registration::svd_match::{match_pairs_within, ScaleRule};
 use nalgebra::{Point3, Vector3};
 use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
@@ -147,8 +147,16 @@ fn nearest_descriptor(d: &[f64; 3 * BINS], set: &[[f64; 3 * BINS]]) -> usize {
 }
 
 /// Start poses from feature correspondences between `scan` and the model behind `nn`,
-/// best first (at most [`PROPOSALS`]); `scale_guess` is a rough scale (scan to model).
-pub fn proposals(nn: &NearestNeighbours, scan: &[Point3<f64>], scale_guess: f64, seed: u64) -> Vec<Pose> {
+/// best first (at most [`PROPOSALS`]); `scale_guess` is a rough scale (scan to model), and
+/// every proposal's scale lies in `bounds`.
+pub fn proposals(
+    nn: &NearestNeighbours,
+    scan: &[Point3<f64>],
+    scale_guess: f64,
+    seed: u64,
+    bounds: &crate::geometry::ScaleBounds,
+) -> Vec<Pose> {
+    let scale_guess = bounds.clamp(scale_guess);
     let diag = bbox_diagonal(nn.points());
     if diag.is_nan() || diag <= 0.0 || scale_guess.is_nan() || scale_guess <= 0.0 || scan.len() < 10 {
         return Vec::new();
@@ -198,8 +206,13 @@ pub fn proposals(nn: &NearestNeighbours, scan: &[Point3<f64>], scale_guess: f64,
             if hi > 1.1 * lo || lo < 0.5 * scale_guess || hi > 2.0 * scale_guess {
                 return None;
             }
-            let pose =
-                match_pairs(&[src[a], src[b], src[c]], &[dst[a], dst[b], dst[c]], None, ScaleRule::LeastSquares)?;
+            let pose = match_pairs_within(
+                &[src[a], src[b], src[c]],
+                &[dst[a], dst[b], dst[c]],
+                None,
+                ScaleRule::LeastSquares,
+                bounds,
+            )?;
             let inliers = (0..src.len()).filter(|&k| (pose.apply(&src[k]) - dst[k]).norm_squared() <= tau2).count();
             Some((inliers, pose))
         })

@@ -26,10 +26,10 @@
 //! elongated part, is out of reach).
 
 use crate::cloud::centroid;
-use crate::geometry::Pose;
+use crate::geometry::{Pose, ScaleBounds};
 use crate::nn::NearestNeighbours;
 use crate::pf_icp::surface::Surface;
-use crate::registration::svd_match::{match_pairs, ScaleRule};
+use crate::registration::svd_match::{match_pairs_within, ScaleRule};
 use nalgebra::{Matrix3, Point3, UnitQuaternion};
 use rayon::prelude::*;
 
@@ -101,7 +101,7 @@ pub fn rotation_grid(n: usize) -> Vec<Matrix3<f64>> {
 }
 
 /// Trimmed ICP: each iteration pairs every point with its closest model point and solves
-/// the similarity over the `trim` fraction of closest pairs.
+/// the similarity over the `trim` fraction of closest pairs, its scale within `bounds`.
 pub fn trimmed_icp(
     nn: &NearestNeighbours,
     points: &[Point3<f64>],
@@ -109,6 +109,7 @@ pub fn trimmed_icp(
     iterations: usize,
     trim: f64,
     rule: ScaleRule,
+    bounds: &ScaleBounds,
 ) -> Pose {
     let model = nn.points();
     let mut pose = *start;
@@ -126,7 +127,7 @@ pub fn trimmed_icp(
         };
         let weights: Vec<f64> = closest.iter().map(|c| if c.dist2 <= threshold { 1.0 } else { 0.0 }).collect();
         let targets: Vec<Point3<f64>> = closest.iter().map(|c| model[c.index]).collect();
-        match match_pairs(points, &targets, Some(&weights), rule) {
+        match match_pairs_within(points, &targets, Some(&weights), rule, bounds) {
             Some(next) if next.scale.is_finite() && next.scale > 0.0 => {
                 // Converged: the pairs no longer move the pose (a fixed point of ICP).
                 let still = next.rotation_angle_to(&pose) < 1e-6
@@ -169,10 +170,10 @@ pub fn radius_ratio(scan: &[Point3<f64>], model: &[Point3<f64>]) -> f64 {
 }
 
 /// The start poses of the uniform set: each rotation with the centroids' translation and
-/// the ratio of RMS radii as scale.
-pub fn grid_starts(scan: &[Point3<f64>], model: &[Point3<f64>], n: usize) -> Vec<Pose> {
+/// the ratio of RMS radii as scale (moved into `bounds`).
+pub fn grid_starts(scan: &[Point3<f64>], model: &[Point3<f64>], n: usize, bounds: &ScaleBounds) -> Vec<Pose> {
     let (mu_m, mu_d) = (centroid(scan), centroid(model));
-    let s = radius_ratio(scan, model);
+    let s = bounds.clamp(radius_ratio(scan, model));
     rotation_grid(n)
         .into_iter()
         .map(|r| Pose { scale: s, rotation: r, translation: mu_d.coords - s * (r * mu_m.coords) })
@@ -182,13 +183,15 @@ pub fn grid_starts(scan: &[Point3<f64>], model: &[Point3<f64>], n: usize) -> Vec
 /// Refine `starts` and return the distinct hypotheses, best first (empty when every one is
 /// implausible: the caller keeps its own start then). `exact` poses are ranked as they
 /// are, without refinement. `sample` is the cost sample (a random subset of the scan, in
-/// random order); distinctness is judged at its centroid.
+/// random order); distinctness is judged at its centroid. Every refined scale lies in
+/// `bounds`; a pose outside them is implausible.
 pub fn search(
     surface: &Surface,
     sample: &[Point3<f64>],
     exact: &[Pose],
     starts: &[Pose],
     settings: &SearchSettings,
+    bounds: &ScaleBounds,
 ) -> Vec<Hypothesis> {
     let nn = surface.nn();
     let diag = crate::cloud::bbox_diagonal(nn.points());
@@ -204,15 +207,18 @@ pub fn search(
         v.get(v.len() / 2).copied().unwrap_or(0.0)
     };
     // A scale far from the radii's ratio is a scan collapsed onto part of the model.
-    let plausible =
-        |h: &Hypothesis| h.cost.is_finite() && (s0 == 0.0 || (h.pose.scale > 0.5 * s0 && h.pose.scale < 2.0 * s0));
+    let plausible = |h: &Hypothesis| {
+        h.cost.is_finite()
+            && bounds.contains(h.pose.scale)
+            && (s0 == 0.0 || bounds.fixed_value().is_some() || (h.pose.scale > 0.5 * s0 && h.pose.scale < 2.0 * s0))
+    };
     // One pass: trimmed ICP from each pose, ranked by the cost over `cost_pts`, implausible
     // scales dropped, best first.
     let pass = |from: &[Pose], pts: &[Point3<f64>], iterations: usize, rule: ScaleRule, cost_pts: &[Point3<f64>]| {
         let mut out: Vec<Hypothesis> = from
             .par_iter()
             .map(|s| {
-                let pose = trimmed_icp(nn, pts, s, iterations, settings.trim, rule);
+                let pose = trimmed_icp(nn, pts, s, iterations, settings.trim, rule, bounds);
                 Hypothesis { pose, cost: surface.cost(cost_pts, &pose, cap) }
             })
             .collect();

@@ -15,9 +15,10 @@
 
 use crate::cloud::centroid;
 use crate::geometry::Pose;
+use crate::geometry::ScaleBounds;
 use crate::nn::NearestNeighbours;
 use crate::pf_icp::kmeans::{kmeans, Clustering, KmeansSettings, Pairing};
-use crate::registration::svd_match::{match_pairs, ScaleRule};
+use crate::registration::svd_match::{match_pairs_within, ScaleRule};
 use nalgebra::{Matrix3, Point3, Rotation3, Unit, Vector3};
 use rayon::prelude::*;
 
@@ -110,11 +111,11 @@ fn rotation_candidates(scan: &[Point3<f64>], model: &[Point3<f64>]) -> Vec<Matri
 }
 
 /// Refine `pose` by ICP between cluster centroids (nearest-centroid pairing).
-fn centroid_icp(scan_c: &[Point3<f64>], model_nn: &NearestNeighbours, mut pose: Pose) -> Pose {
+fn centroid_icp(scan_c: &[Point3<f64>], model_nn: &NearestNeighbours, mut pose: Pose, bounds: &ScaleBounds) -> Pose {
     for _ in 0..CENTROID_ICP_ITERATIONS {
         let targets: Vec<Point3<f64>> =
             scan_c.iter().map(|m| model_nn.points()[model_nn.closest(&pose.apply(m)).index]).collect();
-        match match_pairs(scan_c, &targets, None, ScaleRule::Ratio) {
+        match match_pairs_within(scan_c, &targets, None, ScaleRule::Ratio, bounds) {
             Some(p) => pose = p,
             None => break,
         }
@@ -123,7 +124,7 @@ fn centroid_icp(scan_c: &[Point3<f64>], model_nn: &NearestNeighbours, mut pose: 
 }
 
 /// Compute the initial pose. `cost_sample` is the subset of scan points used to rank the
-/// candidates against the model's k-d tree `nn`.
+/// candidates against the model's k-d tree `nn`; every candidate's scale lies in `bounds`.
 pub fn initial_pose(
     nn: &NearestNeighbours,
     scan: &[Point3<f64>],
@@ -131,6 +132,7 @@ pub fn initial_pose(
     clusters: usize,
     seed: u64,
     mode: InitMode,
+    bounds: &ScaleBounds,
 ) -> InitialPose {
     let model = nn.points();
     let ks = KmeansSettings { k: clusters, max_iterations: 100, seed };
@@ -141,20 +143,22 @@ pub fn initial_pose(
         && scan.len() == model.len()
         && scan_clusters.centroids.len() == model_clusters.centroids.len()
     {
-        if let Some(p) = match_pairs(&scan_clusters.centroids, &model_clusters.centroids, None, ScaleRule::Ratio) {
+        if let Some(p) =
+            match_pairs_within(&scan_clusters.centroids, &model_clusters.centroids, None, ScaleRule::Ratio, bounds)
+        {
             candidates.push((p, Pairing::Index));
         }
     }
     if mode != InitMode::Index || candidates.is_empty() {
         let centroid_nn = NearestNeighbours::new(&model_clusters.centroids);
         let (mu_m, mu_d) = (centroid(scan), centroid(model));
-        let s = crate::pf_icp::hypotheses::radius_ratio(scan, model);
+        let s = bounds.clamp(crate::pf_icp::hypotheses::radius_ratio(scan, model));
         let starts: Vec<Pose> = rotation_candidates(scan, model)
             .into_iter()
             .map(|r| Pose { scale: s, rotation: r, translation: mu_d.coords - s * (r * mu_m.coords) })
             .collect();
         let refined: Vec<Pose> =
-            starts.par_iter().map(|p| centroid_icp(&scan_clusters.centroids, &centroid_nn, *p)).collect();
+            starts.par_iter().map(|p| centroid_icp(&scan_clusters.centroids, &centroid_nn, *p, bounds)).collect();
         candidates.extend(refined.into_iter().map(|p| (p, Pairing::Nearest)));
     }
     let scored: Vec<(f64, usize)> = candidates.par_iter().enumerate().map(|(i, (p, _))| (cost(p), i)).collect();
@@ -178,7 +182,7 @@ mod tests {
         let id = ModelId::Model1;
         let ds = make(id, 600, &id.table1_truth(), &ScanSpec { sampling: Sampling::Paper, noise: 0.0, seed: 1 });
         let nn = NearestNeighbours::new(&ds.model);
-        let init = initial_pose(&nn, &ds.scan, &ds.scan, 30, 5, InitMode::Auto);
+        let init = initial_pose(&nn, &ds.scan, &ds.scan, 30, 5, InitMode::Auto, &ScaleBounds::FREE);
         assert_eq!(init.pairing, Pairing::Index);
         assert!(init.pose.rotation_angle_to(&ds.truth) < 1e-6);
         assert!((init.pose.scale - ds.truth.scale).abs() < 1e-9);
@@ -194,7 +198,7 @@ mod tests {
             &ScanSpec { sampling: Sampling::Independent { points: 1200 }, noise: 0.0, seed: 3 },
         );
         let nn = NearestNeighbours::new(&ds.model);
-        let init = initial_pose(&nn, &ds.scan, &ds.scan[..400], 60, 5, InitMode::Auto);
+        let init = initial_pose(&nn, &ds.scan, &ds.scan[..400], 60, 5, InitMode::Auto, &ScaleBounds::FREE);
         assert_eq!(init.pairing, Pairing::Nearest);
         assert!(init.pose.rotation_angle_to(&ds.truth).to_degrees() < 10.0, "{:?}", init.pose.euler_deg());
     }

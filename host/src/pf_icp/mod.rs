@@ -35,7 +35,7 @@ pub mod kmeans;
 pub mod particle_filter;
 pub mod surface;
 
-use crate::geometry::{Centred, Params, Pose};
+use crate::geometry::{Centred, Params, Pose, ScaleBounds};
 use crate::nn::NearestNeighbours;
 use crate::pf_icp::conclusion::Conclusion;
 use crate::pf_icp::covariance::{approximate_icp_variance, IcpCovariance};
@@ -94,6 +94,9 @@ pub struct PfIcpSettings {
     /// The global search for the start ([`crate::pf_icp::hypotheses`]); `None`: the k-means start
     /// alone, as in the paper.
     pub search: Option<SearchSettings>,
+    /// What is known of the scale (`--scale`, `--scale-range`): every stage keeps the scale
+    /// inside; a fixed scale is no parameter of the filter, the polish or the covariance.
+    pub scale: ScaleBounds,
 }
 
 impl Default for PfIcpSettings {
@@ -114,6 +117,7 @@ impl Default for PfIcpSettings {
             adaptive: None,
             patience: Some(8),
             search: Some(SearchSettings::default()),
+            scale: ScaleBounds::FREE,
         }
     }
 }
@@ -211,8 +215,10 @@ struct PoseObjective<'a> {
     weights: Option<&'a dyn ParticleWeights>,
     /// Distance cap of the software cost.
     cap: f64,
-    /// Allowed scale range (a collapsed scan fits any surface).
+    /// Allowed scale range (a collapsed scan fits any surface; the user's bounds).
     scale_range: (f64, f64),
+    /// The user's scale bounds.
+    bounds: ScaleBounds,
 }
 
 /// Fraction of pairs the filter's trimmed ICP refinement keeps.
@@ -255,7 +261,8 @@ impl Objective for PoseObjective<'_> {
         }
         let start = self.pose(x);
         let pose = if self.weights.is_some() {
-            let s = IcpSettings { max_iterations: self.refine_iterations, ..Default::default() };
+            let s =
+                IcpSettings { max_iterations: self.refine_iterations, scale_bounds: self.bounds, ..Default::default() };
             icp(self.surface.nn(), self.sample, &start, &s).pose
         } else {
             hypotheses::trimmed_icp(
@@ -265,6 +272,7 @@ impl Objective for PoseObjective<'_> {
                 self.refine_iterations,
                 REFINE_TRIM,
                 crate::registration::svd_match::ScaleRule::LeastSquares,
+                &self.bounds,
             )
         };
         let mut refined = self.frame.params(&pose).to_vec();
@@ -352,18 +360,20 @@ fn prior_on(surface: &Surface, scan: &[Point3<f64>], settings: &PfIcpSettings) -
     let k = settings.clusters.min(scan.len().min(model.len()) / 10).max(3);
 
     let t0 = Instant::now();
-    let initial = initial_pose(nn, scan, &sample, k, settings.seed, settings.init);
+    let bounds = &settings.scale;
+    let initial = initial_pose(nn, scan, &sample, k, settings.seed, settings.init, bounds);
     let hypotheses = match &settings.search {
         Some(search) => {
             let mut starts = initial.candidates.clone();
-            starts.extend(hypotheses::grid_starts(scan, model, search.grid));
+            starts.extend(hypotheses::grid_starts(scan, model, search.grid, bounds));
             starts.extend(crate::pf_icp::features::proposals(
                 nn,
                 &sample,
                 hypotheses::radius_ratio(scan, model),
                 settings.seed,
+                bounds,
             ));
-            hypotheses::search(surface, &sample, &[initial.pose], &starts, search)
+            hypotheses::search(surface, &sample, &[initial.pose], &starts, search, bounds)
         }
         None => Vec::new(),
     };
@@ -371,7 +381,7 @@ fn prior_on(surface: &Surface, scan: &[Point3<f64>], settings: &PfIcpSettings) -
     // A start other than the k-means one is as good as the geometric pairing's.
     let pairing = if start == initial.pose { initial.pairing } else { Pairing::Nearest };
     let t1 = Instant::now();
-    let cov_settings = IcpSettings { max_iterations: 30, ..Default::default() };
+    let cov_settings = IcpSettings { max_iterations: 30, scale_bounds: *bounds, ..Default::default() };
     let covariance = approximate_icp_variance(
         nn,
         scan,
@@ -389,8 +399,14 @@ fn prior_on(surface: &Surface, scan: &[Point3<f64>], settings: &PfIcpSettings) -
     let cap = sigma_cap(diag, start.scale);
     let floor = sigma_floor(diag, start.scale);
     let least = start_prior(pairing, diag, start.scale);
-    let sigma0: Vec<f64> =
+    let mut sigma0: Vec<f64> =
         variance.iter().enumerate().map(|(d, v)| v.sqrt().max(least[d]).max(floor[d]).min(cap[d])).collect();
+    let mut floor = floor;
+    if bounds.fixed_value().is_some() {
+        // The scale is no parameter of the filter.
+        sigma0[3] = 0.0;
+        floor[3] = 0.0;
+    }
     let q = covariance.msd_variance;
     Prior {
         sample,
@@ -449,7 +465,11 @@ pub fn register_with(
         refine_iterations: settings.icp_per_iteration,
         weights,
         cap: crate::pf_icp::surface::COST_CAP * diag,
-        scale_range: (start_scale * SCALE_BOUNDS.0, start_scale * SCALE_BOUNDS.1),
+        scale_range: {
+            let b = settings.scale.within(start_scale * SCALE_BOUNDS.0, start_scale * SCALE_BOUNDS.1);
+            (b.lo, b.hi)
+        },
+        bounds: settings.scale,
     };
     let filter_settings = FilterSettings {
         particles: settings.particles,
@@ -474,6 +494,7 @@ pub fn register_with(
         &hypotheses,
         Some((&frame, &filtered.particles)),
         settings.polish_iterations,
+        &settings.scale,
     );
     let polished = Registration {
         pose: conclusion.pose,

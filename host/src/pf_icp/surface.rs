@@ -26,7 +26,7 @@
 //! curvature: rotation about the line of a collinear scan, the in-plane motions of a
 //! planar one).
 
-use crate::geometry::Pose;
+use crate::geometry::{Pose, ScaleBounds};
 use crate::nn::NearestNeighbours;
 use nalgebra::{Matrix3, Point3, Rotation3, SMatrix, SVector, Vector3};
 use rayon::prelude::*;
@@ -173,8 +173,10 @@ impl<'a> Surface<'a> {
     }
 
     /// Point-to-plane ICP with scale from `start`: Gauss-Newton on the linearised
-    /// point-to-plane residuals of the inliers, at most `iterations` steps.
-    pub fn polish(&self, points: &[Point3<f64>], start: &Pose, iterations: usize) -> Pose {
+    /// point-to-plane residuals of the inliers, at most `iterations` steps, the scale kept
+    /// within `bounds` (a fixed scale is not a parameter of the step at all).
+    pub fn polish(&self, points: &[Point3<f64>], start: &Pose, iterations: usize, bounds: &ScaleBounds) -> Pose {
+        let fixed = bounds.fixed_value().is_some();
         let mut pose = *start;
         for _ in 0..iterations {
             let (q, contacts, mask) = self.contacts(points, &pose);
@@ -194,6 +196,15 @@ impl<'a> Surface<'a> {
                 a += j * j.transpose();
                 b += j * r;
             }
+            if fixed {
+                // The scale's row and column out of the system: its step is exactly 0.
+                for k in 0..7 {
+                    a[(6, k)] = 0.0;
+                    a[(k, 6)] = 0.0;
+                }
+                a[(6, 6)] = 1.0;
+                b[6] = 0.0;
+            }
             // A little damping keeps undetermined directions (planar, collinear scans) still.
             let damp = 1e-9 * a.trace().max(1e-300);
             let a = a + SMatrix::<f64, 7, 7>::identity() * damp;
@@ -206,7 +217,8 @@ impl<'a> Surface<'a> {
             let s = (1.0 + step[6]).clamp(0.9, 1.1);
             let t = Vector3::new(step[3], step[4], step[5]);
             let delta = Pose { scale: s, rotation: rot, translation: c + t - s * (rot * c) };
-            pose = delta.compose(&pose);
+            let next = delta.compose(&pose);
+            pose = if fixed { next } else { bounds.apply(&next, &pose.inverse().apply(&Point3::from(c))) };
             if omega.norm() < 1e-8 && t.norm() < 1e-8 * self.spacing.max(1e-300) * 100.0 && step[6].abs() < 1e-8 {
                 break;
             }
@@ -216,8 +228,9 @@ impl<'a> Surface<'a> {
 
     /// `J^T J` of the inliers' point-to-plane residuals at `pose` in the local parameters
     /// [`LOCAL_NAMES`] about the image `at` of the scan's centroid, the residual variance and
-    /// the undetermined parameters.
-    pub fn curvature(&self, points: &[Point3<f64>], pose: &Pose, at: &Point3<f64>) -> Curvature {
+    /// the undetermined parameters; with `scale_known` the scale is no parameter (its
+    /// variance 0, the others' conditional on it).
+    pub fn curvature(&self, points: &[Point3<f64>], pose: &Pose, at: &Point3<f64>, scale_known: bool) -> Curvature {
         let (q, contacts, mask) = self.contacts(points, pose);
         let mut jtj = SMatrix::<f64, 7, 7>::zeros();
         let (mut sum2, mut count) = (0.0, 0usize);
@@ -240,7 +253,7 @@ impl<'a> Surface<'a> {
         let kept: Vec<&Point3<f64>> = (0..q.len()).filter(|&i| mask[i]).map(|i| &q[i]).collect();
         let radius =
             (kept.iter().map(|p| (*p - at).norm_squared()).sum::<f64>() / kept.len().max(1) as f64).sqrt().max(1e-300);
-        let degeneracy = degeneracy(&jtj, radius, scale);
+        let degeneracy = degeneracy(&jtj, radius, scale, scale_known);
         Curvature { jtj, residual_variance, pairs: count, degeneracy }
     }
 }
@@ -285,11 +298,21 @@ fn describe_block(m: &nalgebra::Matrix3<f64>, top: f64, kind: &str, names: [&str
     }
 }
 
-/// What `J^T J` leaves undetermined, and its pseudo-inverse over the rest.
-fn degeneracy(jtj: &SMatrix<f64, 7, 7>, radius: f64, scale: f64) -> Degeneracy {
+/// What `J^T J` leaves undetermined, and its pseudo-inverse over the rest (with
+/// `scale_known`, over the parameters besides the scale, whose rows and columns are 0).
+fn degeneracy(jtj: &SMatrix<f64, 7, 7>, radius: f64, scale: f64, scale_known: bool) -> Degeneracy {
     let unit = [radius, radius, radius, scale, 1.0, 1.0, 1.0];
     let d = SMatrix::<f64, 7, 7>::from_diagonal(&SVector::<f64, 7>::from_column_slice(&unit));
-    let m = d * jtj * d;
+    let mut m = d * jtj * d;
+    if scale_known {
+        // The scale decoupled, at the largest curvature of the rest: never flat, and its
+        // entries of the inverse cleared below.
+        for k in 0..7 {
+            m[(3, k)] = 0.0;
+            m[(k, 3)] = 0.0;
+        }
+        m[(3, 3)] = m.symmetric_eigen().eigenvalues.max().max(1e-300);
+    }
     let e = m.symmetric_eigen();
     let top = e.eigenvalues.max().max(1e-300);
     let mut inverse = SMatrix::<f64, 7, 7>::zeros();
@@ -312,7 +335,14 @@ fn degeneracy(jtj: &SMatrix<f64, 7, 7>, radius: f64, scale: f64) -> Degeneracy {
     if motions.is_empty() && free.iter().any(|&f| f) {
         motions.push("a combined motion".to_string());
     }
-    Degeneracy { motions, free, inverse: d * inverse * d }
+    let mut inverse = d * inverse * d;
+    if scale_known {
+        for k in 0..7 {
+            inverse[(3, k)] = 0.0;
+            inverse[(k, 3)] = 0.0;
+        }
+    }
+    Degeneracy { motions, free, inverse }
 }
 
 #[cfg(test)]
@@ -349,7 +379,7 @@ mod tests {
         let nn = NearestNeighbours::new(&model);
         let s = Surface::new(&nn);
         let off = Pose::from_params(&[0.12, -0.18, 0.04, 1.13, 0.33, -0.17, 0.43]);
-        let p = s.polish(&scan, &off, 30);
+        let p = s.polish(&scan, &off, 30, &ScaleBounds::FREE);
         assert!(p.rotation_angle_to(&truth).to_degrees() < 0.3);
         assert!((p.scale / truth.scale - 1.0).abs() < 3e-3);
     }
@@ -364,14 +394,14 @@ mod tests {
             (0..500).map(|_| Point3::new(rng.gen_range(-0.5..0.5), rng.gen_range(-0.5..0.5), 0.0)).collect();
         let nn = NearestNeighbours::new(&model);
         let s = Surface::new(&nn);
-        let c = s.curvature(&scan, &Pose::identity(), &crate::cloud::centroid(&scan));
+        let c = s.curvature(&scan, &Pose::identity(), &crate::cloud::centroid(&scan), false);
         assert_eq!(c.degeneracy.motions, ["tx", "ty", "scale", "rz"]);
         assert_eq!(c.degeneracy.free, [true, true, false, true, false, false, true]);
         // A box is determined.
         let model = Part::NearCubeNotch.sample_surface(3000, &mut rng);
         let nn = NearestNeighbours::new(&model);
         let s = Surface::new(&nn);
-        let c = s.curvature(&model[..800], &Pose::identity(), &crate::cloud::centroid(&model[..800]));
+        let c = s.curvature(&model[..800], &Pose::identity(), &crate::cloud::centroid(&model[..800]), false);
         assert!(c.degeneracy.motions.is_empty() && c.degeneracy.free.iter().all(|f| !f));
     }
 }

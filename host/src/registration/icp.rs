@@ -9,7 +9,7 @@
 
 use crate::geometry::Pose;
 use crate::nn::NearestNeighbours;
-use crate::registration::svd_match::{match_pairs, ScaleRule};
+use crate::registration::svd_match::{match_pairs_within, ScaleRule};
 use nalgebra::Point3;
 
 /// Robust weighting of the residuals.
@@ -34,6 +34,8 @@ pub struct IcpSettings {
     pub msd_threshold: f64,
     /// Scale estimation rule.
     pub scale: ScaleRule,
+    /// The interval the scale is kept in.
+    pub scale_bounds: crate::geometry::ScaleBounds,
     /// Robust weight function.
     pub robust: Robust,
     /// Robust kernel width as a multiple of the median residual: `nu = k * median(r)`.
@@ -47,6 +49,7 @@ impl Default for IcpSettings {
             relative_tolerance: 1e-9,
             msd_threshold: 0.0,
             scale: ScaleRule::LeastSquares,
+            scale_bounds: crate::geometry::ScaleBounds::FREE,
             robust: Robust::None,
             robust_k: 2.0,
         }
@@ -136,7 +139,7 @@ pub fn icp(nn: &NearestNeighbours, scan: &[Point3<f64>], init: &Pose, settings: 
         targets.extend(closest.iter().map(|c| model[c.index]));
         let r: Vec<f64> = closest.iter().map(|c| c.dist2.sqrt()).collect();
         let w = robust_weights(&r, settings.robust, settings.robust_k);
-        match match_pairs(scan, &targets, w.as_deref(), settings.scale) {
+        match match_pairs_within(scan, &targets, w.as_deref(), settings.scale, &settings.scale_bounds) {
             Some(next) => pose = next,
             None => return Registration { pose, msd: e, iterations, errors },
         }

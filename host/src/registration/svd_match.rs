@@ -93,6 +93,26 @@ pub fn match_pairs(
     Some(Pose { scale: s, rotation: r, translation: mu_d - s * (r * mu_m) })
 }
 
+/// [`match_pairs`] with the scale kept within `bounds` (the least-squares similarity under
+/// the bound: the rotation is unchanged, the scale clamped, the translation taken through
+/// the weighted centroids). Free bounds give exactly [`match_pairs`]' pose.
+pub fn match_pairs_within(
+    scan: &[Point3<f64>],
+    model: &[Point3<f64>],
+    weights: Option<&[f64]>,
+    rule: ScaleRule,
+    bounds: &crate::geometry::ScaleBounds,
+) -> Option<Pose> {
+    let pose = match_pairs(scan, model, weights, rule)?;
+    if bounds.contains(pose.scale) {
+        return Some(pose);
+    }
+    let w = |i: usize| weights.map_or(1.0, |w| w[i]);
+    let wsum: f64 = (0..scan.len()).map(w).sum();
+    let mu = (0..scan.len()).fold(Vector3::zeros(), |a, i| a + w(i) * scan[i].coords) / wsum;
+    Some(bounds.apply(&pose, &Point3::from(mu)))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -43,11 +43,39 @@ pub enum Family {
     /// Any rotation, real shapes and parts.
     #[serde(rename = "hard-180")]
     Hard180,
+    /// Camera views ([`super::camera`]) with clutter, rotations up to 90 deg about a random
+    /// axis, unknown scale.
+    #[serde(rename = "camera")]
+    Camera,
+    /// Camera views at any rotation, unknown scale.
+    #[serde(rename = "camera-any")]
+    CameraAny,
+    /// Camera views, rotations up to 90 deg, scale 1 and known (a metric sensor and a model
+    /// in the same units).
+    #[serde(rename = "camera-metric")]
+    CameraMetric,
+    /// Camera views at any rotation, scale 1 and known.
+    #[serde(rename = "camera-any-metric")]
+    CameraAnyMetric,
 }
 
 impl Family {
-    /// Every family, in report order.
-    pub const ALL: [Family; 4] = [Family::Real, Family::RealOutliers, Family::Parts, Family::Hard180];
+    /// The plane-cut families (partial views that keep 60 to 80% of the surface, or the
+    /// whole surface).
+    pub const PLANE_CUT: [Family; 4] = [Family::Real, Family::RealOutliers, Family::Parts, Family::Hard180];
+    /// The camera-view families.
+    pub const CAMERA: [Family; 4] = [Family::Camera, Family::CameraAny, Family::CameraMetric, Family::CameraAnyMetric];
+    /// Every family, in report order (a family's position here is part of its cases' seeds).
+    pub const ALL: [Family; 8] = [
+        Family::Real,
+        Family::RealOutliers,
+        Family::Parts,
+        Family::Hard180,
+        Family::Camera,
+        Family::CameraAny,
+        Family::CameraMetric,
+        Family::CameraAnyMetric,
+    ];
 
     /// Name in reports.
     pub fn name(self) -> &'static str {
@@ -56,7 +84,26 @@ impl Family {
             Family::RealOutliers => "real-outliers",
             Family::Parts => "parts",
             Family::Hard180 => "hard-180",
+            Family::Camera => "camera",
+            Family::CameraAny => "camera-any",
+            Family::CameraMetric => "camera-metric",
+            Family::CameraAnyMetric => "camera-any-metric",
         }
+    }
+
+    /// A camera-view family.
+    pub fn is_camera(self) -> bool {
+        Family::CAMERA.contains(&self)
+    }
+
+    /// The scale the user knows for this family's cases (`None`: unknown, estimated).
+    pub fn known_scale(self) -> Option<f64> {
+        matches!(self, Family::CameraMetric | Family::CameraAnyMetric).then_some(1.0)
+    }
+
+    /// Any rotation (uniform on SO(3)) rather than a bounded one.
+    fn any_rotation(self) -> bool {
+        matches!(self, Family::Hard180 | Family::CameraAny | Family::CameraAnyMetric)
     }
 }
 
@@ -140,12 +187,16 @@ impl Shape {
 
 /// The shapes of a family in a split.
 pub fn shapes(family: Family, split: Split) -> Vec<Shape> {
-    let real = crate::real_shapes::all().iter().map(Shape::Real);
+    // The plane-cut families keep their original shapes (their figures stay comparable).
+    let real = crate::real_shapes::all().iter().filter(|s| !s.camera_only).map(Shape::Real);
     let parts = Part::ALL.iter().map(|&p| Shape::Part(p));
     let all: Vec<Shape> = match family {
         Family::Real | Family::RealOutliers => real.collect(),
         Family::Parts => parts.collect(),
         Family::Hard180 => real.chain(parts).collect(),
+        Family::Camera | Family::CameraAny | Family::CameraMetric | Family::CameraAnyMetric => {
+            crate::real_shapes::all().iter().map(Shape::Real).chain(parts).collect()
+        }
     };
     all.into_iter().filter(|s| split == Split::Test || !s.held_out()).collect()
 }
@@ -171,8 +222,12 @@ pub struct Case {
     pub diag: f64,
     /// Visible fraction of the surface (1 for a whole view).
     pub visible: f64,
-    /// Outlier points in the scan.
+    /// Outlier points in the scan (clutter in the camera-view families).
     pub outliers: usize,
+    /// The camera's position in the scan's frame (camera-view families).
+    pub viewpoint: Option<Point3<f64>>,
+    /// The scale the user knows ([`Family::known_scale`]).
+    pub known_scale: Option<f64>,
 }
 
 fn uniform_rotation(rng: &mut impl Rng) -> Matrix3<f64> {
@@ -193,6 +248,9 @@ fn unit_vector(rng: &mut impl Rng) -> Vector3<f64> {
 
 /// Make case `index` of `family` on `shape`, seeded by `seed`.
 pub fn make_case(family: Family, shape: Shape, index: usize, seed: u64) -> Case {
+    if family.is_camera() {
+        return make_camera_case(family, shape, index, seed);
+    }
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let partial = matches!(shape, Shape::Real(_));
     let visible = if partial { rng.gen_range(VISIBLE_RANGE.0..VISIBLE_RANGE.1) } else { 1.0 };
@@ -222,7 +280,7 @@ pub fn make_case(family: Family, shape: Shape, index: usize, seed: u64) -> Case 
         }
         view.shuffle(&mut rng);
     }
-    let truth = if family == Family::Hard180 {
+    let truth = if family.any_rotation() {
         let t = crate::datasets::random_truth(&mut rng, 1.0, SCALE_RANGE, diag / 2.0);
         Pose { rotation: uniform_rotation(&mut rng), ..t }
     } else {
@@ -241,5 +299,66 @@ pub fn make_case(family: Family, shape: Shape, index: usize, seed: u64) -> Case 
         diag,
         visible,
         outliers,
+        viewpoint: None,
+        known_scale: None,
+    }
+}
+
+/// Model points of a camera-view case.
+pub const CAMERA_MODEL_POINTS: usize = 3000;
+/// Scan points of a camera-view case (clutter included).
+pub const CAMERA_SCAN_POINTS: usize = 1500;
+/// Surface points a camera view is cut from (the rest of a real shape's stored sample).
+const CAMERA_SURFACE_POINTS: usize = 17_000;
+/// Scale range of the camera-view truths when the scale is unknown.
+pub const CAMERA_SCALE_RANGE: (f64, f64) = (0.8, 1.25);
+/// Largest rotation of the bounded camera-view families (about a random axis) [deg].
+pub const CAMERA_MAX_ANGLE_DEG: f64 = 90.0;
+
+/// A camera-view case ([`super::camera::camera_view`]): the view, 0.5% noise, the truth.
+fn make_camera_case(family: Family, shape: Shape, index: usize, seed: u64) -> Case {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let (model, surface) = shape.draw(CAMERA_MODEL_POINTS, CAMERA_SURFACE_POINTS, &mut rng);
+    let diag = bbox_diagonal(&model);
+    let view = super::camera::camera_view(&surface, diag, CAMERA_SCAN_POINTS, &mut rng);
+    let noise = Normal::new(0.0, NOISE_FRACTION * diag).expect("positive sigma");
+    let mut points = view.surface;
+    for p in points.iter_mut() {
+        for c in p.coords.iter_mut() {
+            *c += noise.sample(&mut rng);
+        }
+    }
+    let outliers = view.clutter.len();
+    points.extend(view.clutter);
+    points.shuffle(&mut rng);
+    let rotation = if family.any_rotation() {
+        uniform_rotation(&mut rng)
+    } else {
+        let axis = nalgebra::Unit::new_normalize(unit_vector(&mut rng));
+        let angle = rng.gen_range(0.0..CAMERA_MAX_ANGLE_DEG).to_radians();
+        nalgebra::Rotation3::from_axis_angle(&axis, angle).into_inner()
+    };
+    let scale = family.known_scale().unwrap_or_else(|| rng.gen_range(CAMERA_SCALE_RANGE.0..CAMERA_SCALE_RANGE.1));
+    let translation = loop {
+        let v = Vector3::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0));
+        if v.norm_squared() <= 1.0 {
+            break v * (diag / 2.0);
+        }
+    };
+    let truth = Pose { scale, rotation, translation };
+    let inv = truth.inverse();
+    Case {
+        id: format!("{}/{}/{index:04}", family.name(), shape.name()),
+        family,
+        shape,
+        seed,
+        model,
+        scan: points.iter().map(|p| inv.apply(p)).collect(),
+        truth,
+        diag,
+        visible: view.visible,
+        outliers,
+        viewpoint: Some(inv.apply(&view.camera)),
+        known_scale: family.known_scale(),
     }
 }

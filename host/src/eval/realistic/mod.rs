@@ -31,8 +31,11 @@
 //!
 //! Every case is a function of the seed, the split, the family and its index.
 
+mod camera;
 mod cases;
 mod scoring;
+
+pub use camera::{camera_view, CameraView};
 
 pub use cases::*;
 pub use scoring::*;
@@ -40,6 +43,7 @@ pub use scoring::*;
 use super::text_table::TextTable;
 use super::{median, mix};
 use crate::cloud::centroid;
+use crate::geometry::ScaleBounds;
 use crate::nn::NearestNeighbours;
 use crate::pf_icp::PfIcpSettings;
 use crate::progress::Progress;
@@ -248,7 +252,9 @@ pub fn run(opts: &RealisticOptions) -> anyhow::Result<RealisticReport> {
             }
             let nn = NearestNeighbours::new(&c.model);
             let surface = crate::pf_icp::surface::Surface::new(&nn);
-            let settings = MethodSettings { pf: PfIcpSettings { seed: c.seed, ..opts.pf.clone() } };
+            // The scale as the family's user knows it.
+            let scale = c.known_scale.map_or(opts.pf.scale, ScaleBounds::fixed);
+            let settings = MethodSettings { pf: PfIcpSettings { seed: c.seed, scale, ..opts.pf.clone() } };
             let mut results: Vec<CaseResult> = opts
                 .methods
                 .iter()
@@ -319,7 +325,8 @@ pub fn run(opts: &RealisticOptions) -> anyhow::Result<RealisticReport> {
                 truth,
                 truth_cost: surface.cost(&c.scan, &c.truth, 0.05 * c.diag),
                 truth_refined_cost: {
-                    let p = surface.polish(&c.scan, &c.truth, 30);
+                    let bounds = c.known_scale.map_or(ScaleBounds::FREE, ScaleBounds::fixed);
+                    let p = surface.polish(&c.scan, &c.truth, 30, &bounds);
                     surface.cost(&c.scan, &p, 0.05 * c.diag)
                 },
                 results,
@@ -413,6 +420,8 @@ fn export_case(dir: &Path, c: &Case) -> anyhow::Result<serde_json::Value> {
         "seed": c.seed, "model": model, "scan": scan,
         "truth": { "scale": t.scale, "rotation": t.rotation, "translation": t.translation },
         "diag": c.diag, "reference_point": [p.x, p.y, p.z], "symmetries": symmetries,
+        "known_scale": c.known_scale, "viewpoint": c.viewpoint.map(|v| [v.x, v.y, v.z]),
+        "visible": c.visible, "outliers": c.outliers,
     }))
 }
 
