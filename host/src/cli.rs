@@ -80,6 +80,12 @@ pub struct Settings {
     pub iterations: usize,
     /// PF-ICP's cluster pairing (`auto`, `index`, `nearest`).
     pub init: String,
+    /// The fixed scale (`--scale`), or `null`.
+    pub scale: Option<f64>,
+    /// The scale's bounds `[lo, hi]` (`--scale-range`), or `null`.
+    pub scale_range: Option<[f64; 2]>,
+    /// The sensor's position in the scan's frame (`--viewpoint`), or `null`.
+    pub viewpoint: Option<[f64; 3]>,
     /// With the filter on the board: scan points it weighs each particle over.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub board_points: Option<usize>,
@@ -108,6 +114,16 @@ impl Provenance {
         ] {
             words.push(flag.to_string());
             words.push(value);
+        }
+        let join = |v: &[f64]| v.iter().map(|x| format!("{x:?}")).collect::<Vec<_>>().join(",");
+        if let Some(s) = settings.scale {
+            words.extend(["--scale".to_string(), format!("{s:?}")]);
+        }
+        if let Some(r) = settings.scale_range {
+            words.extend(["--scale-range".to_string(), join(&r)]);
+        }
+        if let Some(v) = settings.viewpoint {
+            words.extend(["--viewpoint".to_string(), join(&v)]);
         }
         if let Some(port) = port {
             words.push("--board".to_string());
@@ -371,6 +387,9 @@ mod tests {
             particles: 5,
             iterations: 6,
             init: "nearest".into(),
+            scale: None,
+            scale_range: None,
+            viewpoint: None,
             board_points: Some(200),
         };
         let p = Provenance::new("pf-icp", inputs, settings, Some("/dev/ttyUSB0"), false);

@@ -10,6 +10,7 @@ use pficp::board::BoardClient;
 use pficp::cli::{Inputs, Provenance, RegisterReport, Settings};
 use pficp::cloud::Cloud;
 use pficp::datasets::{self, ModelId, Sampling, ScanSpec};
+use pficp::geometry::ScaleBounds;
 use pficp::io::{format_from_path, read_cloud, write_cloud};
 use pficp::nn::NearestNeighbours;
 use pficp::pf_icp::init::InitMode;
@@ -156,6 +157,18 @@ struct PfArgs {
     /// nearest (independent scan) or auto (try both).
     #[arg(long, value_enum, default_value_t = InitArg::from(PfIcpSettings::default().init))]
     init: InitArg,
+    /// The scale (scan to model) when it is known: 1 when model and scan share their units
+    /// (a metric depth camera and a model in the same units). Nothing then changes it.
+    #[arg(long, value_name = "S", conflicts_with = "scale_range", allow_hyphen_values = true)]
+    scale: Option<f64>,
+    /// Bounds on the scale (scan to model): every estimate stays within LO to HI.
+    #[arg(long, value_name = "LO,HI", value_delimiter = ',', num_args = 1, allow_hyphen_values = true)]
+    scale_range: Vec<f64>,
+    /// Where the sensor was, in the scan's coordinates (a depth camera's scans: the origin,
+    /// 0,0,0): model surface that would face it inside the scan's view but has no scan point
+    /// near it counts against a pose.
+    #[arg(long, value_name = "X,Y,Z", value_delimiter = ',', num_args = 1, allow_hyphen_values = true)]
+    viewpoint: Vec<f64>,
 }
 
 impl PfArgs {
@@ -179,6 +192,35 @@ impl PfArgs {
                 bail!("{flag} must be at most {limit} (got {value})");
             }
         }
+        let scale = match (self.scale, self.scale_range.as_slice()) {
+            (Some(s), _) => {
+                if !(s.is_finite() && s > 0.0) {
+                    bail!("--scale must be a positive finite number (got {s})");
+                }
+                ScaleBounds::fixed(s)
+            }
+            (None, []) => ScaleBounds::FREE,
+            (None, &[lo, hi]) => {
+                if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && hi > 0.0) {
+                    bail!("--scale-range takes two positive finite numbers LO,HI (got {lo},{hi})");
+                }
+                if lo > hi {
+                    bail!("--scale-range LO,HI needs LO <= HI (got {lo},{hi})");
+                }
+                ScaleBounds::range(lo, hi)
+            }
+            (None, v) => bail!("--scale-range takes two numbers LO,HI (got {})", v.len()),
+        };
+        let viewpoint = match self.viewpoint.as_slice() {
+            [] => None,
+            &[x, y, z] => {
+                if ![x, y, z].iter().all(|v| v.is_finite()) {
+                    bail!("--viewpoint takes three finite numbers X,Y,Z (got {x},{y},{z})");
+                }
+                Some(nalgebra::Point3::new(x, y, z))
+            }
+            v => bail!("--viewpoint takes three numbers X,Y,Z (got {})", v.len()),
+        };
         Ok(PfIcpSettings {
             clusters: self.clusters,
             particles: self.particles,
@@ -189,6 +231,8 @@ impl PfArgs {
                 InitArg::Index => InitMode::Index,
                 InitArg::Nearest => InitMode::Nearest,
             },
+            scale,
+            viewpoint,
             ..Default::default()
         })
     }
@@ -508,6 +552,10 @@ fn register(a: &RegisterArgs) -> Result<()> {
         particles: a.pf.particles,
         iterations: a.pf.iterations,
         init: a.pf.init.to_possible_value().map_or_else(String::new, |v| v.get_name().to_string()),
+        scale: request.settings.scale.fixed_value(),
+        scale_range: (!request.settings.scale.is_free() && request.settings.scale.fixed_value().is_none())
+            .then_some([request.settings.scale.lo, request.settings.scale.hi]),
+        viewpoint: request.settings.viewpoint.map(|v| [v.x, v.y, v.z]),
         board_points: match request.engine {
             Engine::OnBoard { board_points, .. } => Some(board_points),
             _ => None,

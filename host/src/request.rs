@@ -114,6 +114,16 @@ impl Request {
                 1.0 / MIN_EXTENT_RATIO
             );
         }
+        let scale_given = !self.settings.scale.is_free();
+        if scale_given && matches!(self.method, Method::SparseIcp | Method::EmIcp) {
+            bail!(
+                "--scale and --scale-range apply to pf-icp, icp, welsch and cauchy (got --method {})",
+                self.method.name()
+            );
+        }
+        if self.settings.viewpoint.is_some() && self.method != Method::PfIcp {
+            bail!("--viewpoint applies to pf-icp (got --method {})", self.method.name());
+        }
         if self.engine.needs_board() && self.method != Method::PfIcp {
             bail!("--board runs PF-ICP only (got --method {})", self.method.name());
         }

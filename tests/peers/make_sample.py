@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Write a small synthetic benchmark in the `pficp eval --export` format.
 
-    python3 tests/peers/make_sample.py OUTDIR [--cases 6] [--seed 1]
+    python3 tests/peers/make_sample.py OUTDIR [--cases 6] [--known 2] [--seed 1]
 
 For testing run_peers.py before (or besides) a real export. Shapes are
 star-shaped bumpy surfaces x = r(u) u * (1.0, 0.7, 0.5) for unit directions u:
@@ -10,6 +10,15 @@ star-shaped bumpy surfaces x = r(u) u * (1.0, 0.7, 0.5) for unit directions u:
   partial    the same shape; scan = the half seen from a random direction
   symmetric  an r(u) invariant under 180 deg about z; full scan
              (symmetries: identity and Rz(180) about the origin)
+
+These have "known_scale": null (the scale is unknown to the method). After
+them come --known cases (default 2) whose scale the method is told,
+alternately:
+
+  metric       the partial family's shape and scan, scale exactly 1,
+               "known_scale": 1.0
+  known-scale  the synthetic family's shape and full scan, scale drawn as
+               below, "known_scale" = that scale
 
 Model: 2000 points; scan: 1000 points sampled independently of the model,
 Gaussian noise sigma = 0.5 % of the model diagonal. Truth: random axis,
@@ -83,6 +92,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("out")
     ap.add_argument("--cases", type=int, default=6)
+    ap.add_argument("--known", type=int, default=2, help="cases with a known scale, after the --cases ones")
     ap.add_argument("--seed", type=int, default=1)
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
@@ -90,21 +100,26 @@ def main():
     plan = ["synthetic", "partial", "symmetric"]
     ident = {"rotation": np.eye(3).tolist(), "centre": [0.0, 0.0, 0.0]}
     cases = []
-    for i in range(a.cases):
-        family = plan[0] if i < a.cases // 2 else plan[1] if i < a.cases - a.cases // 6 else plan[2]
+    for i in range(a.cases + a.known):
+        if i < a.cases:
+            family = plan[0] if i < a.cases // 2 else plan[1] if i < a.cases - a.cases // 6 else plan[2]
+        else:
+            family = ("metric", "known-scale")[(i - a.cases) % 2]
         seed = int(rng.integers(1, 2**31))
         crng = np.random.default_rng(seed)
         radius = radius_sym if family == "symmetric" else radius_asym
         model = sample_surface(crng, MODEL_POINTS, radius)
         diag = float(np.linalg.norm(model.max(0) - model.min(0)))
         view = None
-        if family == "partial":
+        if family in ("partial", "metric"):
             view = crng.normal(size=3)
             view /= np.linalg.norm(view)
         scan_d = sample_surface(crng, SCAN_POINTS, radius, view)
         scan_d = scan_d + crng.normal(scale=NOISE_FRAC * diag, size=scan_d.shape)
         r = rotation(crng.normal(size=3), crng.uniform(0, MAX_DEG))
         s = float(crng.uniform(*SCALE_RANGE))
+        if family == "metric":
+            s = 1.0
         t = crng.uniform(-TRANS_FRAC, TRANS_FRAC, size=3) * diag
         scan = (scan_d - t) @ r / s  # rows: R^T (d - T) / s
         stem = f"{family}-{i:04d}"
@@ -116,7 +131,8 @@ def main():
         cases.append({"id": f"{family}/blob/{i:04d}", "family": family, "shape": "blob", "seed": seed,
                       "model": stem + "-model.ply", "scan": stem + "-scan.ply",
                       "truth": {"scale": s, "rotation": r.tolist(), "translation": t.tolist()},
-                      "diag": diag, "reference_point": scan.mean(0).tolist(), "symmetries": syms})
+                      "diag": diag, "reference_point": scan.mean(0).tolist(), "symmetries": syms,
+                      "known_scale": s if family in ("metric", "known-scale") else None})
     suite = {"suite": "sample", "split": "test", "seed": a.seed,
              "tolerance": {"rotation_deg": 2.0, "translation_frac": 0.02, "scale_frac": 0.01}, "cases": cases}
     with open(os.path.join(a.out, "cases.json"), "w") as f:

@@ -141,6 +141,7 @@ OPEN3D_FPFH_RADIUS = 5.0      # x v
 OPEN3D_FPFH_MAX_NN = 100
 OPEN3D_RANSAC_DIST = 1.5      # x v, max correspondence distance and distance checker
 OPEN3D_EDGE_SIMILARITY = 0.63  # edge-length checker: scale admitted in [0.63, 1/0.63]
+OPEN3D_EDGE_SIMILARITY_KNOWN = 0.9  # the tutorial's value, for rigid RANSAC on a pre-scaled scan
 OPEN3D_RANSAC_ATTEMPTS = 5    # RANSAC runs at most, while its scale is outside that range
 OPEN3D_RANSAC_N = 3
 OPEN3D_RANSAC_MAX_ITER = 100000
@@ -152,6 +153,9 @@ CPD_W = 0.1
 CPD_MAX_ITER = 100
 CPD_MAX_MODEL = 2000
 CPD_MAX_SCAN = 1500
+
+TEASER_NOISE_BOUND = 1.0      # x v (TEASER++'s default is an absolute 0.01)
+# KISS-Matcher: voxel_size = OPEN3D_VOXEL_FRAC on clouds divided by diag (= v), the rest its defaults
 
 ALL_METHODS = ("open3d", "cpd")
 
@@ -296,55 +300,212 @@ def similarity_from_matrix(m):
 
 
 # ---------------------------------------------------------------- methods
+def known_scale(case):
+    """The case's "known_scale": None when the family's scale is unknown (or the key is missing)."""
+    k = case.get("known_scale")
+    return None if k is None else float(k)
+
+
+def rms_radius(points):
+    """Root-mean-square distance of the points from their centroid."""
+    p = np.asarray(points, float)
+    return float(np.sqrt(np.mean(np.sum((p - p.mean(0)) ** 2, axis=1))))
+
+
+def prescale(model, scan, case):
+    """(k, known): the factor the scan is multiplied by before a method runs.
+
+    The case's known_scale when it has one (known = True: the method then
+    registers rigidly), else the ratio of RMS radii about the centroids, model
+    over scan (known = False: a first guess that the method refines).
+    """
+    k = known_scale(case)
+    if k is not None:
+        return k, True
+    return rms_radius(model) / rms_radius(scan), False
+
+
+def compose_prescale(m, k):
+    """A 4x4 pose found for the pre-scaled scan k * m, as a pose for the scan m itself."""
+    out = np.asarray(m, float).copy()
+    out[:3, :3] = out[:3, :3] * k
+    return out
+
+
+def _o3d_cloud(points):
+    import open3d as o3d
+    pc = o3d.geometry.PointCloud()
+    pc.points = o3d.utility.Vector3dVector(np.ascontiguousarray(points, dtype=np.float64))
+    return pc
+
+
+def _o3d_features(pc, v):
+    """The open3d peer's down-sampling, normals and FPFH: (down-sampled cloud, FPFH)."""
+    import open3d as o3d
+    reg = o3d.pipelines.registration
+    down = pc.voxel_down_sample(v)
+    down.estimate_normals(o3d.geometry.KDTreeSearchParamHybrid(
+        radius=OPEN3D_NORMAL_RADIUS * v, max_nn=OPEN3D_NORMAL_MAX_NN))
+    fpfh = reg.compute_fpfh_feature(down, o3d.geometry.KDTreeSearchParamHybrid(
+        radius=OPEN3D_FPFH_RADIUS * v, max_nn=OPEN3D_FPFH_MAX_NN))
+    return down, fpfh
+
+
+def _o3d_icp(source, target, v, init, with_scaling):
+    """The open3d peer's ICP: point-to-point on the full clouds, 0.5 v, 100 iterations."""
+    import open3d as o3d
+    reg = o3d.pipelines.registration
+    return reg.registration_icp(
+        source, target, OPEN3D_ICP_DIST * v, np.asarray(init, float),
+        reg.TransformationEstimationPointToPoint(with_scaling=with_scaling),
+        reg.ICPConvergenceCriteria(max_iteration=OPEN3D_ICP_MAX_ITER))
+
+
+def _finite_pose(m, what):
+    m = np.asarray(m, float)
+    if not np.all(np.isfinite(m)):
+        raise ValueError(f"non-finite {what} transformation")
+    return m
+
+
 def run_open3d(model, scan, case):
-    """Open3D FPFH + RANSAC, then ICP, both with scaling. Returns (s, R, T)."""
+    """Open3D FPFH + RANSAC, then ICP. Returns (s, R, T, info).
+
+    Unknown scale: both with scaling, on the scan as given. Known scale k: the
+    scan is multiplied by k first, RANSAC and ICP are rigid (the tutorial's
+    edge checker 0.9), and k is composed back into the pose.
+    """
     import open3d as o3d
     reg = o3d.pipelines.registration
     o3d.utility.random.seed(int(case.get("seed", 0)) & 0x7FFFFFFF)
     v = OPEN3D_VOXEL_FRAC * float(case["diag"])
-
-    def cloud(points):
-        pc = o3d.geometry.PointCloud()
-        pc.points = o3d.utility.Vector3dVector(points)
-        return pc
-
-    def features(pc):
-        down = pc.voxel_down_sample(v)
-        down.estimate_normals(o3d.geometry.KDTreeSearchParamHybrid(
-            radius=OPEN3D_NORMAL_RADIUS * v, max_nn=OPEN3D_NORMAL_MAX_NN))
-        fpfh = reg.compute_fpfh_feature(down, o3d.geometry.KDTreeSearchParamHybrid(
-            radius=OPEN3D_FPFH_RADIUS * v, max_nn=OPEN3D_FPFH_MAX_NN))
-        return down, fpfh
-
-    source, target = cloud(scan), cloud(model)
-    src_down, src_fpfh = features(source)
-    tgt_down, tgt_fpfh = features(target)
+    k = known_scale(case)
+    scaled = k is not None
+    source, target = _o3d_cloud(scan if k is None else k * scan), _o3d_cloud(model)
+    src_down, src_fpfh = _o3d_features(source, v)
+    tgt_down, tgt_fpfh = _o3d_features(target, v)
     dist = OPEN3D_RANSAC_DIST * v
+    edge = OPEN3D_EDGE_SIMILARITY_KNOWN if scaled else OPEN3D_EDGE_SIMILARITY
     lo, hi = OPEN3D_EDGE_SIMILARITY, 1.0 / OPEN3D_EDGE_SIMILARITY
     for attempt in range(OPEN3D_RANSAC_ATTEMPTS):
         ransac = reg.registration_ransac_based_on_feature_matching(
             src_down, tgt_down, src_fpfh, tgt_fpfh, True, dist,
-            reg.TransformationEstimationPointToPoint(with_scaling=True),
+            reg.TransformationEstimationPointToPoint(with_scaling=not scaled),
             OPEN3D_RANSAC_N,
-            [reg.CorrespondenceCheckerBasedOnEdgeLength(OPEN3D_EDGE_SIMILARITY),
+            [reg.CorrespondenceCheckerBasedOnEdgeLength(edge),
              reg.CorrespondenceCheckerBasedOnDistance(dist)],
             reg.RANSACConvergenceCriteria(OPEN3D_RANSAC_MAX_ITER, OPEN3D_RANSAC_CONFIDENCE))
         a = np.asarray(ransac.transformation)[:3, :3]
         s_ransac = float(np.cbrt(np.linalg.det(a)))
-        if lo <= s_ransac <= hi:
+        if scaled or lo <= s_ransac <= hi:  # rigid: det A = 1, no collapse to guard against
             break
         # degenerate (see OPEN3D_RANSAC_ATTEMPTS): draw again with the next seed
         o3d.utility.random.seed((int(case.get("seed", 0)) + attempt + 1) & 0x7FFFFFFF)
-    icp = reg.registration_icp(
-        source, target, OPEN3D_ICP_DIST * v, ransac.transformation,
-        reg.TransformationEstimationPointToPoint(with_scaling=True),
-        reg.ICPConvergenceCriteria(max_iteration=OPEN3D_ICP_MAX_ITER))
-    m = np.asarray(icp.transformation)
-    if not np.all(np.isfinite(m)):
-        raise ValueError("non-finite ICP transformation")
-    info = {"ransac_attempts": attempt + 1, "ransac_scale": s_ransac, "ransac_fitness": ransac.fitness, "ransac_rmse": ransac.inlier_rmse,
+    icp = _o3d_icp(source, target, v, ransac.transformation, with_scaling=not scaled)
+    m = _finite_pose(icp.transformation, "ICP")
+    if scaled:
+        m = compose_prescale(m, k)
+    info = {"known_scale": k, "ransac_attempts": attempt + 1, "ransac_scale": s_ransac,
+            "ransac_fitness": ransac.fitness, "ransac_rmse": ransac.inlier_rmse,
             "icp_fitness": icp.fitness, "icp_rmse": icp.inlier_rmse,
             "scan_down": len(src_down.points), "model_down": len(tgt_down.points)}
+    return similarity_from_matrix(m) + (info,)
+
+
+class _StdoutToDevnull:
+    """Send file descriptor 1 to /dev/null meanwhile (TEASER++ prints its progress there from C++)."""
+
+    def __enter__(self):
+        sys.stdout.flush()
+        self.saved = os.dup(1)
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, 1)
+        os.close(null)
+
+    def __exit__(self, *exc):
+        os.dup2(self.saved, 1)
+        os.close(self.saved)
+
+
+def _teaser_solver(v, estimate_scaling):
+    import teaserpp_python as tpp
+    params = tpp.RobustRegistrationSolver.Params()
+    params.noise_bound = TEASER_NOISE_BOUND * v
+    params.estimate_scaling = estimate_scaling
+    return tpp.RobustRegistrationSolver(params)
+
+
+def run_teaser(model, scan, case):
+    """FPFH correspondences (as the open3d peer), TEASER++, then Open3D ICP. Returns (s, R, T, info).
+
+    The scan is pre-scaled (known scale, or the RMS-radius ratio); TEASER++
+    estimates the scale only when it is unknown, and ICP then runs with
+    scaling; with a known scale both are rigid.
+    """
+    import open3d as o3d
+    reg = o3d.pipelines.registration
+    o3d.utility.random.seed(int(case.get("seed", 0)) & 0x7FFFFFFF)
+    v = OPEN3D_VOXEL_FRAC * float(case["diag"])
+    k, known = prescale(model, scan, case)
+    source, target = _o3d_cloud(k * scan), _o3d_cloud(model)
+    src_down, src_fpfh = _o3d_features(source, v)
+    tgt_down, tgt_fpfh = _o3d_features(target, v)
+    corres = np.asarray(reg.correspondences_from_features(src_fpfh, tgt_fpfh, True))
+    if len(corres) < 3:
+        raise ValueError(f"{len(corres)} FPFH correspondences")
+    src = np.ascontiguousarray(np.asarray(src_down.points)[corres[:, 0]].T)
+    dst = np.ascontiguousarray(np.asarray(tgt_down.points)[corres[:, 1]].T)
+    solver = _teaser_solver(v, estimate_scaling=not known)
+    with _StdoutToDevnull():
+        solver.solve(src, dst)
+    sol = solver.getSolution()  # the Python binding has no `valid` flag
+    init = np.eye(4)
+    init[:3, :3] = float(sol.scale) * np.asarray(sol.rotation, float)
+    init[:3, 3] = np.asarray(sol.translation, float).reshape(3)
+    _finite_pose(init, "TEASER++")
+    icp = _o3d_icp(source, target, v, init, with_scaling=not known)
+    m = compose_prescale(_finite_pose(icp.transformation, "ICP"), k)
+    info = {"known_scale": known_scale(case), "prescale": k, "correspondences": len(corres),
+            "teaser_scale": float(sol.scale),
+            "teaser_max_clique": len(solver.getInlierMaxClique()),
+            "teaser_rotation_inliers": len(solver.getRotationInliers()),
+            "teaser_translation_inliers": len(solver.getTranslationInliers()),
+            "icp_fitness": icp.fitness, "icp_rmse": icp.inlier_rmse,
+            "scan_down": len(src_down.points), "model_down": len(tgt_down.points)}
+    return similarity_from_matrix(m) + (info,)
+
+
+def run_kiss_matcher(model, scan, case):
+    """KISS-Matcher (rigid), then Open3D ICP. Returns (s, R, T, info).
+
+    The scan is pre-scaled (known scale, or the RMS-radius ratio) and
+    KISS-Matcher registers it rigidly; ICP then runs with scaling when the
+    scale is unknown, rigid when it is known. KISS-Matcher sees both clouds
+    divided by diag (unit diagonal): its config has absolute thresholds (a
+    voxel of at least 5e-3, noise bounds clamped at 1.0).
+    """
+    import open3d as o3d
+    import kiss_matcher as km
+    diag = float(case["diag"])
+    v = OPEN3D_VOXEL_FRAC * diag
+    k, known = prescale(model, scan, case)
+    src = np.ascontiguousarray(k * scan / diag, dtype=np.float32)
+    tgt = np.ascontiguousarray(model / diag, dtype=np.float32)
+    matcher = km.KISSMatcher(km.KISSMatcherConfig(voxel_size=OPEN3D_VOXEL_FRAC))
+    sol = matcher.estimate(list(src), list(tgt))
+    init = np.eye(4)
+    init[:3, :3] = np.asarray(sol.rotation, float)
+    init[:3, 3] = np.asarray(sol.translation, float).reshape(3) * diag
+    _finite_pose(init, "KISS-Matcher")
+    o3d.utility.random.seed(int(case.get("seed", 0)) & 0x7FFFFFFF)
+    source, target = _o3d_cloud(k * scan), _o3d_cloud(model)
+    icp = _o3d_icp(source, target, v, init, with_scaling=not known)
+    m = compose_prescale(_finite_pose(icp.transformation, "ICP"), k)
+    info = {"known_scale": known_scale(case), "prescale": k, "kiss_valid": bool(sol.valid),
+            "kiss_rotation_inliers": int(matcher.get_num_rotation_inliers()),
+            "kiss_final_inliers": int(matcher.get_num_final_inliers()),
+            "kiss_initial_correspondences": len(matcher.get_initial_correspondences()),
+            "icp_fitness": icp.fitness, "icp_rmse": icp.inlier_rmse}
     return similarity_from_matrix(m) + (info,)
 
 
@@ -379,7 +540,8 @@ def run_truth(model, scan, case):
     return float(t["scale"]), np.asarray(t["rotation"], float), np.asarray(t["translation"], float), {}
 
 
-METHOD_FUNCS = {"open3d": run_open3d, "cpd": run_cpd, "truth": run_truth}
+METHOD_FUNCS = {"open3d": run_open3d, "cpd": run_cpd, "teaser": run_teaser,
+                "kiss-matcher": run_kiss_matcher, "truth": run_truth}
 
 
 def truth_residual(model, scan, case):
@@ -448,10 +610,14 @@ def format_table(summary, methods):
 
 def prepare(methods, threads):
     """Import the methods' packages (so that imports are not timed) and bound threads."""
-    if "open3d" in methods:
+    if {"open3d", "teaser", "kiss-matcher"} & set(methods):
         import open3d as o3d
         o3d.utility.set_max_threads(threads)
         o3d.utility.set_verbosity_level(o3d.utility.VerbosityLevel.Error)
+    if "teaser" in methods:
+        import teaserpp_python  # noqa: F401
+    if "kiss-matcher" in methods:
+        import kiss_matcher  # noqa: F401
     if "cpd" in methods:
         import warnings
         with warnings.catch_warnings():
@@ -513,18 +679,59 @@ def run(directory, methods, limit=None, first=False, out=None, verbose=True, thr
 
 
 def parameters():
-    return {k: v for k, v in globals().items() if k.startswith(("OPEN3D_", "CPD_"))}
+    return {k: v for k, v in globals().items() if k.startswith(("OPEN3D_", "CPD_", "TEASER_"))}
 
 
 def versions(methods):
     v = {"python": sys.version.split()[0], "numpy": np.__version__}
-    if "open3d" in methods:
+    from importlib.metadata import version
+    if {"open3d", "teaser", "kiss-matcher"} & set(methods):
         import open3d
         v["open3d"] = open3d.__version__
     if "cpd" in methods:
-        from importlib.metadata import version
         v["pycpd"] = version("pycpd")
+    if "teaser" in methods:
+        v["cmeel-teaser-plusplus"] = version("cmeel-teaser-plusplus")
+    if "kiss-matcher" in methods:
+        v["kiss-matcher"] = version("kiss-matcher")
     return v
+
+
+def merge(paths, out=None):
+    """Merge --out files of runs on the same cases (e.g. one per venv) into one report.
+
+    Cases are matched by id; each file adds its methods' entries. The merged
+    "versions" keeps each file's (python, numpy and the methods' packages),
+    keyed by method.
+    """
+    reports = [json.load(open(p)) for p in paths]
+    base = reports[0]
+    methods, cases, order = [], {}, []
+    versions_by_method = {}
+    for rep in reports:
+        for key in ("suite", "split", "seed", "tolerance"):
+            if rep.get(key) != base.get(key):
+                raise ValueError(f"{key} differs between the files to merge")
+        for m in rep["methods"]:
+            if m in methods:
+                raise ValueError(f"method {m} is in more than one file")
+            methods.append(m)
+            versions_by_method[m] = rep.get("versions")
+        for c in rep["cases"]:
+            if c["id"] not in cases:
+                cases[c["id"]] = {k: v for k, v in c.items() if k != "methods"} | {"methods": {}}
+                order.append(c["id"])
+            cases[c["id"]]["methods"].update(c["methods"])
+    results = [cases[i] for i in order]
+    report = {"suite": base.get("suite"), "split": base.get("split"), "seed": base.get("seed"),
+              "tolerance": base["tolerance"], "methods": methods,
+              "threads": {m: rep.get("threads") for rep in reports for m in rep["methods"]},
+              "parameters": base.get("parameters"), "versions": versions_by_method,
+              "merged_from": list(paths), "cases": results, "summary": summarise(results, methods)}
+    if out:
+        with open(out, "w") as f:
+            json.dump(report, f, indent=1)
+    return report
 
 
 # ---------------------------------------------------------------- self-test
@@ -596,25 +803,35 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("dir", nargs="?", help="export directory holding cases.json")
     ap.add_argument("--methods", default=",".join(ALL_METHODS),
-                    help="comma-separated: open3d,cpd (and truth: the truth itself, a scoring check)")
+                    help="comma-separated: open3d,cpd,teaser,kiss-matcher (and truth: the truth itself, "
+                         "a scoring check); default open3d,cpd. teaser needs the Python 3.10 venv")
     ap.add_argument("--limit", type=int, help="run N cases spread evenly over the file")
     ap.add_argument("--first", action="store_true", help="with --limit: take the first N cases instead")
     ap.add_argument("--out", help="write per-case results and summaries as JSON here")
     ap.add_argument("--threads", type=int, default=1,
                     help="CPU threads for Open3D (TBB) and BLAS; default 1 (repeatable RANSAC, 0 = all)")
     ap.add_argument("--quiet", action="store_true", help="no per-case lines on stderr")
-    ap.add_argument("--selftest", action="store_true", help="check scoring and the pycpd conversion, then exit")
+    ap.add_argument("--selftest", action="store_true",
+                    help="check scoring, the pose conventions of the installed peers and the known-scale "
+                         "paths, then exit")
+    ap.add_argument("--merge", nargs="+", metavar="JSON",
+                    help="merge --out files of runs on the same cases (e.g. one per venv), print the table; "
+                         "--out writes the merged JSON")
     a = ap.parse_args(argv)
     if a.selftest:
         selftest()
         return 0
-    if not a.dir:
-        ap.error("DIR is required")
-    methods = [m.strip() for m in a.methods.split(",") if m.strip()]
-    bad = [m for m in methods if m not in METHOD_FUNCS]
-    if bad:
-        ap.error(f"unknown method(s) {bad}; known: {list(METHOD_FUNCS)}")
-    report = run(a.dir, methods, a.limit, a.first, a.out, verbose=not a.quiet, threads=a.threads)
+    if a.merge:
+        report = merge(a.merge, a.out)
+        methods = report["methods"]
+    else:
+        if not a.dir:
+            ap.error("DIR is required")
+        methods = [m.strip() for m in a.methods.split(",") if m.strip()]
+        bad = [m for m in methods if m not in METHOD_FUNCS]
+        if bad:
+            ap.error(f"unknown method(s) {bad}; known: {list(METHOD_FUNCS)}")
+        report = run(a.dir, methods, a.limit, a.first, a.out, verbose=not a.quiet, threads=a.threads)
     tol = report["tolerance"]
     print(f"suite {report['suite']} split {report['split']}: {len(report['cases'])} cases, tolerance "
           f"{tol['rotation_deg']} deg / {100 * tol['translation_frac']:g}% diag / {100 * tol['scale_frac']:g}% scale")

@@ -97,6 +97,8 @@ pub struct PfIcpSettings {
     /// What is known of the scale (`--scale`, `--scale-range`): every stage keeps the scale
     /// inside; a fixed scale is no parameter of the filter, the polish or the covariance.
     pub scale: ScaleBounds,
+    /// Where the sensor was, in the scan's frame (`--viewpoint`), if known.
+    pub viewpoint: Option<Point3<f64>>,
 }
 
 impl Default for PfIcpSettings {
@@ -118,6 +120,7 @@ impl Default for PfIcpSettings {
             patience: Some(8),
             search: Some(SearchSettings::default()),
             scale: ScaleBounds::FREE,
+            viewpoint: None,
         }
     }
 }

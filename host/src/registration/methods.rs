@@ -77,8 +77,8 @@ pub struct Outcome {
 /// ICP as a baseline (Sparse ICP and EM-ICP likewise): from the identity with the paper's scale formula (Algorithm 2's
 /// ratio of spreads). The least-squares scale, exact for good pairs, collapses towards zero
 /// from a far start (the scan shrinks onto a patch of the model and the MSD with it).
-fn baseline(settings: IcpSettings, cap: usize) -> IcpSettings {
-    IcpSettings { max_iterations: cap, scale: ScaleRule::Ratio, ..settings }
+fn baseline(settings: IcpSettings, cap: usize, bounds: crate::geometry::ScaleBounds) -> IcpSettings {
+    IcpSettings { max_iterations: cap, scale: ScaleRule::Ratio, scale_bounds: bounds, ..settings }
 }
 
 /// Run `method` on `scan` against the model behind `nn`.
@@ -91,9 +91,9 @@ pub fn run(method: Method, nn: &NearestNeighbours, scan: &[Point3<f64>], setting
             let r = register(nn, scan, &settings.pf);
             (r.registration.clone(), Some(Box::new(r)))
         }
-        Method::Icp => (icp(nn, scan, &id, &baseline(IcpSettings::default(), cap)), None),
-        Method::Welsch => (icp(nn, scan, &id, &baseline(IcpSettings::welsch(), cap)), None),
-        Method::Cauchy => (icp(nn, scan, &id, &baseline(IcpSettings::cauchy(), cap)), None),
+        Method::Icp => (icp(nn, scan, &id, &baseline(IcpSettings::default(), cap, settings.pf.scale)), None),
+        Method::Welsch => (icp(nn, scan, &id, &baseline(IcpSettings::welsch(), cap, settings.pf.scale)), None),
+        Method::Cauchy => (icp(nn, scan, &id, &baseline(IcpSettings::cauchy(), cap, settings.pf.scale)), None),
         Method::SparseIcp => (
             sparse_icp(
                 nn,

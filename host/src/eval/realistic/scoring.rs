@@ -101,7 +101,8 @@ pub fn inside_95(d2: f64, dof: usize) -> bool {
 /// positive definite).
 pub fn mahalanobis2(c: &crate::pf_icp::conclusion::Conclusion, truth: &Pose, at: &Point3<f64>) -> Option<(f64, usize)> {
     let e = crate::pf_icp::conclusion::local_error(&c.pose, truth, at);
-    let k: Vec<usize> = (0..7).filter(|&i| c.uncertainty.sigma[i].is_some()).collect();
+    // A parameter the user fixed (sigma 0, the scale under `--scale`) has no error to weigh.
+    let k: Vec<usize> = (0..7).filter(|&i| c.uncertainty.sigma[i].is_some_and(|s| s > 0.0)).collect();
     let n = k.len();
     let m = nalgebra::DMatrix::from_fn(n, n, |a, b| c.uncertainty.covariance[k[a]][k[b]].unwrap_or(0.0));
     let v = nalgebra::DVector::from_fn(n, |a, _| e[k[a]]);
