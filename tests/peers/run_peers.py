@@ -2,7 +2,9 @@
 """Run peer registration methods on benchmark cases exported by the Rust tool.
 
     pficp eval --suite realistic --export DIR
-    python3 tests/peers/run_peers.py DIR [--methods open3d,cpd] [--limit N] [--out peers.json]
+    python3 tests/peers/run_peers.py DIR [--methods open3d,cpd,kiss-matcher] [--limit N] [--out peers.json]
+    python3.10 tests/peers/run_peers.py DIR --methods teaser --out teaser.json   (the Python 3.10 venv)
+    python3 tests/peers/run_peers.py --merge peers.json teaser.json [--out all.json]
 
 DIR/cases.json lists the cases (format: tests/peers/README.md). Each case
 has a model cloud, a scan cloud and the true pose d = s R m + T, which maps
@@ -12,6 +14,15 @@ returned pose is in the same convention as the truth.
 
 Methods and their parameters (fixed for every case and family; no per-case
 tuning; lengths are fractions of the case's "diag", the model's diagonal):
+
+Known scale: a case's "known_scale" is null (or missing) when its family's
+scale is unknown to the method, else the scale the user knows (1.0 for
+metric families). Then every method except cpd multiplies the scan by it
+first, registers rigidly and composes the scale back into the pose (the
+scale error is then exactly that of known_scale). teaser and kiss-matcher
+also pre-scale when the scale is unknown: by the ratio of RMS radii about
+the centroids, model over scan, and then estimate the scale (TEASER++) and
+refine it (ICP with scaling). cpd ignores known_scale.
 
 open3d -- Open3D's global registration tutorial: RANSAC on FPFH feature
     correspondences, then ICP point-to-point, both with scale estimation.
@@ -59,6 +70,45 @@ open3d -- Open3D's global registration tutorial: RANSAC on FPFH feature
               (Open3D takes a signed 32-bit seed; exported seeds are 64-bit).
       pose    Open3D returns a 4x4 [[A, t], [0, 1]] with A = s R:
               s = cbrt(det A), R = nearest rotation to A / s (SVD), T = t.
+      known scale k: the scan is multiplied by k; RANSAC and ICP are rigid
+              (with_scaling False) and RANSAC's edge checker is the
+              tutorial's 0.9 (OPEN3D_EDGE_SIMILARITY_KNOWN; no scale to
+              admit, and no collapse to guard against); the pose's A is
+              multiplied by k. The unknown-scale path is as above.
+
+teaser -- FPFH correspondences, TEASER++ (cmeel-teaser-plusplus 2.0's
+      teaserpp_python; CPython 3.10 and numpy < 2 only), then Open3D ICP.
+      pre-scale k = known_scale, else RMS radius (model) / RMS radius (scan)
+      features the open3d peer's: voxel v = 0.05 diag, normals 2 v / 30,
+              FPFH 5 v / 100, on k * scan and on the model.
+      correspondences  Open3D's correspondences_from_features(mutual_filter
+              True): mutual nearest neighbours in FPFH space, the same set
+              as the open3d peer's RANSAC builds (Open3D keeps every nearest
+              neighbour instead when fewer than 10 % are mutual).
+      TEASER++ RobustRegistrationSolver.Params() defaults except
+              noise_bound = TEASER_NOISE_BOUND * v = v (the default 0.01 is
+              absolute; TEASER++'s FPFH example uses the voxel size) and
+              estimate_scaling = True only when the scale is unknown (the
+              default True; False when known). Defaults kept: cbar2 1,
+              GNC-TLS rotation (factor 1.4, 100 iterations, cost threshold
+              1e-6), PMC_EXACT max clique (time limit 3600 s), chain TIM graph.
+              Its C++ progress messages on stdout are sent to /dev/null.
+      ICP     as the open3d peer's (0.5 v, point-to-point, 100 iterations)
+              from TEASER++'s pose, with scaling when the scale is unknown,
+              rigid when known. Pose = ICP's with A multiplied by k.
+
+kiss-matcher -- KISS-Matcher 1.0.2 (rigid global registration), then Open3D ICP.
+      pre-scale k as teaser's.
+      KISS-Matcher sees k * scan / diag and model / diag (unit diagonal,
+              because its config has absolute thresholds: a voxel below 5e-3
+              is refused and noise bounds above 1.0 are clamped) with
+              KISSMatcherConfig(voxel_size = 0.05), i.e. v; every other
+              setting its default (normal radius 3 v, FPFH radius 5 v,
+              ROBIN noise bound gain 1.0, solver noise bound gain 0.75,
+              ratio test on, no linearity filter, at most 5000
+              correspondences). Its translation is multiplied back by diag.
+      ICP     as teaser's, from KISS-Matcher's pose (its identity when it
+              reports an invalid solution; info.kiss_valid records it).
 
 cpd -- pycpd's RigidRegistration (Coherent Point Drift, rigid + scale):
       X (fixed) = model, Y (moving) = scan.
@@ -98,14 +148,17 @@ floor(i * len / N)), so every family in a family-grouped file is sampled;
 --first takes the first N instead.
 
 Threads: --threads N (default 1) bounds Open3D (o3d.utility.set_max_threads)
-and BLAS (OMP/OPENBLAS/MKL_NUM_THREADS, unless already set). With more than
+and BLAS and OpenMP (OMP/OPENBLAS/MKL_NUM_THREADS, unless already set; TEASER++'s
+max clique uses OpenMP). With more than
 one thread Open3D's RANSAC is not repeatable even with a fixed seed: its
 TBB workers share one random generator, so which draws each worker gets
 varies from run to run. One thread makes runs repeat and times a single
 core; 0 lets Open3D use every core.
 
-Self-check: `run_peers.py --selftest` checks the scoring rule and the pycpd
-pose conversion on a synthetic case with a known pose.
+Self-check: `run_peers.py --selftest` checks the scoring rule, the
+pre-scaling helpers, the pycpd pose conversion on a synthetic case with a
+known pose, and each installed Open3D-based peer (open3d, teaser,
+kiss-matcher) on a synthetic surface with the scale unknown and known.
 """
 
 import argparse
@@ -466,6 +519,8 @@ def run_teaser(model, scan, case):
     icp = _o3d_icp(source, target, v, init, with_scaling=not known)
     m = compose_prescale(_finite_pose(icp.transformation, "ICP"), k)
     info = {"known_scale": known_scale(case), "prescale": k, "correspondences": len(corres),
+            # Open3D keeps every nearest neighbour when fewer than 10 % are mutual
+            "correspondences_not_mutual": bool(len(corres) == len(src_down.points)),
             "teaser_scale": float(sol.scale),
             "teaser_max_clique": len(solver.getInlierMaxClique()),
             "teaser_rotation_inliers": len(solver.getRotationInliers()),
@@ -500,7 +555,12 @@ def run_kiss_matcher(model, scan, case):
     o3d.utility.random.seed(int(case.get("seed", 0)) & 0x7FFFFFFF)
     source, target = _o3d_cloud(k * scan), _o3d_cloud(model)
     icp = _o3d_icp(source, target, v, init, with_scaling=not known)
-    m = compose_prescale(_finite_pose(icp.transformation, "ICP"), k)
+    if not np.all(np.isfinite(np.asarray(icp.transformation))):
+        # seen when KISS-Matcher returns its invalid solution (identity) and ICP then has ~1 correspondence
+        raise ValueError(f"non-finite ICP transformation (KISS-Matcher valid={bool(sol.valid)}, "
+                         f"{len(matcher.get_initial_correspondences())} initial correspondences, "
+                         f"ICP {len(icp.correspondence_set)} correspondences)")
+    m = compose_prescale(np.asarray(icp.transformation), k)
     info = {"known_scale": known_scale(case), "prescale": k, "kiss_valid": bool(sol.valid),
             "kiss_rotation_inliers": int(matcher.get_num_rotation_inliers()),
             "kiss_final_inliers": int(matcher.get_num_final_inliers()),
@@ -777,6 +837,18 @@ def selftest():
     s, r, t = similarity_from_matrix(m)
     assert abs(s - s_t) < 1e-12 and np.allclose(r, r_t) and np.allclose(t, t_t)
     print("scoring: ok")
+    # the pre-scaling helpers: a pose found for k * m, composed, maps m the same way
+    k, a = 1.7, s_t * r_t
+    m4 = np.eye(4)
+    m4[:3, :3], m4[:3, 3] = a, t_t
+    pts = rng.normal(size=(5, 3))
+    assert np.allclose(pts @ compose_prescale(m4, k)[:3, :3].T, (k * pts) @ a.T)
+    assert known_scale({}) is None and known_scale({"known_scale": None}) is None \
+        and known_scale({"known_scale": 2}) == 2.0
+    assert prescale(3 * pts, pts, {}) == (prescale(3 * pts, pts, {})[0], False) \
+        and abs(prescale(3 * pts, pts, {})[0] - 3) < 1e-12 and prescale(pts, pts, {"known_scale": 0.5}) == (0.5, True)
+    print("pre-scaling helpers: ok")
+    selftest_peers(rng, tol)
     # pycpd conversion on a synthetic case: model d = s R m + T of a scan m
     try:
         import pycpd  # noqa: F401
@@ -797,6 +869,45 @@ def selftest():
           f"scale {e['scale_frac']:.2e}")
     assert e["success"] and e["rotation_deg"] < 0.1, e
     print("pycpd conversion: ok")
+
+
+def selftest_peers(rng, tol):
+    """Each installed Open3D-based peer on a synthetic surface, once with the scale unknown and once known.
+
+    The surface is make_sample.py's asymmetric one (FPFH needs a surface, not
+    a blob); the scan is sampled independently of the model with 0.5 % noise,
+    rotated by 25 deg (R and R^T are 50 deg apart), scale 0.8.
+    """
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    import make_sample
+    model = make_sample.sample_surface(rng, 2000, make_sample.radius_asym)
+    diag = float(np.linalg.norm(model.max(0) - model.min(0)))
+    scan_d = make_sample.sample_surface(rng, 1000, make_sample.radius_asym)
+    scan_d = scan_d + rng.normal(scale=0.005 * diag, size=scan_d.shape)
+    s_t, r_t, t_t = 0.8, random_rotation(rng, exact_deg=25.0), np.array([0.1, -0.2, 0.15]) * diag
+    scan = (scan_d - t_t) @ r_t / s_t
+    base = {"truth": {"scale": s_t, "rotation": r_t.tolist(), "translation": t_t.tolist()},
+            "diag": diag, "reference_point": scan.mean(0).tolist(), "seed": 5,
+            "symmetries": [{"rotation": np.eye(3).tolist(), "centre": [0, 0, 0]}]}
+    modules = {"open3d": ("open3d",), "teaser": ("open3d", "teaserpp_python"),
+               "kiss-matcher": ("open3d", "kiss_matcher")}
+    for method, mods in modules.items():
+        try:
+            for mod in mods:
+                __import__(mod)
+        except ImportError:
+            print(f"{method}: not installed, not checked")
+            continue
+        prepare([method], 1)
+        for ks in (None, s_t):
+            *est, info = METHOD_FUNCS[method](model, scan, dict(base, known_scale=ks))
+            e = score(est, base, tol)
+            print(f"{method} ({'scale known' if ks else 'scale unknown'}): rotation {e['rotation_deg']:.2f} deg, "
+                  f"translation {100 * e['translation_frac']:.2f} %, scale {100 * e['scale_frac']:.2f} %")
+            assert e["success"], (method, ks, e, info)
+            if ks is not None:
+                assert e["scale_frac"] < 1e-9, e  # rigid after pre-scaling: the known scale comes back exactly
+        print(f"{method}: ok")
 
 
 def main(argv=None):
