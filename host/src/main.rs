@@ -384,6 +384,9 @@ struct EvalArgs {
     /// [default: the register command's].
     #[arg(long, requires = "board_reference")]
     board_points: Option<usize>,
+    /// Realistic suite: do not tell PF-ICP where the camera was in the camera-view families.
+    #[arg(long)]
+    without_viewpoint: bool,
     /// Realistic suite: export every case (model, scan, truth, symmetries) to this folder
     /// for the peers' script (tests/peers).
     #[arg(long, value_name = "DIR")]
@@ -735,6 +738,7 @@ fn eval_realistic(a: &EvalArgs) -> Result<()> {
         export: a.export.clone(),
         board: a.board_reference,
         board_points: board_points(a)?,
+        viewpoint: !a.without_viewpoint,
         ..Default::default()
     };
     let report = realistic::run(&opts)?;

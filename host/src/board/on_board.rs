@@ -402,6 +402,7 @@ pub fn finish(
         None,
         settings.polish_iterations,
         &settings.scale,
+        &plan.prior.evidence,
     );
     let polished = Registration {
         pose: conclusion.pose,

@@ -31,6 +31,7 @@
 
 use crate::cloud::{bbox_diagonal, centroid};
 use crate::geometry::{Centred, Pose, ScaleBounds};
+use crate::pf_icp::evidence::Evidence;
 use crate::pf_icp::hypotheses::{same_pose, Hypothesis};
 use crate::pf_icp::surface::{Surface, COST_CAP};
 use nalgebra::Point3;
@@ -158,6 +159,7 @@ pub fn conclude(
     particles: Option<(&Centred, &[Vec<f64>])>,
     polish_iterations: usize,
     bounds: &ScaleBounds,
+    evidence: &Evidence,
 ) -> Conclusion {
     let nn = surface.nn();
     let diag = bbox_diagonal(nn.points());
@@ -185,7 +187,7 @@ pub fn conclude(
             } else {
                 return None;
             };
-            let c = surface.costs(&compared, &q, cap);
+            let c = evidence.tight_costs(surface, &compared, &q);
             Some((q, c))
         })
         .collect();
@@ -257,7 +259,7 @@ pub fn conclude(
             (inliers.iter().map(|x| x * x).sum::<f64>() / inliers.len() as f64).sqrt()
         },
         inlier_distance,
-        cost: if stride > 1 { surface.cost(scan, &pose, cap) } else { mean(&costs) },
+        cost: surface.cost(scan, &pose, cap),
     };
     Conclusion {
         pose,

@@ -28,6 +28,7 @@
 use crate::cloud::centroid;
 use crate::geometry::{Pose, ScaleBounds};
 use crate::nn::NearestNeighbours;
+use crate::pf_icp::evidence::Evidence;
 use crate::pf_icp::surface::Surface;
 use crate::registration::svd_match::{match_pairs_within, ScaleRule};
 use nalgebra::{Matrix3, Point3, UnitQuaternion};
@@ -180,8 +181,9 @@ pub fn grid_starts(scan: &[Point3<f64>], model: &[Point3<f64>], n: usize, bounds
         .collect()
 }
 
-/// Refine `starts` and return the distinct hypotheses, best first (empty when every one is
-/// implausible: the caller keeps its own start then). `exact` poses are ranked as they
+/// Refine `starts` and return the distinct hypotheses, best first by the wide cost in the
+/// scan's units ([`Evidence::wide_cost`]: a scan shrunk onto part of the model gains
+/// nothing), empty when every one is implausible (the caller keeps its own start then). `exact` poses are ranked as they
 /// are, without refinement. `sample` is the cost sample (a random subset of the scan, in
 /// random order); distinctness is judged at its centroid. Every refined scale lies in
 /// `bounds`; a pose outside them is implausible.
@@ -192,10 +194,10 @@ pub fn search(
     starts: &[Pose],
     settings: &SearchSettings,
     bounds: &ScaleBounds,
+    evidence: &Evidence,
 ) -> Vec<Hypothesis> {
     let nn = surface.nn();
     let diag = crate::cloud::bbox_diagonal(nn.points());
-    let cap = crate::pf_icp::surface::COST_CAP * diag;
     let at = centroid(sample);
     let coarse_pts = &sample[..settings.coarse_points.min(sample.len())];
     let fine_pts = &sample[..settings.fine_points.min(sample.len())];
@@ -219,7 +221,7 @@ pub fn search(
             .par_iter()
             .map(|s| {
                 let pose = trimmed_icp(nn, pts, s, iterations, settings.trim, rule, bounds);
-                Hypothesis { pose, cost: surface.cost(cost_pts, &pose, cap) }
+                Hypothesis { pose, cost: evidence.wide_cost(surface, cost_pts, &pose) }
             })
             .collect();
         out.retain(plausible);
@@ -241,7 +243,9 @@ pub fn search(
         pass(&best(coarse, settings.keep), fine_pts, settings.fine_iterations, ScaleRule::LeastSquares, sample);
     // The exact poses, unrefined, join the last ranking (a stable sort: ties keep the
     // refined ones first, as before).
-    fine.extend(exact.iter().map(|p| Hypothesis { pose: *p, cost: surface.cost(sample, p, cap) }).filter(plausible));
+    fine.extend(
+        exact.iter().map(|p| Hypothesis { pose: *p, cost: evidence.wide_cost(surface, sample, p) }).filter(plausible),
+    );
     fine.sort_by(|a, b| a.cost.total_cmp(&b.cost));
     distinct(fine, &at, diag)
 }

@@ -27,6 +27,7 @@
 
 pub mod conclusion;
 pub mod covariance;
+pub mod evidence;
 pub mod features;
 pub mod hessian;
 pub mod hypotheses;
@@ -43,6 +44,7 @@ use crate::pf_icp::init::{initial_pose, InitMode, InitialPose};
 use crate::pf_icp::kmeans::Pairing;
 use crate::pf_icp::surface::Surface;
 use crate::registration::icp::{icp, IcpSettings, Registration};
+use evidence::Evidence;
 use hypotheses::{Hypothesis, SearchSettings};
 use nalgebra::Point3;
 use particle_filter::{Adaptive, FilterSettings, Objective, WeighError, Weighed};
@@ -343,6 +345,8 @@ pub struct Prior {
     pub threshold_max: f64,
     /// The model's bounding-box diagonal.
     pub diag: f64,
+    /// The scan's own evidence (noise, caps, viewpoint) the poses are ranked by.
+    pub evidence: Evidence,
     /// Wall time of the clustering and the start.
     pub clustering_time: Duration,
     /// Wall time of the covariance.
@@ -364,6 +368,8 @@ fn prior_on(surface: &Surface, scan: &[Point3<f64>], settings: &PfIcpSettings) -
 
     let t0 = Instant::now();
     let bounds = &settings.scale;
+    let evidence =
+        Evidence::new(surface, scan, bounds.clamp(hypotheses::radius_ratio(scan, model)), settings.viewpoint);
     let initial = initial_pose(nn, scan, &sample, k, settings.seed, settings.init, bounds);
     let hypotheses = match &settings.search {
         Some(search) => {
@@ -376,7 +382,7 @@ fn prior_on(surface: &Surface, scan: &[Point3<f64>], settings: &PfIcpSettings) -
                 settings.seed,
                 bounds,
             ));
-            hypotheses::search(surface, &sample, &[initial.pose], &starts, search, bounds)
+            hypotheses::search(surface, &sample, &[initial.pose], &starts, search, bounds, &evidence)
         }
         None => Vec::new(),
     };
@@ -425,6 +431,7 @@ fn prior_on(surface: &Surface, scan: &[Point3<f64>], settings: &PfIcpSettings) -
         threshold_avg: settings.threshold_avg * diag,
         threshold_max: settings.threshold_max * diag,
         diag,
+        evidence,
         clustering_time: t1 - t0,
         covariance_time: t2 - t1,
     }
@@ -452,6 +459,7 @@ pub fn register_with(
         threshold_avg,
         threshold_max,
         diag,
+        evidence,
         clustering_time,
         covariance_time,
         ..
@@ -498,6 +506,7 @@ pub fn register_with(
         Some((&frame, &filtered.particles)),
         settings.polish_iterations,
         &settings.scale,
+        &evidence,
     );
     let polished = Registration {
         pose: conclusion.pose,

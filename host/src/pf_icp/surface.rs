@@ -192,7 +192,10 @@ impl<'a> Surface<'a> {
                 let n = contacts[i].normal;
                 let r = n.dot(&(q[i] - contacts[i].point));
                 let w = x.cross(&n);
-                let j = SVector::<f64, 7>::from_column_slice(&[w.x, w.y, w.z, n.x, n.y, n.z, n.dot(&x)]);
+                // The residual in the scan's units, r / s: a relative scale step d changes it by
+                // n.x - r (to first order), so that the noise's share of the cost, s^2 sigma^2
+                // a point in the model's units, does not pull the scale down.
+                let j = SVector::<f64, 7>::from_column_slice(&[w.x, w.y, w.z, n.x, n.y, n.z, n.dot(&x) - r]);
                 a += j * j.transpose();
                 b += j * r;
             }

@@ -2,7 +2,9 @@
 //! scans ([`camera_view`]).
 //!
 //! 1. **The camera**: at [`CAMERA_DISTANCE`] diagonals from the shape's bounding-box centre
-//!    in a random direction, looking at the centre (a perspective camera).
+//!    in a random direction, looking at the centre (a perspective camera); the first of up
+//!    to [`DIRECTION_TRIES`] random directions that sees at least the window's share of the
+//!    surface (step 3), else the one that sees the most.
 //! 2. **Self-occlusion**: a point z-buffer in the camera's image (a pixel that the near surface
 //!    leaves empty takes its neighbours' depth). Pixels are
 //!    [`PIXEL_SPACINGS`] times the surface samples' spacing wide at the shape's distance,
@@ -73,26 +75,36 @@ fn spacing(points: &[Point3<f64>]) -> f64 {
     crate::registration::icp::median(&gaps)
 }
 
-/// A camera view of the surface sampled by `points` (uniform by area), `scan_points` points
-/// in all (clutter included; fewer when the window holds fewer), drawn with `rng`.
-pub fn camera_view(points: &[Point3<f64>], diag: f64, scan_points: usize, rng: &mut impl Rng) -> CameraView {
-    let (lo, hi) = crate::cloud::bbox(points);
-    let centre = nalgebra::center(&lo, &hi);
-    let dir = unit_vector(rng);
+/// Directions tried for a camera that sees the window's share of the surface.
+const DIRECTION_TRIES: usize = 20;
+
+/// What a camera in one direction sees.
+struct Sight {
+    camera: Point3<f64>,
+    /// Every point's image coordinates (tangents across the viewing direction) and depth.
+    image: Vec<(f64, f64, f64)>,
+    /// The points it sees.
+    seen: Vec<usize>,
+}
+
+/// The camera at [`CAMERA_DISTANCE`] diagonals from `centre` in direction `dir`, and the
+/// points of `points` (spacing `h`) it sees.
+fn look(points: &[Point3<f64>], centre: &Point3<f64>, diag: f64, h: f64, dir: &Vector3<f64>) -> Sight {
     let camera = centre + dir * (CAMERA_DISTANCE * diag);
     // Image axes: `w` the viewing direction, `u` and `v` across it.
     let w = -dir;
     let helper = if w.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
     let u = w.cross(&helper).normalize();
     let v = w.cross(&u);
-    let h = spacing(points);
     let pixel = PIXEL_SPACINGS * h / (CAMERA_DISTANCE * diag);
-    let project = |p: &Point3<f64>| {
-        let r = p - camera;
-        let depth = r.dot(&w);
-        (r.dot(&u) / depth, r.dot(&v) / depth, depth)
-    };
-    let image: Vec<(f64, f64, f64)> = points.iter().map(project).collect();
+    let image: Vec<(f64, f64, f64)> = points
+        .iter()
+        .map(|p| {
+            let r = p - camera;
+            let depth = r.dot(&w);
+            (r.dot(&u) / depth, r.dot(&v) / depth, depth)
+        })
+        .collect();
     let cell = |x: f64, y: f64| ((x / pixel).floor() as i64, (y / pixel).floor() as i64);
     let mut zbuffer: HashMap<(i64, i64), f64> = HashMap::new();
     for &(x, y, d) in &image {
@@ -118,13 +130,35 @@ pub fn camera_view(points: &[Point3<f64>], diag: f64, scan_points: usize, rng: &
             }
         })
         .collect();
-    let zbuffer = filled;
     let seen: Vec<usize> = (0..points.len())
-        .filter(|&i| image[i].2 <= zbuffer[&cell(image[i].0, image[i].1)] + DEPTH_TOLERANCE * h)
+        .filter(|&i| image[i].2 <= filled[&cell(image[i].0, image[i].1)] + DEPTH_TOLERANCE * h)
         .collect();
+    Sight { camera, image, seen }
+}
+
+/// A camera view of the surface sampled by `points` (uniform by area), `scan_points` points
+/// in all (clutter included; fewer when the window holds fewer), drawn with `rng`.
+pub fn camera_view(points: &[Point3<f64>], diag: f64, scan_points: usize, rng: &mut impl Rng) -> CameraView {
+    let (lo, hi) = crate::cloud::bbox(points);
+    let centre = nalgebra::center(&lo, &hi);
+    let h = spacing(points);
+    let target = (rng.gen_range(VISIBLE_RANGE.0..VISIBLE_RANGE.1) * points.len() as f64).round() as usize;
+    // The first direction that sees at least the window's share of the surface (a folded
+    // surface, or a plate seen edge on, may see less: the best of the tries then).
+    let mut best: Option<Sight> = None;
+    for _ in 0..DIRECTION_TRIES {
+        let sight = look(points, &centre, diag, h, &unit_vector(rng));
+        let enough = sight.seen.len() >= target;
+        if best.as_ref().is_none_or(|b| sight.seen.len() > b.seen.len()) {
+            best = Some(sight);
+        }
+        if enough {
+            break;
+        }
+    }
+    let Sight { camera, image, seen } = best.expect("at least one try");
 
     // The window: the seen points nearest a random seen point in the image.
-    let target = (rng.gen_range(VISIBLE_RANGE.0..VISIBLE_RANGE.1) * points.len() as f64).round() as usize;
     let mut window = seen;
     if window.len() > target {
         let &c = window.choose(rng).expect("a seen point");

@@ -84,6 +84,9 @@ pub struct RealisticOptions {
     pub export: Option<PathBuf>,
     /// Progress on stderr.
     pub progress: bool,
+    /// Give PF-ICP the camera's position in the camera-view families (`--viewpoint`, as a
+    /// depth camera's scans in its own frame give it).
+    pub viewpoint: bool,
 }
 
 impl Default for RealisticOptions {
@@ -100,6 +103,7 @@ impl Default for RealisticOptions {
             out_dir: None,
             export: None,
             progress: true,
+            viewpoint: true,
         }
     }
 }
@@ -254,7 +258,8 @@ pub fn run(opts: &RealisticOptions) -> anyhow::Result<RealisticReport> {
             let surface = crate::pf_icp::surface::Surface::new(&nn);
             // The scale as the family's user knows it.
             let scale = c.known_scale.map_or(opts.pf.scale, ScaleBounds::fixed);
-            let settings = MethodSettings { pf: PfIcpSettings { seed: c.seed, scale, ..opts.pf.clone() } };
+            let viewpoint = if opts.viewpoint { c.viewpoint } else { None };
+            let settings = MethodSettings { pf: PfIcpSettings { seed: c.seed, scale, viewpoint, ..opts.pf.clone() } };
             let mut results: Vec<CaseResult> = opts
                 .methods
                 .iter()
