@@ -162,9 +162,20 @@ pub struct AlternativeRecord {
     pub excess_sigmas: f64,
 }
 
-/// PF-ICP's alternatives, uncertainty and fit (docs in `crate::pf_icp::conclusion`).
+/// PF-ICP's verdict, alternatives, uncertainty and fit (docs in `crate::pf_icp::conclusion`
+/// and `crate::pf_icp::verdict`).
 #[derive(Clone, Debug, Serialize)]
 pub struct Assessment {
+    /// `confident` (act on the pose), `ambiguous` (the answer and its alternatives fit as
+    /// well) or `unreliable` (do not act on it).
+    pub verdict: crate::pf_icp::verdict::Verdict,
+    /// The verdict's reasons in words (empty for `confident`).
+    pub reasons: Vec<String>,
+    /// What the verdict was judged on: `explained` (share of the scan on the surface within
+    /// the noise), `hidden` (share the model would hide from `--viewpoint`, or `null`),
+    /// `scale_at_bound`, `alternatives`, `undetermined`, `widest_sigma` (deg, fraction of the
+    /// diagonal, relative scale).
+    pub checks: crate::pf_icp::verdict::Checks,
     /// Other poses that fit as well within the noise (empty: the pose is unambiguous).
     pub alternatives: Vec<AlternativeRecord>,
     /// Names and order of the covariance's parameters ([`crate::pf_icp::surface::LOCAL_NAMES`]).
@@ -191,6 +202,9 @@ impl Assessment {
     /// From PF-ICP's conclusion.
     pub fn new(c: &crate::pf_icp::conclusion::Conclusion) -> Self {
         Assessment {
+            verdict: c.verdict,
+            reasons: c.reasons.clone(),
+            checks: c.checks.clone(),
             alternatives: c
                 .alternatives
                 .iter()
@@ -205,6 +219,15 @@ impl Assessment {
             inlier_distance: c.fit.inlier_distance,
             cost: c.fit.cost,
         }
+    }
+
+    /// The verdict line: the verdict and its reasons.
+    pub fn verdict_line(&self) -> String {
+        let mut s = format!("verdict      {}", self.verdict.name());
+        if !self.reasons.is_empty() {
+            s += &format!(": {}", self.reasons.join("; "));
+        }
+        s + "\n"
     }
 
     /// The text lines: one-sigma values, fit, ambiguity, undetermined parameters.
@@ -292,6 +315,9 @@ impl RegisterReport {
     /// The human-readable form.
     pub fn text(&self) -> String {
         let mut s = String::new();
+        if let Some(a) = &self.assessment {
+            s += &a.verdict_line();
+        }
         s += &format!("method       {}\n", self.method);
         match &self.port {
             Some(port) => s += &format!("engine       {} ({port})\n", self.engine),

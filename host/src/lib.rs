@@ -2,11 +2,12 @@
 //!
 //! The tree follows the data path:
 //! - [`io`] reads and writes PLY, PCD, XYZ and CSV clouds into a [`cloud::Cloud`]; [`geometry`]
-//!   holds poses and transforms, [`nn`] the nearest-neighbour search every method uses.
+//!   holds poses, transforms and the scale's bounds, [`nn`] the nearest-neighbour search
+//!   every method uses, [`visibility`] what a sensor at a point sees of a cloud.
 //! - [`request::Request`]: one registration (method, engine, settings), checked and run;
 //!   what the CLI's `register` calls.
 //! - [`pf_icp`]: PF-ICP ([`pf_icp::register`]): k-means start and global search, ICP
-//!   covariance, particle filter, polish and conclusion, one module each.
+//!   covariance, particle filter, polish, conclusion and verdict, one module each.
 //! - [`registration`]: ICP (Algorithm 1, [`registration::icp::icp`]) and the other
 //!   baselines, and [`registration::methods::run`], which runs any of them or PF-ICP.
 //! - [`board`]: the board client over the serial line, the on-board and host-driven
@@ -34,3 +35,4 @@ pub mod registration;
 pub mod request;
 #[cfg(test)]
 mod test_support;
+pub mod visibility;

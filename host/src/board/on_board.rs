@@ -399,7 +399,6 @@ pub fn finish(
         scan,
         &filter_pose,
         &plan.prior.hypotheses,
-        None,
         settings.polish_iterations,
         &settings.scale,
         &plan.prior.evidence,

@@ -5,35 +5,42 @@
 //!    search ([`crate::pf_icp::hypotheses`]: the first [`ARBITRATED`] + 1, and any other within
 //!    [`CANDIDATE_COST_FACTOR`] of the best's cost, [`MAX_CANDIDATES`] poses in all) are
 //!    each polished on the scan ([`Surface::polish`]; on [`COMPARE_POINTS`] of a larger one,
-//!    the winner then on all of it); the lowest capped surface cost wins. A filter that
-//!    settled in a wrong basin loses to a hypothesis in the right one.
+//!    the winner then on all of it); the lowest tight cost in the scan's units wins
+//!    ([`Evidence::tight_costs`]: 3 noise sigmas, points the model would hide from a known
+//!    sensor at the cap). A filter that settled in a wrong basin loses to a hypothesis in
+//!    the right one.
 //! 2. **Alternatives** (ambiguity): every other polished hypothesis that differs from the
 //!    answer by more than 5 deg, 2% of the diagonal at the scan's centroid or 2% in scale
 //!    and fits as well within the noise: the mean of its per-point cost excess over the
 //!    answer is below [`ALTERNATIVE_SIGMAS`] standard errors of that mean (a paired test
-//!    over the same scan points; neighbouring points' costs are correlated, so the test is
-//!    liberal and a weakly resolved feature may hide an alternative). An exactly symmetric
-//!    shape lists its symmetric poses; a near-symmetric one whose breaking feature is
-//!    clearly seen lists none.
+//!    over the same scan points; neighbouring points' costs are correlated, so the standard
+//!    error is the cluster-robust one over spatial blocks, an eighth of the scan's
+//!    diagonal wide). An exactly symmetric shape lists its symmetric poses; a
+//!    near-symmetric one whose breaking feature is clearly seen lists none.
 //! 3. **Uncertainty**: the covariance of the local parameters
 //!    [`crate::pf_icp::surface::LOCAL_NAMES`] (translation of the scan centroid's image, scale,
 //!    rotation vector in the model frame) is `k^2 sigma^2 (J^T J)^-1` from the surface
 //!    residuals' curvature ([`Surface::curvature`]), `k` = [`COVARIANCE_INFLATION`] for the
 //!    correlation of neighbouring residuals (calibrated on the realistic benchmark's dev
-//!    split, docs/decisions.md), plus the spread of the filter's last particle set when
-//!    the answer is the filter's own. Parameters the scan cannot determine are named, and their rows and
+//!    split, docs/decisions.md); with the scale fixed, the scale is no parameter (its row
+//!    and column 0). Parameters the scan cannot determine are named, and their rows and
 //!    columns are left out (`None`) instead of printed as a confident number.
 //! 4. **Fit** (as Open3D's `fitness` and `inlier_rmse`, on the surface distance of
 //!    [`Surface::distance2`] rather than to the nearest model point, so that it does not
 //!    depend on the model's sampling): the fraction of scan points within
 //!    [`INLIER_DISTANCE`] of the diagonal of the model's surface, and the RMS of their
 //!    distances.
+//! 5. **Verdict** ([`crate::pf_icp::verdict`]): the share of the scan explained within the
+//!    noise, the share the model would hide from a known sensor, the alternatives, the
+//!    undetermined parameters and the widest one-sigma values decide whether a robot may
+//!    act on the pose.
 
 use crate::cloud::{bbox_diagonal, centroid};
-use crate::geometry::{Centred, Pose, ScaleBounds};
+use crate::geometry::{Pose, ScaleBounds};
 use crate::pf_icp::evidence::Evidence;
 use crate::pf_icp::hypotheses::{same_pose, Hypothesis};
 use crate::pf_icp::surface::{Surface, COST_CAP};
+use crate::pf_icp::verdict::{judge, Checks, Verdict};
 use nalgebra::Point3;
 use nalgebra::Rotation3;
 use rayon::prelude::*;
@@ -112,15 +119,46 @@ pub struct Conclusion {
     pub uncertainty: Uncertainty,
     /// Its fit.
     pub fit: Fit,
+    /// What the verdict was judged on.
+    pub checks: Checks,
+    /// Whether to act on the pose.
+    pub verdict: Verdict,
+    /// The verdict's reasons in words (empty for `confident`).
+    pub reasons: Vec<String>,
 }
 
-fn paired_excess(best: &[f64], other: &[f64]) -> f64 {
+/// Blocks per side of the scan's bounding box for [`paired_excess`]'s standard error.
+const BLOCKS_PER_SIDE: f64 = 8.0;
+
+/// Each point's block: a cube of an eighth of the points' bounding-box diagonal.
+fn blocks(points: &[Point3<f64>]) -> Vec<(i64, i64, i64)> {
+    let (lo, _) = crate::cloud::bbox(points);
+    let side = (bbox_diagonal(points) / BLOCKS_PER_SIDE).max(1e-300);
+    points
+        .iter()
+        .map(|p| {
+            let v = (p - lo) / side;
+            (v.x.floor() as i64, v.y.floor() as i64, v.z.floor() as i64)
+        })
+        .collect()
+}
+
+/// The mean per-point cost excess of `other` over `best`, in standard errors. Neighbouring
+/// points' excesses are correlated (a feature fits or not as a whole), so the standard
+/// error is the cluster-robust one over spatial blocks (`block` per point): the variance
+/// of the mean is the sum over blocks of the squared block sums of deviations over `n^2`.
+fn paired_excess(best: &[f64], other: &[f64], block: &[(i64, i64, i64)]) -> f64 {
     let n = best.len().max(2) as f64;
     let d: Vec<f64> = other.iter().zip(best).map(|(a, b)| a - b).collect();
     let mean = d.iter().sum::<f64>() / n;
-    let var = d.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0);
-    let se = (var / n).sqrt().max(1e-300);
-    mean / se
+    let mut sums: std::collections::HashMap<(i64, i64, i64), f64> = std::collections::HashMap::new();
+    for (x, b) in d.iter().zip(block) {
+        *sums.entry(*b).or_insert(0.0) += x - mean;
+    }
+    let var = sums.values().map(|s| s * s).sum::<f64>() / (n * n);
+    // Never below the independent points' standard error.
+    let independent = d.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0) / n;
+    mean / var.max(independent).sqrt().max(1e-300)
 }
 
 /// The local parameter error of `pose` against `reference` ([`LOCAL_NAMES`], about the
@@ -149,14 +187,13 @@ pub fn candidates(filter_pose: &Pose, hypotheses: &[Hypothesis]) -> Vec<Pose> {
 }
 
 /// Conclude a registration: `filter_pose` from the filter, `hypotheses` of the search
-/// (best first), `particles` the filter's final set in `frame`'s parameters (if any); every
-/// polish keeps the scale within `bounds`.
+/// (best first); every polish keeps the scale within `bounds`; `evidence` ranks the
+/// candidates.
 pub fn conclude(
     surface: &Surface,
     scan: &[Point3<f64>],
     filter_pose: &Pose,
     hypotheses: &[Hypothesis],
-    particles: Option<(&Centred, &[Vec<f64>])>,
     polish_iterations: usize,
     bounds: &ScaleBounds,
     evidence: &Evidence,
@@ -203,38 +240,27 @@ pub fn conclude(
             pose = q;
         }
     }
+    let block = blocks(&compared);
     let mut alternatives: Vec<Alternative> = Vec::new();
     for (i, (p, c)) in polished.iter().enumerate() {
         if i == best || same_pose(p, &pose, &at, diag) || alternatives.iter().any(|a| same_pose(&a.pose, p, &at, diag))
         {
             continue;
         }
-        let z = paired_excess(&costs, c);
+        let z = paired_excess(&costs, c, &block);
         if z < ALTERNATIVE_SIGMAS {
             alternatives.push(Alternative { pose: *p, cost: mean(c), excess_sigmas: z });
         }
     }
     alternatives.sort_by(|a, b| a.cost.total_cmp(&b.cost));
 
-    // Uncertainty: curvature, inflated, plus the particles' spread.
+    // Uncertainty: the curvature's, inflated. (The filter's last particle set is no
+    // posterior: it spreads over the propagation region, a prior's width, and on an exact
+    // answer it reported several degrees.)
     let image = pose.apply(&at);
     let curv = surface.curvature(scan, &pose, &image, bounds.fixed_value().is_some());
     let k2 = COVARIANCE_INFLATION * COVARIANCE_INFLATION * curv.residual_variance;
-    let mut cov = curv.degeneracy.inverse * k2;
-    // The filter's last particle set (unweighted) describes the answer only when the answer
-    // is the filter's own.
-    if let Some((frame, set)) = particles.filter(|_| best == 0) {
-        let poses: Vec<Pose> = set.iter().filter_map(|x| x.as_slice().try_into().ok()).map(|x| frame.pose(x)).collect();
-        if poses.len() > 1 {
-            let errs: Vec<[f64; 7]> = poses.iter().map(|p| local_error(p, &pose, &at)).collect();
-            let m: Vec<f64> = (0..7).map(|k| errs.iter().map(|e| e[k]).sum::<f64>() / errs.len() as f64).collect();
-            for a in 0..7 {
-                for b in 0..7 {
-                    cov[(a, b)] += errs.iter().map(|e| (e[a] - m[a]) * (e[b] - m[b])).sum::<f64>() / errs.len() as f64;
-                }
-            }
-        }
-    }
+    let cov = curv.degeneracy.inverse * k2;
     let known = |k: usize| !curv.degeneracy.free[k];
     let mut covariance = [[None; 7]; 7];
     let mut sigma = [None; 7];
@@ -261,12 +287,34 @@ pub fn conclude(
         inlier_distance,
         cost: surface.cost(scan, &pose, cap),
     };
+    // The verdict's checks.
+    let cap2 = evidence.tight_cap * evidence.tight_cap;
+    let explained = costs.iter().filter(|&&c| c < cap2).count() as f64 / costs.len().max(1) as f64;
+    let hidden = evidence.viewpoint.map(|v| {
+        crate::pf_icp::evidence::hidden(surface, &compared, &pose, &v).iter().filter(|&&h| h).count() as f64
+            / compared.len().max(1) as f64
+    });
+    let at_bound = |b: f64| b.is_finite() && (pose.scale / b - 1.0).abs() < 1e-9;
+    let scale_at_bound = bounds.fixed_value().is_none() && (at_bound(bounds.lo) || at_bound(bounds.hi));
+    let widest = |r: std::ops::Range<usize>, unit: f64| r.filter_map(|k| sigma[k]).fold(0.0f64, f64::max) / unit;
+    let checks = Checks {
+        explained,
+        hidden,
+        scale_at_bound,
+        alternatives: alternatives.len(),
+        undetermined: curv.degeneracy.motions.clone(),
+        widest_sigma: [widest(4..7, 1f64.to_radians()), widest(0..3, diag), widest(3..4, pose.scale)],
+    };
+    let (verdict, reasons) = judge(&checks);
     Conclusion {
         pose,
         from_hypothesis: best != 0,
         alternatives,
         uncertainty: Uncertainty { covariance, sigma, undetermined: curv.degeneracy.motions },
         fit,
+        checks,
+        verdict,
+        reasons,
     }
 }
 

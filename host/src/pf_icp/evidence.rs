@@ -15,15 +15,15 @@
 //!   it, along the sensor's ray, by more than [`HIDDEN_DEPTH`] noise-free spacings) could
 //!   not have been seen: a pose that lays the scan on surface facing away from the sensor,
 //!   or inside the part, is wrong. The model's surface as the sensor would see it is a
-//!   point z-buffer (pixels [`PIXEL_SPACINGS`] model spacings wide at the scan's distance;
-//!   an empty pixel takes its neighbours' depth when most of them see nearer surface).
+//!   point z-buffer ([`crate::visibility`]; pixels [`PIXEL_SPACINGS`] model spacings wide
+//!   at the scan's distance).
 
 use crate::geometry::Pose;
 use crate::nn::NearestNeighbours;
 use crate::pf_icp::surface::Surface;
+use crate::visibility::{DepthImage, View};
 use nalgebra::{Matrix3, Point3, Vector3};
 use rayon::prelude::*;
-use std::collections::HashMap;
 
 /// Neighbours of the scan's noise estimate.
 pub const NOISE_NEIGHBOURS: usize = 10;
@@ -126,53 +126,19 @@ pub fn scan_cost(surface: &Surface, scan: &[Point3<f64>], pose: &Pose, cap: f64)
 /// under `pose` (the module's rule). All `false` when the viewpoint is inside the model's
 /// bounding box or the pose puts the scan behind it.
 pub fn hidden(surface: &Surface, scan: &[Point3<f64>], pose: &Pose, viewpoint: &Point3<f64>) -> Vec<bool> {
-    let model = surface.nn().points();
-    let eye = pose.apply(viewpoint);
     let q: Vec<Point3<f64>> = scan.iter().map(|p| pose.apply(p)).collect();
-    let c = crate::cloud::centroid(&q);
-    let axis = c - eye;
-    let distance = axis.norm();
-    if !(distance > 0.0) || q.is_empty() {
-        return vec![false; scan.len()];
+    if q.is_empty() {
+        return Vec::new();
     }
-    let w = axis / distance;
-    let helper = if w.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
-    let u = w.cross(&helper).normalize();
-    let v = w.cross(&u);
     let h = surface.spacing().max(1e-12);
-    let pixel = PIXEL_SPACINGS * h / distance;
-    let project = |p: &Point3<f64>| {
-        let r = p - eye;
-        let depth = r.dot(&w);
-        (depth > 1e-9 * distance)
-            .then(|| ((r.dot(&u) / depth / pixel).floor() as i64, (r.dot(&v) / depth / pixel).floor() as i64, depth))
+    let Some(view) = View::new(pose.apply(viewpoint), &crate::cloud::centroid(&q), PIXEL_SPACINGS * h) else {
+        return vec![false; scan.len()];
     };
-    let mut zbuffer: HashMap<(i64, i64), f64> = HashMap::new();
-    for p in model {
-        if let Some((i, j, d)) = project(p) {
-            let z = zbuffer.entry((i, j)).or_insert(f64::INFINITY);
-            *z = z.min(d);
-        }
-    }
     let tolerance = HIDDEN_DEPTH * h;
-    let front = |i: i64, j: i64| -> Option<f64> {
-        let own = zbuffer.get(&(i, j)).copied();
-        let mut near: Vec<f64> = (-1..=1)
-            .flat_map(|a| (-1..=1).map(move |b| (a, b)))
-            .filter(|&(a, b)| (a, b) != (0, 0))
-            .filter_map(|(a, b)| zbuffer.get(&(i + a, j + b)).copied())
-            .filter(|&n| own.is_none_or(|z| n < z - 2.0 * tolerance))
-            .collect();
-        if near.len() >= 5 {
-            near.sort_by(f64::total_cmp);
-            Some(near[near.len() / 2])
-        } else {
-            own
-        }
-    };
+    let image = DepthImage::new(view, surface.nn().points(), 2.0 * tolerance);
     q.iter()
-        .map(|p| match project(p) {
-            Some((i, j, d)) => front(i, j).is_some_and(|z| z < d - tolerance),
+        .map(|p| match view.project(p) {
+            Some((px, d)) => image.front(px).is_some_and(|z| z < d - tolerance),
             None => false,
         })
         .collect()

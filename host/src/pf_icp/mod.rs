@@ -35,6 +35,7 @@ pub mod init;
 pub mod kmeans;
 pub mod particle_filter;
 pub mod surface;
+pub mod verdict;
 
 use crate::geometry::{Centred, Params, Pose, ScaleBounds};
 use crate::nn::NearestNeighbours;
@@ -503,7 +504,6 @@ pub fn register_with(
         scan,
         &filter_pose,
         &hypotheses,
-        Some((&frame, &filtered.particles)),
         settings.polish_iterations,
         &settings.scale,
         &evidence,

@@ -20,10 +20,10 @@
 //!    tool, a gloved hand), which hide the surface behind them, and half uniform in the
 //!    view's bounding box grown by 10% of the diagonal.
 
+use crate::visibility::{DepthImage, View};
 use nalgebra::{Point3, Vector3};
 use rand::seq::SliceRandom;
 use rand::Rng;
-use std::collections::HashMap;
 
 /// Distance of the camera from the shape's centre, in bounding-box diagonals.
 pub const CAMERA_DISTANCE: f64 = 2.0;
@@ -81,8 +81,7 @@ const DIRECTION_TRIES: usize = 20;
 /// What a camera in one direction sees.
 struct Sight {
     camera: Point3<f64>,
-    /// Every point's image coordinates (tangents across the viewing direction) and depth.
-    image: Vec<(f64, f64, f64)>,
+    view: View,
     /// The points it sees.
     seen: Vec<usize>,
 }
@@ -91,49 +90,10 @@ struct Sight {
 /// points of `points` (spacing `h`) it sees.
 fn look(points: &[Point3<f64>], centre: &Point3<f64>, diag: f64, h: f64, dir: &Vector3<f64>) -> Sight {
     let camera = centre + dir * (CAMERA_DISTANCE * diag);
-    // Image axes: `w` the viewing direction, `u` and `v` across it.
-    let w = -dir;
-    let helper = if w.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
-    let u = w.cross(&helper).normalize();
-    let v = w.cross(&u);
-    let pixel = PIXEL_SPACINGS * h / (CAMERA_DISTANCE * diag);
-    let image: Vec<(f64, f64, f64)> = points
-        .iter()
-        .map(|p| {
-            let r = p - camera;
-            let depth = r.dot(&w);
-            (r.dot(&u) / depth, r.dot(&v) / depth, depth)
-        })
-        .collect();
-    let cell = |x: f64, y: f64| ((x / pixel).floor() as i64, (y / pixel).floor() as i64);
-    let mut zbuffer: HashMap<(i64, i64), f64> = HashMap::new();
-    for &(x, y, d) in &image {
-        let z = zbuffer.entry(cell(x, y)).or_insert(f64::INFINITY);
-        *z = z.min(d);
-    }
-    // A pixel the near surface happens to leave empty shows what lies behind it: when most
-    // of its neighbours see something nearer, it takes their median depth.
-    let filled: HashMap<(i64, i64), f64> = zbuffer
-        .iter()
-        .map(|(&(i, j), &z)| {
-            let mut near: Vec<f64> = (-1..=1)
-                .flat_map(|a| (-1..=1).map(move |b| (a, b)))
-                .filter(|&(a, b)| (a, b) != (0, 0))
-                .filter_map(|(a, b)| zbuffer.get(&(i + a, j + b)).copied())
-                .filter(|&n| n < z - 2.0 * DEPTH_TOLERANCE * h)
-                .collect();
-            if near.len() >= 5 {
-                near.sort_by(f64::total_cmp);
-                ((i, j), near[near.len() / 2])
-            } else {
-                ((i, j), z)
-            }
-        })
-        .collect();
-    let seen: Vec<usize> = (0..points.len())
-        .filter(|&i| image[i].2 <= filled[&cell(image[i].0, image[i].1)] + DEPTH_TOLERANCE * h)
-        .collect();
-    Sight { camera, image, seen }
+    let view = View::new(camera, centre, PIXEL_SPACINGS * h).expect("the camera is away from the centre");
+    let image = DepthImage::new(view, points, 2.0 * DEPTH_TOLERANCE * h);
+    let seen = (0..points.len()).filter(|&i| image.sees(&points[i], DEPTH_TOLERANCE * h)).collect();
+    Sight { camera, view, seen }
 }
 
 /// A camera view of the surface sampled by `points` (uniform by area), `scan_points` points
@@ -156,7 +116,9 @@ pub fn camera_view(points: &[Point3<f64>], diag: f64, scan_points: usize, rng: &
             break;
         }
     }
-    let Sight { camera, image, seen } = best.expect("at least one try");
+    let Sight { camera, view, seen } = best.expect("at least one try");
+    let image: Vec<(f64, f64)> =
+        points.iter().map(|p| view.image(p).map_or((f64::INFINITY, f64::INFINITY), |(x, y, _)| (x, y))).collect();
 
     // The window: the seen points nearest a random seen point in the image.
     let mut window = seen;

@@ -43,8 +43,11 @@ pub use scoring::*;
 use super::text_table::TextTable;
 use super::{median, mix};
 use crate::cloud::centroid;
-use crate::geometry::ScaleBounds;
+use crate::geometry::{Pose, ScaleBounds};
 use crate::nn::NearestNeighbours;
+use crate::pf_icp::conclusion::Conclusion;
+use crate::pf_icp::surface::Surface;
+use crate::pf_icp::verdict::Verdict;
 use crate::pf_icp::PfIcpSettings;
 use crate::progress::Progress;
 use crate::registration::methods::{run as run_method, Method, MethodSettings};
@@ -133,6 +136,72 @@ pub struct CaseResult {
     /// Capped surface cost of the estimate on the whole scan ([`crate::pf_icp::surface::Surface::cost`],
     /// cap 5% of the diagonal), to compare with the truth's.
     pub cost: f64,
+    /// PF-ICP only: its verdict ([`crate::pf_icp::verdict`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub verdict: Option<Verdict>,
+    /// PF-ICP only: the verdict's reasons.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reasons: Option<Vec<String>>,
+    /// PF-ICP only: what the verdict was judged on.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub checks: Option<crate::pf_icp::verdict::Checks>,
+    /// PF-ICP only: some alternative is within the tolerance of (a symmetric copy of) the truth.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub truth_in_alternatives: Option<bool>,
+}
+
+impl CaseResult {
+    /// A method without self-assessment.
+    fn plain(method: &str, case: &Case, pose: &Pose, seconds: f64, surface: &Surface) -> Self {
+        CaseResult {
+            method: method.to_string(),
+            score: score(pose, case),
+            seconds,
+            alternatives: None,
+            mahalanobis2: None,
+            dof: None,
+            inside_95: None,
+            cost: surface.cost(&case.scan, pose, 0.05 * case.diag),
+            verdict: None,
+            reasons: None,
+            checks: None,
+            truth_in_alternatives: None,
+        }
+    }
+
+    /// PF-ICP's result with its conclusion (region, alternatives, verdict).
+    fn assessed(method: &str, case: &Case, c: &Conclusion, seconds: f64, surface: &Surface) -> Self {
+        let plain = Self::plain(method, case, &c.pose, seconds, surface);
+        let g = case.shape.symmetries()[plain.score.symmetry];
+        let truth = symmetric_truth(&case.truth, &g, &case.shape.centre());
+        let md = mahalanobis2(c, &truth, &centroid(&case.scan));
+        CaseResult {
+            alternatives: Some(c.alternatives.len()),
+            mahalanobis2: md.map(|m| m.0),
+            dof: md.map(|m| m.1),
+            inside_95: Some(md.is_some_and(|(d, k)| inside_95(d, k))),
+            verdict: Some(c.verdict),
+            reasons: Some(c.reasons.clone()),
+            checks: Some(c.checks.clone()),
+            truth_in_alternatives: Some(c.alternatives.iter().any(|a| score(&a.pose, case).success)),
+            ..plain
+        }
+    }
+
+    /// Right, or honestly flagged: `ambiguous` with the truth among the alternatives, or
+    /// `unreliable` (`None` without a verdict).
+    pub fn right_or_flagged(&self) -> Option<bool> {
+        self.verdict.map(|v| {
+            self.score.success
+                || v == Verdict::Unreliable
+                || (v == Verdict::Ambiguous && self.truth_in_alternatives == Some(true))
+        })
+    }
+
+    /// Wrong and `confident`.
+    pub fn confidently_wrong(&self) -> bool {
+        self.verdict == Some(Verdict::Confident) && !self.score.success
+    }
 }
 
 /// One case in the report.
@@ -184,6 +253,53 @@ pub struct FamilyCell {
     /// Cases that reported alternatives (PF-ICP only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub with_alternatives: Option<usize>,
+    /// The verdicts against the outcome (PF-ICP only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub verdicts: Option<VerdictTally>,
+}
+
+/// Verdict x outcome over a family's cases.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct VerdictTally {
+    /// `confident` and right.
+    pub confident_right: usize,
+    /// `confident` and wrong: the case that must not happen.
+    pub confident_wrong: usize,
+    /// `ambiguous` and right.
+    pub ambiguous_right: usize,
+    /// `ambiguous`, wrong, the truth among the alternatives.
+    pub ambiguous_truth_listed: usize,
+    /// `ambiguous`, wrong, the truth not among the alternatives.
+    pub ambiguous_wrong: usize,
+    /// `unreliable` and right.
+    pub unreliable_right: usize,
+    /// `unreliable` and wrong.
+    pub unreliable_wrong: usize,
+    /// Right, or honestly flagged ([`CaseResult::right_or_flagged`]).
+    pub right_or_flagged: usize,
+}
+
+impl VerdictTally {
+    /// Count the results that carry a verdict.
+    pub fn of<'a>(results: impl Iterator<Item = &'a CaseResult>) -> Self {
+        let mut t = VerdictTally::default();
+        for r in results {
+            let Some(v) = r.verdict else { continue };
+            let right = r.score.success;
+            let slot = match (v, right) {
+                (Verdict::Confident, true) => &mut t.confident_right,
+                (Verdict::Confident, false) => &mut t.confident_wrong,
+                (Verdict::Ambiguous, true) => &mut t.ambiguous_right,
+                (Verdict::Ambiguous, false) if r.truth_in_alternatives == Some(true) => &mut t.ambiguous_truth_listed,
+                (Verdict::Ambiguous, false) => &mut t.ambiguous_wrong,
+                (Verdict::Unreliable, true) => &mut t.unreliable_right,
+                (Verdict::Unreliable, false) => &mut t.unreliable_wrong,
+            };
+            *slot += 1;
+            t.right_or_flagged += usize::from(r.right_or_flagged() == Some(true));
+        }
+        t
+    }
 }
 
 /// One family.
@@ -265,21 +381,10 @@ pub fn run(opts: &RealisticOptions) -> anyhow::Result<RealisticReport> {
                 .iter()
                 .map(|&m| {
                     let o = run_method(m, &nn, &c.scan, &settings);
-                    let sc = score(&o.registration.pose, &c);
-                    let md = o.pf.as_ref().and_then(|pf| {
-                        let g = c.shape.symmetries()[sc.symmetry];
-                        let truth = symmetric_truth(&c.truth, &g, &c.shape.centre());
-                        mahalanobis2(&pf.conclusion, &truth, &centroid(&c.scan))
-                    });
-                    CaseResult {
-                        method: m.name().to_string(),
-                        alternatives: o.pf.as_ref().map(|pf| pf.conclusion.alternatives.len()),
-                        mahalanobis2: md.map(|m| m.0),
-                        dof: md.map(|m| m.1),
-                        inside_95: o.pf.as_ref().map(|_| md.is_some_and(|(d, k)| inside_95(d, k))),
-                        score: sc,
-                        seconds: o.elapsed.as_secs_f64(),
-                        cost: surface.cost(&c.scan, &o.registration.pose, 0.05 * c.diag),
+                    let seconds = o.elapsed.as_secs_f64();
+                    match &o.pf {
+                        Some(pf) => CaseResult::assessed(m.name(), &c, &pf.conclusion, seconds, &surface),
+                        None => CaseResult::plain(m.name(), &c, &o.registration.pose, seconds, &surface),
                     }
                 })
                 .collect();
@@ -288,32 +393,9 @@ pub fn run(opts: &RealisticOptions) -> anyhow::Result<RealisticReport> {
                 let pf = crate::board::on_board::emulate_registration(&nn, &c.scan, &settings.pf, opts.board_points)
                     .with_context(|| format!("case {}", c.id))?;
                 let seconds = t.elapsed().as_secs_f64();
-                let sc = score(&pf.registration.pose, &c);
-                let g = c.shape.symmetries()[sc.symmetry];
-                let truth = symmetric_truth(&c.truth, &g, &c.shape.centre());
-                let md = mahalanobis2(&pf.conclusion, &truth, &centroid(&c.scan));
-                results.push(CaseResult {
-                    method: BOARD_COLUMN.to_string(),
-                    alternatives: Some(pf.conclusion.alternatives.len()),
-                    mahalanobis2: md.map(|m| m.0),
-                    dof: md.map(|m| m.1),
-                    inside_95: Some(md.is_some_and(|(d, k)| inside_95(d, k))),
-                    score: sc,
-                    seconds,
-                    cost: surface.cost(&c.scan, &pf.registration.pose, 0.05 * c.diag),
-                });
-                // The board's pose alone: no polish, no conclusion (so no region).
-                let sc = score(&pf.filter_pose, &c);
-                results.push(CaseResult {
-                    method: BOARD_FILTER_COLUMN.to_string(),
-                    alternatives: None,
-                    mahalanobis2: None,
-                    dof: None,
-                    inside_95: None,
-                    score: sc,
-                    seconds,
-                    cost: surface.cost(&c.scan, &pf.filter_pose, 0.05 * c.diag),
-                });
+                results.push(CaseResult::assessed(BOARD_COLUMN, &c, &pf.conclusion, seconds, &surface));
+                // The board's pose alone: no polish, no conclusion (so no region, no verdict).
+                results.push(CaseResult::plain(BOARD_FILTER_COLUMN, &c, &pf.filter_pose, seconds, &surface));
             }
             let mut truth = c.truth.to_params();
             for a in &mut truth[4..] {
@@ -371,6 +453,7 @@ pub fn run(opts: &RealisticOptions) -> anyhow::Result<RealisticReport> {
                     }),
                     with_alternatives: pf
                         .then(|| cases.iter().filter(|c| c.results[j].alternatives.is_some_and(|a| a > 0)).count()),
+                    verdicts: pf.then(|| VerdictTally::of(cases.iter().map(|c| &c.results[j]))),
                 }
             })
             .collect();
@@ -445,7 +528,7 @@ impl RealisticReport {
         }
         let mut t = TextTable::new(
             format!(
-                "Realistic benchmark ({} split, seed {}): {} cases per family, {MODEL_POINTS} model / ~{SCAN_POINTS} scan points",
+                "Realistic benchmark ({} split, seed {}): {} cases per family",
                 self.split.name(),
                 self.seed,
                 self.cases_per_family
@@ -471,16 +554,66 @@ impl RealisticReport {
             t.row(row);
         }
         t.note(format!(
-            "success: within {} deg, {}% of the diagonal at the scan centroid, {}% scale, modulo the shape's symmetries; partial views keep {:.0} to {:.0}% of the surface; noise {}% of the diagonal; outliers {}%",
+            "success: within {} deg, {}% of the diagonal at the scan centroid, {}% scale, modulo the shape's symmetries",
             TOLERANCE.rotation_deg,
             100.0 * TOLERANCE.translation_frac,
             100.0 * TOLERANCE.scale_frac,
+        ));
+        t.note(format!(
+            "plane-cut families: {MODEL_POINTS} model / ~{SCAN_POINTS} scan points, views keep {:.0} to {:.0}% of the surface, noise {}% of the diagonal, outliers {}%",
             100.0 * VISIBLE_RANGE.0,
             100.0 * VISIBLE_RANGE.1,
             100.0 * NOISE_FRACTION,
             100.0 * OUTLIER_FRACTION
         ));
-        t.render()
+        t.note(format!(
+            "camera families: {CAMERA_MODEL_POINTS} model / {CAMERA_SCAN_POINTS} scan points, self-occluded views keep {:.0} to {:.0}% of the surface, {:.0}% clutter (half in blobs), noise {}%; -metric: scale 1 and known",
+            100.0 * camera::VISIBLE_RANGE.0,
+            100.0 * camera::VISIBLE_RANGE.1,
+            100.0 * camera::CLUTTER_FRACTION,
+            100.0 * NOISE_FRACTION,
+        ));
+        let mut out = t.render();
+        for (j, m) in self.methods.iter().enumerate() {
+            if self.families.iter().all(|f| f.cells[j].verdicts.is_none()) {
+                continue;
+            }
+            let mut v = TextTable::new(
+                format!("Verdicts of {m} against the outcome"),
+                [
+                    "family",
+                    "confident right",
+                    "confident WRONG",
+                    "ambiguous right",
+                    "ambiguous, truth listed",
+                    "ambiguous, truth missing",
+                    "unreliable right",
+                    "unreliable wrong",
+                    "right or flagged",
+                ]
+                .map(String::from)
+                .to_vec(),
+            );
+            for f in &self.families {
+                let Some(x) = f.cells[j].verdicts else { continue };
+                let n = f.cells[j].cases;
+                v.row(vec![
+                    f.family.name().to_string(),
+                    format!("{}/{n}", x.confident_right),
+                    format!("{}/{n}", x.confident_wrong),
+                    x.ambiguous_right.to_string(),
+                    x.ambiguous_truth_listed.to_string(),
+                    x.ambiguous_wrong.to_string(),
+                    x.unreliable_right.to_string(),
+                    x.unreliable_wrong.to_string(),
+                    format!("{}/{n}", x.right_or_flagged),
+                ]);
+            }
+            v.note("right or flagged: right, or ambiguous with the truth among the alternatives, or unreliable");
+            out += "\n";
+            out += &v.render();
+        }
+        out
     }
 }
 
