@@ -156,7 +156,8 @@ impl DemoCase {
         s += &row("iterations", &|o| o.registration.iterations.to_string());
         s += &row("seconds", &|o| format!("{:.3}", o.elapsed.as_secs_f64()));
         if let Some(c) = pf.pf.as_ref().map(|r| &r.conclusion) {
-            for line in Assessment::new(c).text().lines() {
+            let a = Assessment::new(c);
+            for line in a.verdict_line().lines().chain(a.text().lines()) {
                 s += &format!("pf-icp  {line}\n");
             }
             match self.truth_inside_95() {

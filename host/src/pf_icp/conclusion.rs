@@ -13,15 +13,19 @@
 //!    answer by more than 5 deg, 2% of the diagonal at the scan's centroid or 2% in scale
 //!    and fits as well within the noise: the mean of its per-point cost excess over the
 //!    answer is below [`ALTERNATIVE_SIGMAS`] standard errors of that mean (a paired test
-//!    over the same scan points; neighbouring points' costs are correlated, so the standard
-//!    error is the cluster-robust one over spatial blocks, an eighth of the scan's
-//!    diagonal wide). An exactly symmetric shape lists its symmetric poses; a
+//!    over the same scan points). Neighbouring points' costs are correlated, so the test is
+//!    liberal and a weakly resolved feature may hide an alternative; a cluster-robust
+//!    standard error over spatial blocks was tried and dropped: a clearly seen small
+//!    feature puts all the evidence in one block, and it then listed the flip of a block
+//!    with a boss seen whole. An exactly symmetric shape lists its symmetric poses; a
 //!    near-symmetric one whose breaking feature is clearly seen lists none.
 //! 3. **Uncertainty**: the covariance of the local parameters
 //!    [`crate::pf_icp::surface::LOCAL_NAMES`] (translation of the scan centroid's image, scale,
-//!    rotation vector in the model frame) is `k^2 sigma^2 (J^T J)^-1` from the surface
-//!    residuals' curvature ([`Surface::curvature`]), `k` = [`COVARIANCE_INFLATION`] for the
-//!    correlation of neighbouring residuals (calibrated on the realistic benchmark's dev
+//!    rotation vector in the model frame) is the cluster-robust (sandwich) covariance
+//!    `k^2 H^-1 M H^-1` of the surface residuals ([`Surface::curvature`]: `H = J^T J`, `M`
+//!    the residual gradients summed over spatial blocks, an eighth of the scan's diagonal
+//!    wide, never below the independent residuals' `sigma^2 H^-1`), `k` =
+//!    [`COVARIANCE_INFLATION`] (calibrated on the realistic benchmark's dev
 //!    split, docs/decisions.md); with the scale fixed, the scale is no parameter (its row
 //!    and column 0). Parameters the scan cannot determine are named, and their rows and
 //!    columns are left out (`None`) instead of printed as a confident number.
@@ -50,8 +54,10 @@ use rayon::prelude::*;
 pub const ARBITRATED: usize = 6;
 /// A pose is an alternative when its mean cost excess is below this many standard errors.
 pub const ALTERNATIVE_SIGMAS: f64 = 2.0;
-/// Inflation of the curvature covariance (see the module doc).
-pub const COVARIANCE_INFLATION: f64 = 1.5;
+/// Inflation of the covariance (see the module doc): on the realistic benchmark's dev split
+/// (camera-view and plane-cut families, seed 1) the truth lies in the 95% region of 96% of
+/// the right results with 2.5 (76% of the camera views' with 1.5).
+pub const COVARIANCE_INFLATION: f64 = 2.5;
 /// Inlier distance of `fitness` and `inlier_rmse`, as a fraction of the model's diagonal.
 pub const INLIER_DISTANCE: f64 = 0.02;
 /// Hypotheses polished besides the best [`ARBITRATED`] for alternatives: those whose cost in
@@ -127,38 +133,14 @@ pub struct Conclusion {
     pub reasons: Vec<String>,
 }
 
-/// Blocks per side of the scan's bounding box for [`paired_excess`]'s standard error.
-const BLOCKS_PER_SIDE: f64 = 8.0;
-
-/// Each point's block: a cube of an eighth of the points' bounding-box diagonal.
-fn blocks(points: &[Point3<f64>]) -> Vec<(i64, i64, i64)> {
-    let (lo, _) = crate::cloud::bbox(points);
-    let side = (bbox_diagonal(points) / BLOCKS_PER_SIDE).max(1e-300);
-    points
-        .iter()
-        .map(|p| {
-            let v = (p - lo) / side;
-            (v.x.floor() as i64, v.y.floor() as i64, v.z.floor() as i64)
-        })
-        .collect()
-}
-
-/// The mean per-point cost excess of `other` over `best`, in standard errors. Neighbouring
-/// points' excesses are correlated (a feature fits or not as a whole), so the standard
-/// error is the cluster-robust one over spatial blocks (`block` per point): the variance
-/// of the mean is the sum over blocks of the squared block sums of deviations over `n^2`.
-fn paired_excess(best: &[f64], other: &[f64], block: &[(i64, i64, i64)]) -> f64 {
+/// The mean per-point cost excess of `other` over `best`, in standard errors of that mean
+/// (a paired test over the same scan points).
+fn paired_excess(best: &[f64], other: &[f64]) -> f64 {
     let n = best.len().max(2) as f64;
     let d: Vec<f64> = other.iter().zip(best).map(|(a, b)| a - b).collect();
     let mean = d.iter().sum::<f64>() / n;
-    let mut sums: std::collections::HashMap<(i64, i64, i64), f64> = std::collections::HashMap::new();
-    for (x, b) in d.iter().zip(block) {
-        *sums.entry(*b).or_insert(0.0) += x - mean;
-    }
-    let var = sums.values().map(|s| s * s).sum::<f64>() / (n * n);
-    // Never below the independent points' standard error.
-    let independent = d.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0) / n;
-    mean / var.max(independent).sqrt().max(1e-300)
+    let var = d.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0);
+    mean / (var / n).sqrt().max(1e-300)
 }
 
 /// The local parameter error of `pose` against `reference` ([`LOCAL_NAMES`], about the
@@ -240,14 +222,13 @@ pub fn conclude(
             pose = q;
         }
     }
-    let block = blocks(&compared);
     let mut alternatives: Vec<Alternative> = Vec::new();
     for (i, (p, c)) in polished.iter().enumerate() {
         if i == best || same_pose(p, &pose, &at, diag) || alternatives.iter().any(|a| same_pose(&a.pose, p, &at, diag))
         {
             continue;
         }
-        let z = paired_excess(&costs, c, &block);
+        let z = paired_excess(&costs, c);
         if z < ALTERNATIVE_SIGMAS {
             alternatives.push(Alternative { pose: *p, cost: mean(c), excess_sigmas: z });
         }
@@ -259,8 +240,15 @@ pub fn conclude(
     // answer it reported several degrees.)
     let image = pose.apply(&at);
     let curv = surface.curvature(scan, &pose, &image, bounds.fixed_value().is_some());
-    let k2 = COVARIANCE_INFLATION * COVARIANCE_INFLATION * curv.residual_variance;
-    let cov = curv.degeneracy.inverse * k2;
+    // The sandwich H^-1 M H^-1 over spatial blocks, never tighter than the independent
+    // residuals' sigma^2 H^-1 (each inflated by k).
+    let k2 = COVARIANCE_INFLATION * COVARIANCE_INFLATION;
+    let inv = &curv.degeneracy.inverse;
+    let sandwich = inv * curv.meat * inv;
+    // (The residuals' variance floored at float precision: an exact answer's one sigma is
+    // its rounding, not 0.)
+    let independent = inv * curv.residual_variance.max((1e-9 * diag).powi(2));
+    let cov = if sandwich.trace() > independent.trace() { sandwich } else { independent } * k2;
     let known = |k: usize| !curv.degeneracy.free[k];
     let mut covariance = [[None; 7]; 7];
     let mut sigma = [None; 7];

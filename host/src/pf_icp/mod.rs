@@ -376,6 +376,9 @@ fn prior_on(surface: &Surface, scan: &[Point3<f64>], settings: &PfIcpSettings) -
         Some(search) => {
             let mut starts = initial.candidates.clone();
             starts.extend(hypotheses::grid_starts(scan, model, search.grid, bounds));
+            if let Some(v) = &settings.viewpoint {
+                starts.extend(hypotheses::view_starts(surface, &sample, search.grid, bounds, v));
+            }
             starts.extend(crate::pf_icp::features::proposals(
                 nn,
                 &sample,

@@ -64,6 +64,13 @@ pub struct Curvature {
     pub jtj: SMatrix<f64, 7, 7>,
     /// Variance of the point-to-plane residuals over the kept pairs.
     pub residual_variance: f64,
+    /// The residuals' gradient outer products summed over spatial blocks,
+    /// `sum_b (sum_{i in b} J_i r_i)(sum_{i in b} J_i r_i)^T` (blocks an eighth of the
+    /// kept points' bounding-box diagonal wide): the middle of the cluster-robust
+    /// (sandwich) covariance `H^-1 M H^-1`, which holds when neighbouring residuals are
+    /// correlated or the model misfits a whole region; with independent residuals it is
+    /// `sigma^2 J^T J`.
+    pub meat: SMatrix<f64, 7, 7>,
     /// Pairs used.
     pub pairs: usize,
     /// What the scan does not determine.
@@ -238,6 +245,11 @@ impl<'a> Surface<'a> {
         let mut jtj = SMatrix::<f64, 7, 7>::zeros();
         let (mut sum2, mut count) = (0.0, 0usize);
         let scale = pose.scale.abs().max(1e-12);
+        let kept_points: Vec<Point3<f64>> = (0..q.len()).filter(|&i| mask[i]).map(|i| q[i]).collect();
+        let (lo, _) = crate::cloud::bbox(&kept_points);
+        let side = (crate::cloud::bbox_diagonal(&kept_points) / 8.0).max(1e-300);
+        let mut gradients: std::collections::HashMap<(i64, i64, i64), SVector<f64, 7>> =
+            std::collections::HashMap::new();
         // Only the point-to-plane residual: the tangential excess is a penalty for leaving a
         // model point's footprint, not information about where the surface is.
         for i in (0..q.len()).filter(|&i| mask[i]) {
@@ -249,7 +261,12 @@ impl<'a> Surface<'a> {
             jtj += j * j.transpose();
             sum2 += r * r;
             count += 1;
+            let b = (q[i] - lo) / side;
+            *gradients
+                .entry((b.x.floor() as i64, b.y.floor() as i64, b.z.floor() as i64))
+                .or_insert(SVector::zeros()) += j * r;
         }
+        let meat = gradients.values().fold(SMatrix::<f64, 7, 7>::zeros(), |m, g| m + g * g.transpose());
         let residual_variance = sum2 / (count as f64 - 7.0).max(1.0);
         // The scan image's RMS radius about `at`: a translation by it, a relative scale change
         // of 1 and a turn of 1 rad move the points by about as much.
@@ -257,7 +274,7 @@ impl<'a> Surface<'a> {
         let radius =
             (kept.iter().map(|p| (*p - at).norm_squared()).sum::<f64>() / kept.len().max(1) as f64).sqrt().max(1e-300);
         let degeneracy = degeneracy(&jtj, radius, scale, scale_known);
-        Curvature { jtj, residual_variance, pairs: count, degeneracy }
+        Curvature { jtj, residual_variance, meat, pairs: count, degeneracy }
     }
 }
 
