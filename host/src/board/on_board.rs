@@ -391,7 +391,10 @@ pub fn finish(
     result: &ResultReply,
     filter_time: Duration,
 ) -> PfIcpResult {
-    let filter_pose = plan.board_pose(result);
+    // The board's polish solves for the scale too (protocol 6 has no way to fix it): the
+    // user's scale bounds are imposed on its pose here, the image of the scan's centroid
+    // kept (a fixed scale exactly; the host's conclusion then polishes with it fixed).
+    let filter_pose = settings.scale.apply(&plan.board_pose(result), &crate::cloud::centroid(scan));
     let t = Instant::now();
     let surface = crate::pf_icp::surface::Surface::new(nn);
     let conclusion = crate::pf_icp::conclusion::conclude(

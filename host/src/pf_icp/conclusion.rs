@@ -66,6 +66,18 @@ pub const CANDIDATE_COST_FACTOR: f64 = 2.0;
 /// Scan points the candidates are polished and compared on (every k-th point of a larger
 /// scan; the winner is polished again on the whole scan).
 pub const COMPARE_POINTS: usize = 20_000;
+/// In a large registration ([`crate::pf_icp::is_large`]): scan points the candidates are
+/// polished and compared on, against the search's model subsample (every k-th point of a
+/// larger scan; as many as a small registration's scan typically has).
+pub const LARGE_COMPARE_POINTS: usize = 2_000;
+/// In a large registration: scan points the winner is polished on at the end, against the
+/// whole model (every k-th point of a larger scan).
+pub const FINAL_POLISH_POINTS: usize = 10_000;
+/// In a large registration: most iterations of the winner's final polish. It starts
+/// converged on the model subset's surface and settles on the whole model's in a few (on
+/// model-1 at 1,000,000 model points in 2; its step then flipped between two sets of
+/// contacts, 1e-5 rad, for the other 48 of 50).
+pub const FINAL_POLISH_ITERATIONS: usize = 20;
 /// The polish may change a candidate's scale by these factors at most (0.8 and 1.25: the
 /// on-board polish's bounds, `pficp_fpga::polish::SCALE_DRIFT`).
 pub const SCALE_DRIFT: (f64, f64) = {
@@ -180,7 +192,31 @@ pub fn conclude(
     bounds: &ScaleBounds,
     evidence: &Evidence,
 ) -> Conclusion {
-    let nn = surface.nn();
+    conclude_on(surface, evidence, surface, evidence, scan, filter_pose, hypotheses, polish_iterations, bounds)
+}
+
+/// [`conclude`] with the candidates polished and compared against `surface` (in a large
+/// registration the search's model subset) by `evidence` (made for `surface`), and the
+/// winner's final polish, its uncertainty, its fit and, in a large registration, the
+/// verdict's share explained and share hidden against `full`, the whole model, by
+/// `full_evidence` (made for `full`). In a large registration
+/// ([`crate::pf_icp::is_large`]) the candidates are polished and compared on at most
+/// [`LARGE_COMPARE_POINTS`] scan points and the winner is polished on at most
+/// [`FINAL_POLISH_POINTS`]; the uncertainty and the fit still take every scan point.
+#[allow(clippy::too_many_arguments)]
+pub fn conclude_on(
+    surface: &Surface,
+    evidence: &Evidence,
+    full: &Surface,
+    full_evidence: &Evidence,
+    scan: &[Point3<f64>],
+    filter_pose: &Pose,
+    hypotheses: &[Hypothesis],
+    polish_iterations: usize,
+    bounds: &ScaleBounds,
+) -> Conclusion {
+    let large = crate::pf_icp::is_large(full.nn().points().len(), scan.len());
+    let nn = full.nn();
     let diag = bbox_diagonal(nn.points());
     let cap = COST_CAP * diag;
     let at = centroid(scan);
@@ -191,9 +227,9 @@ pub fn conclude(
     // stays, unpolished).
     // Candidates are polished and compared on at most COMPARE_POINTS scan points (every
     // k-th of a larger scan): memory and time stay bounded for huge scans.
-    let stride = scan.len().div_ceil(COMPARE_POINTS).max(1);
+    let stride = scan.len().div_ceil(if large { LARGE_COMPARE_POINTS } else { COMPARE_POINTS }).max(1);
     let compared: Vec<Point3<f64>> = scan.iter().step_by(stride).copied().collect();
-    let polished: Vec<(Pose, Vec<f64>)> = starts
+    let mut polished: Vec<(Pose, Vec<f64>)> = starts
         .par_iter()
         .enumerate()
         .filter_map(|(i, p)| {
@@ -211,11 +247,42 @@ pub fn conclude(
         })
         .collect();
     let mean = |c: &[f64]| c.iter().sum::<f64>() / c.len().max(1) as f64;
-    let best = (0..polished.len())
-        .min_by(|&a, &b| mean(&polished[a].1).total_cmp(&mean(&polished[b].1)).then(a.cmp(&b)))
-        .unwrap_or(0);
+    let choose = |polished: &[(Pose, Vec<f64>)]| {
+        (0..polished.len())
+            .min_by(|&a, &b| mean(&polished[a].1).total_cmp(&mean(&polished[b].1)).then(a.cmp(&b)))
+            .unwrap_or(0)
+    };
+    // The winner composed with the model's near-symmetries ([`crate::pf_icp::symmetry`]),
+    // polished and compared as well: a near-symmetric part's other poses are weighed
+    // whether or not the search held them.
+    let first = polished[choose(&polished)].0;
+    let symmetric: Vec<Pose> = crate::pf_icp::symmetry::near_symmetries(surface)
+        .iter()
+        .map(|g| bounds.apply(&g.compose(&first), &at))
+        .filter(|p| !polished.iter().any(|(q, _)| same_pose(p, q, &at, diag)))
+        .collect();
+    polished.extend(
+        symmetric
+            .par_iter()
+            .filter_map(|p| {
+                let q = surface.polish(&compared, p, polish_iterations, bounds);
+                (SCALE_DRIFT.0..=SCALE_DRIFT.1)
+                    .contains(&(q.scale / p.scale))
+                    .then(|| (q, evidence.tight_costs(surface, &compared, &q)))
+            })
+            .collect::<Vec<_>>(),
+    );
+    let best = choose(&polished);
     let (mut pose, costs) = (polished[best].0, polished[best].1.clone());
-    if stride > 1 {
+    if large {
+        // The winner against the whole model, on every k-th scan point.
+        let step = scan.len().div_ceil(FINAL_POLISH_POINTS).max(1);
+        let fine: Vec<Point3<f64>> = scan.iter().step_by(step).copied().collect();
+        let q = full.polish(&fine, &pose, polish_iterations.min(FINAL_POLISH_ITERATIONS), bounds);
+        if (SCALE_DRIFT.0..=SCALE_DRIFT.1).contains(&(q.scale / pose.scale)) {
+            pose = q;
+        }
+    } else if stride > 1 {
         // The winner on the whole scan.
         let q = surface.polish(scan, &pose, polish_iterations, bounds);
         if (SCALE_DRIFT.0..=SCALE_DRIFT.1).contains(&(q.scale / pose.scale)) {
@@ -239,7 +306,9 @@ pub fn conclude(
     // posterior: it spreads over the propagation region, a prior's width, and on an exact
     // answer it reported several degrees.)
     let image = pose.apply(&at);
-    let curv = surface.curvature(scan, &pose, &image, bounds.fixed_value().is_some());
+    // One pass over the scan for the curvature and the fit.
+    let contacts = full.contacts(scan, &pose);
+    let curv = full.curvature_of(&contacts, &pose, &image, bounds.fixed_value().is_some());
     // The sandwich H^-1 M H^-1 over spatial blocks, never tighter than the independent
     // residuals' sigma^2 H^-1 (each inflated by k).
     let k2 = COVARIANCE_INFLATION * COVARIANCE_INFLATION;
@@ -263,7 +332,7 @@ pub fn conclude(
         }
     }
     let inlier_distance = INLIER_DISTANCE * diag;
-    let d: Vec<f64> = scan.par_iter().map(|p| surface.distance2(&pose.apply(p)).sqrt()).collect();
+    let d: Vec<f64> = contacts.1.iter().map(|c| c.dist2.sqrt()).collect();
     let inliers: Vec<f64> = d.into_iter().filter(|&x| x <= inlier_distance).collect();
     let fit = Fit {
         fitness: inliers.len() as f64 / scan.len().max(1) as f64,
@@ -273,13 +342,21 @@ pub fn conclude(
             (inliers.iter().map(|x| x * x).sum::<f64>() / inliers.len() as f64).sqrt()
         },
         inlier_distance,
-        cost: surface.cost(scan, &pose, cap),
+        // (Surface::cost over the scan.)
+        cost: contacts.1.iter().map(|c| c.dist2.min(cap * cap)).sum::<f64>() / scan.len().max(1) as f64,
     };
     // The verdict's checks.
+    // (In a large registration the answer's own, after its final polish, against the whole
+    // model: a model subset's coarser surface leaves more of a scan outside the noise.)
+    let (checked, evidence, costs) = if large {
+        (full, full_evidence, full_evidence.tight_costs(full, &compared, &pose))
+    } else {
+        (surface, evidence, costs)
+    };
     let cap2 = evidence.tight_cap * evidence.tight_cap;
     let explained = costs.iter().filter(|&&c| c < cap2).count() as f64 / costs.len().max(1) as f64;
     let hidden = evidence.viewpoint.map(|v| {
-        crate::pf_icp::evidence::hidden(surface, &compared, &pose, &v).iter().filter(|&&h| h).count() as f64
+        crate::pf_icp::evidence::hidden(checked, &compared, &pose, &v).iter().filter(|&&h| h).count() as f64
             / compared.len().max(1) as f64
     });
     let at_bound = |b: f64| b.is_finite() && (pose.scale / b - 1.0).abs() < 1e-9;

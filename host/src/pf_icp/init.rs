@@ -17,7 +17,7 @@ use crate::cloud::centroid;
 use crate::geometry::Pose;
 use crate::geometry::ScaleBounds;
 use crate::nn::NearestNeighbours;
-use crate::pf_icp::kmeans::{kmeans, Clustering, KmeansSettings, Pairing};
+use crate::pf_icp::kmeans::{kmeans, kmeans_sampled, Clustering, KmeansSettings, Pairing};
 use crate::registration::svd_match::{match_pairs_within, ScaleRule};
 use nalgebra::{Matrix3, Point3, Rotation3, Unit, Vector3};
 use rayon::prelude::*;
@@ -134,9 +134,35 @@ pub fn initial_pose(
     mode: InitMode,
     bounds: &ScaleBounds,
 ) -> InitialPose {
-    let model = nn.points();
+    initial_pose_for(nn, nn.points(), scan, cost_sample, clusters, seed, mode, bounds)
+}
+
+/// [`initial_pose`] for the model `model`, its candidates ranked on the k-d tree `nn`
+/// (the model's own or, in a large registration, its search subsample:
+/// [`crate::pf_icp::SEARCH_MODEL_POINTS`]). In a large registration
+/// ([`crate::pf_icp::is_large`]) each cloud is clustered on a seeded subset of at most
+/// [`crate::pf_icp::KMEANS_POINTS`] points, every point then assigned to its nearest
+/// centroid ([`kmeans_sampled`]).
+#[allow(clippy::too_many_arguments)]
+pub fn initial_pose_for(
+    nn: &NearestNeighbours,
+    model: &[Point3<f64>],
+    scan: &[Point3<f64>],
+    cost_sample: &[Point3<f64>],
+    clusters: usize,
+    seed: u64,
+    mode: InitMode,
+    bounds: &ScaleBounds,
+) -> InitialPose {
     let ks = KmeansSettings { k: clusters, max_iterations: 100, seed };
-    let (scan_clusters, model_clusters) = rayon::join(|| kmeans(scan, &ks), || kmeans(model, &ks));
+    let cluster = |points: &[Point3<f64>]| {
+        if crate::pf_icp::is_large(model.len(), scan.len()) {
+            kmeans_sampled(points, &ks, crate::pf_icp::KMEANS_POINTS)
+        } else {
+            kmeans(points, &ks)
+        }
+    };
+    let (scan_clusters, model_clusters) = rayon::join(|| cluster(scan), || cluster(model));
     let cost = |p: &Pose| nn.sum_dist2(&p.apply_all(cost_sample)) / cost_sample.len() as f64;
     let mut candidates: Vec<(Pose, Pairing)> = Vec::new();
     if mode != InitMode::Nearest

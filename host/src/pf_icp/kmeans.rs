@@ -112,6 +112,46 @@ pub fn kmeans(points: &[Point3<f64>], settings: &KmeansSettings) -> Clustering {
     sequential_sort(points, centroids, labels)
 }
 
+/// Seed offset of [`kmeans_sampled`]'s subset (the k-means++ start keeps the plain seed).
+const SUBSET_SEED: u64 = 0x6b6d_5375_6273_6574;
+
+/// [`kmeans`] on a seeded random subset of at most `sample` points of a larger cloud (all
+/// of them, exactly [`kmeans`], when it has no more), then every point assigned to its
+/// nearest centroid: `labels` and `members` cover the whole cloud, each centroid is the
+/// mean of its members, and the clusters keep the subset's sequential order (two clouds of
+/// the same size draw the same subset, so [`Pairing::Index`] still pairs the paper's
+/// setting). Cost `O(sample K iterations + n log K)` instead of `O(n K iterations)`.
+pub fn kmeans_sampled(points: &[Point3<f64>], settings: &KmeansSettings, sample: usize) -> Clustering {
+    let n = points.len();
+    if n <= sample.max(1) {
+        return kmeans(points, settings);
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(settings.seed ^ SUBSET_SEED);
+    let mut idx = rand::seq::index::sample(&mut rng, n, sample.max(1)).into_vec();
+    idx.sort_unstable();
+    let subset: Vec<Point3<f64>> = idx.iter().map(|&i| points[i]).collect();
+    let coarse = kmeans(&subset, settings);
+    let tree = crate::nn::NearestNeighbours::new(&coarse.centroids);
+    let labels: Vec<usize> = points.par_iter().map(|p| tree.closest(p).index).collect();
+    let k = coarse.centroids.len();
+    let mut members = vec![Vec::new(); k];
+    for (i, &l) in labels.iter().enumerate() {
+        members[l].push(i);
+    }
+    // A cluster that no point is nearest to any more is dropped (order otherwise kept).
+    let kept: Vec<usize> = (0..k).filter(|&j| !members[j].is_empty()).collect();
+    let mut relabel = vec![0; k];
+    for (new, &old) in kept.iter().enumerate() {
+        relabel[old] = new;
+    }
+    let members: Vec<Vec<usize>> = kept.iter().map(|&j| std::mem::take(&mut members[j])).collect();
+    let centroids = members
+        .par_iter()
+        .map(|m| Point3::from(m.iter().fold(nalgebra::Vector3::zeros(), |a, &i| a + points[i].coords) / m.len() as f64))
+        .collect();
+    Clustering { centroids, labels: labels.iter().map(|&l| relabel[l]).collect(), members }
+}
+
 /// Order clusters by their lowest member index and drop any that ended empty.
 fn sequential_sort(points: &[Point3<f64>], centroids: Vec<Point3<f64>>, labels: Vec<usize>) -> Clustering {
     let k = centroids.len();
@@ -181,6 +221,25 @@ mod tests {
         for (ca, cb) in a.centroids.iter().zip(&b.centroids) {
             assert!((pose.apply(ca) - cb).norm() < 1e-9);
         }
+    }
+
+    #[test]
+    fn a_sampled_clustering_covers_every_point_and_commutes_with_a_similarity() {
+        let pts: Vec<Point3<f64>> = (0..20).flat_map(|_| blobs()).collect();
+        let s = KmeansSettings { k: 3, max_iterations: 50, seed: 1 };
+        let c = kmeans_sampled(&pts, &s, 500);
+        assert_eq!(c.labels.len(), pts.len());
+        assert_eq!(c.members.iter().map(Vec::len).sum::<usize>(), pts.len());
+        for (j, m) in c.members.iter().enumerate() {
+            assert!(m.windows(2).all(|w| w[0] < w[1]));
+            assert!(m.iter().all(|&i| c.labels[i] == j && i % 3 == m[0] % 3), "cluster {j} mixes blobs");
+        }
+        let pose = Pose::from_params(&[1.0, -2.0, 0.5, 0.7, 0.3, -0.2, 1.0]);
+        let b = kmeans_sampled(&pose.apply_all(&pts), &s, 500);
+        assert_eq!(c.labels, b.labels);
+        // At most `sample` points: exactly `kmeans`.
+        let small = kmeans_sampled(&pts[..400], &s, 500);
+        assert_eq!(small.labels, kmeans(&pts[..400], &s).labels);
     }
 
     #[test]

@@ -39,11 +39,22 @@ pub const COST_CAP: f64 = 0.05;
 /// Inlier gate of the polish and the curvature, in robust standard deviations.
 const INLIER_SIGMAS: f64 = 3.0;
 
+/// Models of more points than [`crate::pf_icp::LARGE_CLOUD`] get their normals when a
+/// scan point first lands next to them (each the same as if computed up front) and their
+/// spacing from every k-th of at most this many points.
+pub const SPACING_POINTS: usize = 20_000;
+
 /// A model cloud with normals.
 pub struct Surface<'a> {
     nn: &'a NearestNeighbours,
-    normals: Vec<Vector3<f64>>,
+    normals: Normals,
     spacing: f64,
+}
+
+/// The model's normals: all of them, or (a large model) each on first use.
+enum Normals {
+    All(Vec<Vector3<f64>>),
+    OnUse(Vec<std::sync::OnceLock<Vector3<f64>>>),
 }
 
 /// One scan point against the surface.
@@ -56,6 +67,10 @@ pub struct Contact {
     /// [`Surface::distance2`].
     pub dist2: f64,
 }
+
+/// Images of points under a pose, their [`Contact`]s and the inlier mask
+/// ([`Surface::contacts`]).
+pub type Contacts = (Vec<Point3<f64>>, Vec<Contact>, Vec<bool>);
 
 /// `J^T J` and what it says about the pose.
 #[derive(Clone, Debug)]
@@ -110,21 +125,49 @@ pub fn least_axis(points: &[Point3<f64>]) -> Vector3<f64> {
 }
 
 impl<'a> Surface<'a> {
-    /// Normals and spacing of the model behind `nn`.
+    /// Normals and spacing of the model behind `nn` (a model of more than
+    /// [`crate::pf_icp::LARGE_CLOUD`] points: [`SPACING_POINTS`]).
     pub fn new(nn: &'a NearestNeighbours) -> Self {
         let pts = nn.points();
-        let (normals, gaps): (Vec<Vector3<f64>>, Vec<f64>) = pts
-            .par_iter()
-            .map(|p| {
-                let near = nn.nearest_k(p, NORMAL_NEIGHBOURS + 1);
-                let nb: Vec<Point3<f64>> = near.iter().map(|c| pts[c.index]).collect();
-                // The first neighbour at a distance (duplicated points have several at 0).
-                let gap = near.iter().find(|c| c.dist2 > 0.0).map_or(0.0, |c| c.dist2.sqrt());
-                (least_axis(&nb), gap)
-            })
-            .unzip();
+        let local = |p: &Point3<f64>| {
+            let near = nn.nearest_k(p, NORMAL_NEIGHBOURS + 1);
+            let nb: Vec<Point3<f64>> = near.iter().map(|c| pts[c.index]).collect();
+            // The first neighbour at a distance (duplicated points have several at 0).
+            let gap = near.iter().find(|c| c.dist2 > 0.0).map_or(0.0, |c| c.dist2.sqrt());
+            (least_axis(&nb), gap)
+        };
+        if pts.len() > crate::pf_icp::LARGE_CLOUD {
+            let normals: Vec<std::sync::OnceLock<Vector3<f64>>> =
+                (0..pts.len()).map(|_| std::sync::OnceLock::new()).collect();
+            let step = pts.len().div_ceil(SPACING_POINTS).max(1);
+            let gaps: Vec<f64> = (0..pts.len())
+                .into_par_iter()
+                .step_by(step)
+                .map(|i| {
+                    let (n, gap) = local(&pts[i]);
+                    let _ = normals[i].set(n);
+                    gap
+                })
+                .collect();
+            let spacing = crate::registration::icp::median(&gaps);
+            return Self { nn, normals: Normals::OnUse(normals), spacing };
+        }
+        let (normals, gaps): (Vec<Vector3<f64>>, Vec<f64>) = pts.par_iter().map(local).unzip();
         let spacing = crate::registration::icp::median(&gaps);
-        Self { nn, normals, spacing }
+        Self { nn, normals: Normals::All(normals), spacing }
+    }
+
+    /// The normal of model point `i`.
+    #[inline]
+    fn normal(&self, i: usize) -> Vector3<f64> {
+        match &self.normals {
+            Normals::All(n) => n[i],
+            Normals::OnUse(n) => *n[i].get_or_init(|| {
+                let near = self.nn.nearest_k(&self.nn.points()[i], NORMAL_NEIGHBOURS + 1);
+                let nb: Vec<Point3<f64>> = near.iter().map(|c| self.nn.points()[c.index]).collect();
+                least_axis(&nb)
+            }),
+        }
     }
 
     /// The model's k-d tree.
@@ -141,7 +184,7 @@ impl<'a> Surface<'a> {
     pub fn contact(&self, q: &Point3<f64>) -> Contact {
         let c = self.nn.closest(q);
         let point = self.nn.points()[c.index];
-        let normal = self.normals[c.index];
+        let normal = self.normal(c.index);
         let d = q - point;
         let along = normal.dot(&d);
         let tangential = (c.dist2 - along * along).max(0.0).sqrt();
@@ -168,8 +211,8 @@ impl<'a> Surface<'a> {
 
     /// Contacts of `points` under `pose` and the inlier mask: surface distance within
     /// [`INLIER_SIGMAS`] robust standard deviations (1.4826 times the median distance; at
-    /// least half the spacing).
-    fn contacts(&self, points: &[Point3<f64>], pose: &Pose) -> (Vec<Point3<f64>>, Vec<Contact>, Vec<bool>) {
+    /// least half the spacing); the images of `points` first.
+    pub fn contacts(&self, points: &[Point3<f64>], pose: &Pose) -> Contacts {
         let q: Vec<Point3<f64>> = points.iter().map(|p| pose.apply(p)).collect();
         let contacts: Vec<Contact> = q.par_iter().map(|x| self.contact(x)).collect();
         let d: Vec<f64> = contacts.iter().map(|c| c.dist2.sqrt()).collect();
@@ -241,15 +284,21 @@ impl<'a> Surface<'a> {
     /// the undetermined parameters; with `scale_known` the scale is no parameter (its
     /// variance 0, the others' conditional on it).
     pub fn curvature(&self, points: &[Point3<f64>], pose: &Pose, at: &Point3<f64>, scale_known: bool) -> Curvature {
-        let (q, contacts, mask) = self.contacts(points, pose);
+        self.curvature_of(&self.contacts(points, pose), pose, at, scale_known)
+    }
+
+    /// [`Surface::curvature`] from the points' [`Surface::contacts`] under `pose`.
+    pub fn curvature_of(&self, contacts: &Contacts, pose: &Pose, at: &Point3<f64>, scale_known: bool) -> Curvature {
+        let (q, contacts, mask) = contacts;
         let mut jtj = SMatrix::<f64, 7, 7>::zeros();
         let (mut sum2, mut count) = (0.0, 0usize);
         let scale = pose.scale.abs().max(1e-12);
         let kept_points: Vec<Point3<f64>> = (0..q.len()).filter(|&i| mask[i]).map(|i| q[i]).collect();
         let (lo, _) = crate::cloud::bbox(&kept_points);
         let side = (crate::cloud::bbox_diagonal(&kept_points) / 8.0).max(1e-300);
-        let mut gradients: std::collections::HashMap<(i64, i64, i64), SVector<f64, 7>> =
-            std::collections::HashMap::new();
+        // A BTreeMap: the blocks summed in one order, so that the covariance repeats to the bit.
+        let mut gradients: std::collections::BTreeMap<(i64, i64, i64), SVector<f64, 7>> =
+            std::collections::BTreeMap::new();
         // Only the point-to-plane residual: the tangential excess is a penalty for leaving a
         // model point's footprint, not information about where the surface is.
         for i in (0..q.len()).filter(|&i| mask[i]) {
@@ -383,7 +432,7 @@ mod tests {
             .filter(|&i| (pts[i].z - 0.15).abs() < 1e-9 && pts[i].x.abs() < 0.3 && pts[i].y.abs() < 0.15)
             .collect();
         assert!(top.len() > 50);
-        assert!(top.iter().all(|&i| s.normals[i].z.abs() > 0.99));
+        assert!(top.iter().all(|&i| s.normal(i).z.abs() > 0.99));
         // Above the face by 0.01: the surface distance is 0.01 whatever the sampling.
         let q = Point3::new(0.05, 0.02, 0.16);
         assert!((s.distance2(&q).sqrt() - 0.01).abs() < 1e-3);
