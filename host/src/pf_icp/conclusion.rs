@@ -272,7 +272,19 @@ pub fn conclude_on(
             })
             .collect::<Vec<_>>(),
     );
-    let best = choose(&polished);
+    // Among the poses the tight cost cannot tell from the best (the best's alternatives,
+    // below), the wide cost decides: a feature that misfits by more than the tight cap (a
+    // notch, a boss, a keyway) costs the cap either way under the tight cost, but its
+    // misfit's size still shows in the wide one.
+    let best = {
+        let first = choose(&polished);
+        let tied: Vec<usize> = (0..polished.len())
+            .filter(|&i| i == first || paired_excess(&polished[first].1, &polished[i].1) < ALTERNATIVE_SIGMAS)
+            .collect();
+        let wide: Vec<(usize, f64)> =
+            tied.par_iter().map(|&i| (i, evidence.wide_cost(surface, &compared, &polished[i].0))).collect();
+        wide.iter().min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0))).map_or(first, |w| w.0)
+    };
     let (mut pose, costs) = (polished[best].0, polished[best].1.clone());
     if large {
         // The winner against the whole model, on every k-th scan point.

@@ -23,8 +23,8 @@ pub const STEP_DEG: f64 = 15.0;
 pub const MIN_MATCHED: f64 = 0.85;
 /// A point is matched within this many model spacings of the surface.
 pub const MATCH_SPACINGS: f64 = 2.0;
-/// Most near-symmetries kept.
-pub const MAX_SYMMETRIES: usize = 8;
+/// Most near-symmetries kept (a cube's group has 23 besides the identity).
+pub const MAX_SYMMETRIES: usize = 23;
 /// Least angle between two kept near-symmetries [deg].
 pub const DISTINCT_DEG: f64 = 10.0;
 /// Model points each candidate is tested on.
