@@ -98,7 +98,7 @@ const SEARCH_MODEL_SEED: u64 = 0x7365_6172_6368;
 /// 500,000); on a subset as large as a small registration's scan it does not.
 pub const NOISE_POINTS: usize = 20_000;
 /// Seed offset of the noise estimate's scan subset.
-const NOISE_SEED: u64 = 0x6e6f_6973_65;
+const NOISE_SEED: u64 = 0x006e_6f69_7365;
 
 /// Whether a registration of a `scan_points` scan to a `model_points` model takes the
 /// large-cloud path ([`LARGE_CLOUD`]).
