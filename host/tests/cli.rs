@@ -97,7 +97,18 @@ fn bad_settings_give_one_line_errors() {
     assert_error(&register(&good, &good, &["--iterations", "0"]), &["--iterations"]);
     assert_error(&register(&good, &good, &["--clusters", "0"]), &["--clusters"]);
     assert_error(&register(&good, &good, &["--out-aligned", "x.unknown"]), &["x.unknown"]);
-    // clap's own errors (unknown method) exit with 2 and no panic.
+    for bad in [["--scale", "0"], ["--scale", "-2"], ["--scale", "NaN"], ["--scale", "inf"]] {
+        assert_error(&register(&good, &good, &bad), &["--scale"]);
+    }
+    assert_error(&register(&good, &good, &["--scale-range", "2,1"]), &["--scale-range", "LO <= HI"]);
+    assert_error(&register(&good, &good, &["--scale-range", "0,1"]), &["--scale-range"]);
+    assert_error(&register(&good, &good, &["--scale-range", "1"]), &["--scale-range", "two numbers"]);
+    assert_error(&register(&good, &good, &["--viewpoint", "1,2"]), &["--viewpoint"]);
+    assert_error(&register(&good, &good, &["--viewpoint", "1,nan,2"]), &["--viewpoint"]);
+    assert_error(&register(&good, &good, &["--method", "em-icp", "--scale", "1"]), &["--scale", "em-icp"]);
+    // clap's own errors (unknown method, --scale with --scale-range) exit with 2 and no panic.
+    let o = register(&good, &good, &["--scale", "1", "--scale-range", "1,2"]);
+    assert_eq!(o.status.code(), Some(2));
     let o = register(&good, &good, &["--method", "magic"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(!stderr(&o).contains("panicked"));
@@ -128,6 +139,28 @@ fn gen_then_register_recovers_the_truth() {
     assert!((r["scale"].as_f64().unwrap() / truth["scale"].as_f64().unwrap() - 1.0).abs() < 0.005);
     let aligned_text = std::fs::read_to_string(&aligned).unwrap();
     assert_eq!(aligned_text.lines().filter(|l| !l.trim().is_empty() && !l.starts_with('#')).count(), 1200);
+}
+
+/// With --scale the result has exactly that scale, the settings record it, the reproduce
+/// command carries it, and the verdict comes first in the text.
+#[test]
+fn a_fixed_scale_is_kept_and_recorded() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = gen(dir.path(), &["--model", "model-2", "--points", "1200"]);
+    let truth: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&files[2]).unwrap()).unwrap();
+    let s = truth["scale"].as_f64().unwrap().to_string();
+    let o = register(Path::new(&files[0]), Path::new(&files[1]), &["--json", "--scale", &s]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(r["scale"].as_f64().unwrap().to_string(), s);
+    assert_eq!(r["settings"]["scale"].as_f64().unwrap().to_string(), s);
+    assert!(r["command"].as_str().unwrap().contains("--scale"));
+    assert!(["confident", "ambiguous", "unreliable"].contains(&r["verdict"].as_str().unwrap()));
+    let o = register(Path::new(&files[0]), Path::new(&files[1]), &["--scale-range", "0.9,1.0"]); // the truth 0.8333 below it
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8(o.stdout).unwrap();
+    assert!(text.starts_with("verdict      unreliable"), "{text}");
+    assert!(text.lines().next().unwrap().contains("bound of --scale-range"), "{text}");
 }
 
 #[test]
