@@ -12,7 +12,7 @@
 //!   clutter (10% of a camera view, 5% of the diagonal away) no pull.
 //! - **Visibility** ([`hidden`]): with the sensor's position known (`--viewpoint`), a scan
 //!   point that the model's surface would hide from the sensor (model surface in front of
-//!   it, along the sensor's ray, by more than [`HIDDEN_DEPTH`] noise-free spacings) could
+//!   it, along the sensor's ray, by more than [`HIDDEN_DEPTH`] model spacings) could
 //!   not have been seen: a pose that lays the scan on surface facing away from the sensor,
 //!   or inside the part, is wrong. The model's surface as the sensor would see it is a
 //!   point z-buffer ([`crate::visibility`]; pixels [`PIXEL_SPACINGS`] model spacings wide

@@ -9,6 +9,8 @@
 //!   candidate the k-means stage refined (principal-frame flips and sweeps);
 //! - a uniform set of rotations ([`rotation_grid`], super-Fibonacci samples of SO(3)),
 //!   each with the centroids' translation and the ratio of RMS radii as scale;
+//! - with the sensor's position known, the same rotations as the sensor would see the
+//!   model ([`view_starts`]: the scan's centroid on the centroid of the seen part);
 //! - feature-based proposals ([`crate::pf_icp::features`]: FPFH correspondences, RANSAC), which
 //!   the caller adds to the starts.
 //!
@@ -18,7 +20,9 @@
 //! [`SearchSettings::screen_keep`] [`SearchSettings::coarse_iterations`] more on
 //! [`SearchSettings::coarse_points`], the best [`SearchSettings::keep`]
 //! [`SearchSettings::fine_iterations`] more on [`SearchSettings::fine_points`]
-//! (least-squares scale); ranked by [`Surface::cost`] over the whole cost sample. Poses
+//! (least-squares scale); ranked by the wide cost in the scan's units
+//! ([`Evidence::wide_cost`]) over the whole cost sample; every scale within the user's
+//! bounds. Poses
 //! count as distinct when they differ by more than 5 deg, 2% of the diagonal at the scan's
 //! centroid or 2% in scale; a scale outside half to twice the median start's (the radius
 //! ratio) is a collapse and dropped (which also bounds the views it handles: a view so
