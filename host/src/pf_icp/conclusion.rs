@@ -26,8 +26,10 @@
 //!    the residual gradients summed over spatial blocks, an eighth of the scan's diagonal
 //!    wide, never below the independent residuals' `sigma^2 H^-1`), `k` =
 //!    [`COVARIANCE_INFLATION`] (calibrated on the realistic benchmark's dev
-//!    split, docs/decisions.md); with the scale fixed, the scale is no parameter (its row
-//!    and column 0). Parameters the scan cannot determine are named, and their rows and
+//!    split, docs/decisions.md), plus the spread of where restarts of the polish about
+//!    the answer end that fit as well ([`crate::pf_icp::probe`]: a bumpy surface's shallow
+//!    minima a few degrees apart, which the curvature at one of them does not see); with
+//!    the scale fixed, the scale is no parameter (its row and column 0). Parameters the scan cannot determine are named, and their rows and
 //!    columns are left out (`None`) instead of printed as a confident number.
 //! 4. **Fit** (as Open3D's `fitness` and `inlier_rmse`, on the surface distance of
 //!    [`Surface::distance2`] rather than to the nearest model point, so that it does not
@@ -46,7 +48,6 @@ use crate::pf_icp::hypotheses::{same_pose, Hypothesis};
 use crate::pf_icp::surface::{Surface, COST_CAP};
 use crate::pf_icp::verdict::{judge, Checks, Verdict};
 use nalgebra::Point3;
-use nalgebra::Rotation3;
 use rayon::prelude::*;
 
 /// Hypotheses polished and compared at the end besides the filter's estimate: the best
@@ -159,8 +160,20 @@ fn paired_excess(best: &[f64], other: &[f64]) -> f64 {
 /// image of `at`).
 pub fn local_error(pose: &Pose, reference: &Pose, at: &Point3<f64>) -> [f64; 7] {
     let t = pose.apply(at) - reference.apply(at);
-    let r = Rotation3::from_matrix_unchecked(pose.rotation * reference.rotation.transpose()).scaled_axis();
+    let r = rotation_vector(&(pose.rotation * reference.rotation.transpose()));
     [t.x, t.y, t.z, pose.scale - reference.scale, r.x, r.y, r.z]
+}
+
+/// The rotation vector (axis times angle) of a rotation matrix, from its skew part and its
+/// trace by `atan2`: finite and accurate near the identity even when rounding has put the
+/// trace a hair above 3 (where nalgebra's `scaled_axis`, by `acos`, gives NaN).
+pub fn rotation_vector(r: &nalgebra::Matrix3<f64>) -> nalgebra::Vector3<f64> {
+    let v = 0.5 * nalgebra::Vector3::new(r[(2, 1)] - r[(1, 2)], r[(0, 2)] - r[(2, 0)], r[(1, 0)] - r[(0, 1)]);
+    let (sin, cos) = (v.norm(), 0.5 * (r.trace() - 1.0));
+    if sin < 1e-300 {
+        return nalgebra::Vector3::zeros();
+    }
+    v * (sin.atan2(cos) / sin)
 }
 
 /// The poses polished and compared at the end (step 1 of the module doc): the filter's
@@ -330,7 +343,28 @@ pub fn conclude_on(
     // its rounding, not 0.)
     let independent = inv * curv.residual_variance.max((1e-9 * diag).powi(2));
     let cov = if sandwich.trace() > independent.trace() { sandwich } else { independent } * k2;
-    let known = |k: usize| !curv.degeneracy.free[k];
+    // The basin probe's spread: where restarts of the polish about the answer end that
+    // fit the scan as well ([`crate::pf_icp::probe`]).
+    let probe = crate::pf_icp::probe::probe(
+        surface,
+        evidence,
+        &compared,
+        &pose,
+        &evidence.tight_costs(surface, &compared, &pose),
+        polish_iterations,
+        bounds,
+        &at,
+        diag,
+        |best, other| paired_excess(best, other) < ALTERNATIVE_SIGMAS,
+    );
+    let cov = cov + probe.spread;
+    // (A parameter whose variance is not a finite number is reported as undetermined: a
+    // NaN must never print as a confident 0.)
+    let mut undetermined = curv.degeneracy.motions.clone();
+    if (0..7).any(|k| !curv.degeneracy.free[k] && !cov[(k, k)].is_finite()) {
+        undetermined.push("any parameter (the covariance is not a finite number)".to_string());
+    }
+    let known = |k: usize| !curv.degeneracy.free[k] && cov[(k, k)].is_finite();
     let mut covariance = [[None; 7]; 7];
     let mut sigma = [None; 7];
     for a in 0..7 {
@@ -379,7 +413,7 @@ pub fn conclude_on(
         hidden,
         scale_at_bound,
         alternatives: alternatives.len(),
-        undetermined: curv.degeneracy.motions.clone(),
+        undetermined: undetermined.clone(),
         widest_sigma: [widest(4..7, 1f64.to_radians()), widest(0..3, diag), widest(3..4, pose.scale)],
     };
     let (verdict, reasons) = judge(&checks);
@@ -387,7 +421,7 @@ pub fn conclude_on(
         pose,
         from_hypothesis: best != 0,
         alternatives,
-        uncertainty: Uncertainty { covariance, sigma, undetermined: curv.degeneracy.motions },
+        uncertainty: Uncertainty { covariance, sigma, undetermined },
         fit,
         checks,
         verdict,
@@ -440,6 +474,26 @@ mod tests {
             "{:?}",
             c.uncertainty.sigma
         );
+    }
+}
+
+#[cfg(test)]
+mod rotation_vector_tests {
+    use super::rotation_vector;
+    use nalgebra::{Matrix3, Rotation3, Vector3};
+
+    #[test]
+    fn the_rotation_vector_is_finite_near_the_identity_and_exact_elsewhere() {
+        for v in [Vector3::new(0.3, -0.2, 0.5), Vector3::new(1e-7, 0.0, -2e-7), Vector3::new(0.0, 2.5, 0.1)] {
+            let r = Rotation3::new(v).into_inner();
+            assert!((rotation_vector(&r) - v).norm() < 1e-12, "{v:?}");
+        }
+        // A near-identity matrix whose trace rounding put above 3.
+        let mut r = Rotation3::new(Vector3::new(1e-9, 0.0, 0.0)).into_inner();
+        r += Matrix3::identity() * 1e-12;
+        assert!(r.trace() > 3.0);
+        let e = rotation_vector(&r);
+        assert!(e.iter().all(|x| x.is_finite()) && (e.x - 1e-9).abs() < 1e-12, "{e:?}");
     }
 }
 

@@ -15,13 +15,20 @@
 //!   it, along the sensor's ray, by more than [`HIDDEN_DEPTH`] model spacings) could
 //!   not have been seen: a pose that lays the scan on surface facing away from the sensor,
 //!   or inside the part, is wrong. The model's surface as the sensor would see it is a
-//!   point z-buffer ([`crate::visibility`]; pixels [`PIXEL_SPACINGS`] model spacings wide
-//!   at the scan's distance).
+//!   surfel image ([`crate::visibility::SurfelImage`]: each model point a disc
+//!   [`SURFEL_SPACINGS`] model spacings in radius in its normal's plane, pixels
+//!   [`PIXEL_SPACINGS`] spacing wide at the scan's distance), and each scan point is
+//!   compared with the surface's depth along its own ray. A point z-buffer (the nearest
+//!   sample a pixel five spacings wide) put the surface up to a pixel's width times the
+//!   tangent of the viewing angle in front of itself: on the right poses of the camera
+//!   views' dev split it called 5 to 12% of the scan hidden that lies on the surface; the
+//!   surfels 0.3 to 1.7% (discs 1.5 spacings wide leave a fifth of a randomly sampled
+//!   surface uncovered, 2 spacings about 6%).
 
 use crate::geometry::Pose;
 use crate::nn::NearestNeighbours;
 use crate::pf_icp::surface::Surface;
-use crate::visibility::{DepthImage, View};
+use crate::visibility::{SurfelImage, View};
 use nalgebra::{Matrix3, Point3, Vector3};
 use rayon::prelude::*;
 
@@ -30,7 +37,11 @@ pub const NOISE_NEIGHBOURS: usize = 10;
 /// Cap of [`scan_cost`], in noise sigmas.
 pub const SCAN_CAP_SIGMAS: f64 = 3.0;
 /// Width of a visibility pixel, in the model's spacings.
-pub const PIXEL_SPACINGS: f64 = 5.0;
+pub const PIXEL_SPACINGS: f64 = 1.0;
+/// Radius of each model point's disc in the visibility image, in the model's spacings.
+pub const SURFEL_SPACINGS: f64 = 2.0;
+/// Most model points drawn into the visibility image.
+pub const MAX_SURFELS: usize = 20_000;
 /// A scan point is hidden when model surface lies this many model spacings in front of it.
 pub const HIDDEN_DEPTH: f64 = 6.0;
 
@@ -134,14 +145,14 @@ pub fn hidden(surface: &Surface, scan: &[Point3<f64>], pose: &Pose, viewpoint: &
     let Some(view) = View::new(pose.apply(viewpoint), &crate::cloud::centroid(&q), PIXEL_SPACINGS * h) else {
         return vec![false; scan.len()];
     };
+    // At most MAX_SURFELS of the model's points (every k-th, their discs sqrt(k) wider).
+    let model = surface.nn().points();
+    let stride = model.len().div_ceil(MAX_SURFELS).max(1);
+    let (points, normals): (Vec<Point3<f64>>, Vec<Vector3<f64>>) =
+        (0..model.len()).step_by(stride).map(|i| (model[i], surface.normal(i))).unzip();
+    let image = SurfelImage::new(view, &points, &normals, SURFEL_SPACINGS * h * (stride as f64).sqrt(), &q);
     let tolerance = HIDDEN_DEPTH * h;
-    let image = DepthImage::new(view, surface.nn().points(), 2.0 * tolerance);
-    q.iter()
-        .map(|p| match view.project(p) {
-            Some((px, d)) => image.front(px).is_some_and(|z| z < d - tolerance),
-            None => false,
-        })
-        .collect()
+    q.iter().map(|p| matches!(image.front(p), Some((Some(z), d)) if z < d - tolerance)).collect()
 }
 
 #[cfg(test)]
@@ -186,6 +197,11 @@ mod tests {
         // The front face turned onto the back face, the eye staying above the front face.
         let back: Vec<Point3<f64>> = front.iter().map(|p| turn.apply(p)).collect();
         let flagged = hidden(&surface, &back, &Pose::identity(), &eye);
-        assert!(flagged.iter().filter(|&&h| h).count() * 10 > 9 * back.len());
+        assert!(
+            flagged.iter().filter(|&&h| h).count() * 10 > 9 * back.len(),
+            "{} of {}",
+            flagged.iter().filter(|&&h| h).count(),
+            back.len()
+        );
     }
 }

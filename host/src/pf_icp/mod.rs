@@ -34,6 +34,7 @@ pub mod hypotheses;
 pub mod init;
 pub mod kmeans;
 pub mod particle_filter;
+pub mod probe;
 pub mod surface;
 pub mod symmetry;
 pub mod verdict;

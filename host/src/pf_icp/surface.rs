@@ -157,9 +157,9 @@ impl<'a> Surface<'a> {
         Self { nn, normals: Normals::All(normals), spacing }
     }
 
-    /// The normal of model point `i`.
+    /// The normal of model point `i` (unit).
     #[inline]
-    fn normal(&self, i: usize) -> Vector3<f64> {
+    pub fn normal(&self, i: usize) -> Vector3<f64> {
         match &self.normals {
             Normals::All(n) => n[i],
             Normals::OnUse(n) => *n[i].get_or_init(|| {

@@ -50,9 +50,9 @@ impl Verdict {
 }
 
 /// Least fraction of the scan explained.
-pub const MIN_EXPLAINED: f64 = 0.75;
+pub const MIN_EXPLAINED: f64 = 0.8;
 /// Largest fraction of the scan hidden from the sensor by the model.
-pub const MAX_HIDDEN: f64 = 0.2;
+pub const MAX_HIDDEN: f64 = 0.08;
 /// Widest one-sigma rotation [deg].
 pub const MAX_SIGMA_DEG: f64 = 1.0;
 /// Widest one-sigma translation, as a fraction of the model's diagonal.
