@@ -21,8 +21,9 @@ pub struct BoardConfig {
 }
 
 /// The default board: 8 lanes (16 with the on-board polish pass 80% of the LUTs,
-/// docs/polish.md), the design clock straight from the default pin map's 50 MHz
-/// oscillator (constraints/pinmap.toml: no DCM), [`DEFAULT_BAUD`] (16 2/3 clocks per bit).
+/// docs/resources.md, "Why 8 lanes"), the design clock straight from the default pin map's
+/// 50 MHz oscillator (constraints/pinmap.toml: no DCM), [`DEFAULT_BAUD`] (16 2/3 clocks per
+/// bit).
 /// This is the board `hdl-gen` generates and `pficp-sim-board` serves.
 impl Default for BoardConfig {
     fn default() -> Self {

@@ -1,6 +1,6 @@
 //! The model's cell grid for the board's nearest-neighbour search: the format the host
-//! builds and the board will store, and the search's bit-exact functional reference
-//! (issue 13; the RTL twin and the protocol's upload come with the grid pipeline).
+//! builds and the board stores (LoadModel, LoadTable), and the search's bit-exact
+//! functional reference (docs/search.md).
 //!
 //! **Cells.** The grid covers the cube `[-1, 1]^3` of normalised units (the host normalises
 //! the model into the unit ball, docs/fixed-point.md) with [`CELLS_PER_AXIS`] cells per

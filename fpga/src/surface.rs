@@ -1,9 +1,9 @@
 //! The board's surface residual: the squared distance of a transformed scan point to the
 //! tangent plane of its nearest stored model point, the bit-exact rule the residual stage
-//! (`SurfaceResidual`, docs/pipeline.md "The surface residual") computes and the filter's
-//! cost would sum in place of the point-to-point distance.
+//! (`SurfaceResidual`, docs/pipeline.md "The surface residual") computes and the board's
+//! costs sum in place of the point-to-point distance.
 //!
-//! **Why** (docs/decisions.md, "The surface residual"): a point-to-point distance to a
+//! **Why** (docs/board-modes.md, "The surface residual"): a point-to-point distance to a
 //! model of 2,000 points is mostly the model's sampling (a scan point on the surface lies
 //! up to half a spacing from the nearest sample), so the minimum of the board's cost lies a
 //! fraction of a spacing from the truth: scale errors of 1 to 2.7% on the realistic set,

@@ -12,7 +12,7 @@
 //! `cargo test --release -p pficp-host --test board_accuracy -- --ignored --nocapture`
 //! (`PFICP_TRIALS` random transforms a row, default 30; `PFICP_CASES` cases a family,
 //! default 8, the quick set; `PFICP_SPLIT=test` for the held-out split, default dev). The
-//! figures are in docs/polish.md.
+//! figures are in docs/on-board-polish.md, "Accuracy".
 
 use pficp::eval::realistic::{self, Family, RealisticOptions, Split};
 use pficp::eval::{success, EvalOptions, BOARD_COLUMN, BOARD_FILTER_COLUMN};
@@ -83,7 +83,7 @@ fn tally<'a>(rows: impl Iterator<Item = (Vec<(&'a str, usize)>, usize)>) -> Coun
 }
 
 #[test]
-#[ignore = "a few minutes in release; prints the figures of docs/polish.md"]
+#[ignore = "a few minutes in release; prints the figures of docs/on-board-polish.md"]
 fn the_board_mode_is_as_good_as_the_software_mode() {
     let mut failures = Vec::new();
     for (set, (counts, total)) in [("models 1-3", models()), ("realistic", realistic_set())] {

@@ -165,7 +165,8 @@ fn a_running_board_is_polled_and_busy_is_not_resent() {
 /// Model-1 with 300 model points and an independent, noisy 300-point scan (seed 5). On
 /// clouds this small the filter without ICP between iterations ends about 2 degrees off in
 /// about one case in six (seed 3 is one; the software mode misses others, e.g. seed 2):
-/// docs/decisions.md has the measured rates on the full-size models.
+/// docs/board-modes.md, "Scan points per weight", has the measured rates on the full-size
+/// models.
 fn reduced_model_1() -> (pficp::datasets::Dataset, f64) {
     let id = ModelId::Model1;
     let diag = bbox_diagonal(&id.model_points(300));

@@ -18,7 +18,7 @@
 //! (`PFICP_SPLIT=test` for the test split, default dev; `PFICP_POLISH_STEPS` and
 //! `PFICP_POLISH_STARTS` for fewer steps and starts; `PFICP_CASES` cases a family, default
 //! 8). The tables are in
-//! docs/polish.md.
+//! docs/on-board-polish.md.
 
 use pficp::board::fixed::{normalised_pose, original_pose, quantise_pose, restore_pose};
 use pficp::board::on_board::{self, plan, OnBoardPlan};
@@ -120,7 +120,7 @@ fn row(name: &str, ok: &[[bool; 6]]) -> [usize; 6] {
 }
 
 #[test]
-#[ignore = "a minute or two in release; prints the tables of docs/polish.md"]
+#[ignore = "a minute or two in release; prints the tables of docs/on-board-polish.md"]
 fn the_polish_on_the_board() {
     let split = if std::env::var("PFICP_SPLIT").is_ok_and(|v| v == "test") { Split::Test } else { Split::Dev };
     println!(

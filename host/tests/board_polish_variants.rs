@@ -12,8 +12,8 @@
 //! them.
 //!
 //! The board's time for a setting is the on-board bench's (`pficp-onboard-bench
-//! --polish-steps S --polish-points N`). The tables are in docs/polish.md ("Shipped" and
-//! "The pass at 14 clocks an inlier").
+//! --polish-steps S --polish-points N`). The tables are in docs/on-board-polish.md ("Eight
+//! starts, the winner polished further" and "Alternatives measured").
 //!
 //! Slow (about 4 minutes for 100 cases a family): ignored by default. Run it with
 //! `PFICP_CASES=100 PFICP_SEED=2 cargo test --release -p pficp-host --test
@@ -89,7 +89,7 @@ const H15: &[usize] = &[0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14];
 
 const VARIANTS: [Variant; 34] = [
     halving("8 starts, 5 steps over all, the winner 5 more (shipped)", H7, 5, 1, 5),
-    v("3 starts, 5 steps (stops 31 and 32)", H2, 5, 0),
+    v("3 starts, 5 steps (protocol 5's setting)", H2, 5, 0),
     v("3 starts, 8 steps", H2, 8, 0),
     v("3 starts, 15 steps", H2, 15, 0),
     v("3 starts, 5 steps, at most 500 points", H2, 5, 500),
@@ -118,7 +118,7 @@ const VARIANTS: [Variant; 34] = [
     v("5 starts, 10 steps", H4, 10, 0),
     v("5 starts, hypotheses 2 to 5 (not the filter's start), 10 steps", H1_4, 10, 0),
     v("6 starts, 10 steps", H5, 10, 0),
-    v("3 starts, 10 steps, all points (stop 33)", H2, 10, 0),
+    v("3 starts, 10 steps, all points (the 3-start setting)", H2, 10, 0),
     halving("8 starts, 5 steps over all, the best two 5 more", H7, 5, 2, 5),
     halving("16 starts, 3 steps over all, the best two 7 more", H15, 3, 2, 7),
     halving("8 starts, 4 steps over all, the best two 6 more", H7, 4, 2, 6),
@@ -209,7 +209,7 @@ fn selected(i: usize) -> bool {
 }
 
 #[test]
-#[ignore = "minutes in release; prints the tables of docs/polish.md"]
+#[ignore = "minutes in release; prints the tables of docs/on-board-polish.md"]
 fn the_polish_settings_on_the_dev_split() {
     let cases = env_or("PFICP_CASES", 32) as usize;
     let seed = env_or("PFICP_SEED", 1);

@@ -14,7 +14,7 @@
 //! `PFICP_SAMPLE_UNCAPPED=1` to emulate the protocol 2 board instead: the brute-force
 //! search, distances not capped, to see what the grid's cap changes). The board's cost is
 //! the surface residual (protocol 4, `pficp_fpga::surface`). The tables they print are in
-//! docs/decisions.md.
+//! docs/board-modes.md.
 
 use pficp::board::fixed::{normalised_pose, quantise_pose};
 use pficp::board::on_board;
@@ -58,7 +58,7 @@ fn env_list(name: &str, default: &[usize]) -> Vec<usize> {
 }
 
 #[test]
-#[ignore = "minutes in release; prints the table of docs/decisions.md"]
+#[ignore = "minutes in release; prints the table of docs/board-modes.md"]
 fn scan_points_per_weight_on_the_board() {
     let seeds = env_list("PFICP_SAMPLE_SEEDS", &[10])[0] as u64;
     let noise_percent =
@@ -221,7 +221,7 @@ fn the_clock_bound_holds_on_models_1_to_3() {
 /// to 3 (2,000 model points, a 1,000-point scan, seed 3; 300 board points by default,
 /// `PFICP_SAMPLE_SIZES` for others).
 #[test]
-#[ignore = "seconds in release; prints the table of docs/decisions.md"]
+#[ignore = "seconds in release; prints the table of docs/board-modes.md"]
 fn morton_order_clocks() {
     let lanes = BoardConfig::default().lanes;
     println!(

@@ -8,7 +8,7 @@
 //! Slow (a minute or two): ignored by default. Run it with
 //! `cargo test --release -p pficp-host --test surface_residual_figures -- --ignored --nocapture`
 //! (`PFICP_SPLIT=test` for the test split, default dev; `PFICP_BOARD_POINTS=N` for another
-//! sample size). The tables it printed are in docs/decisions.md, "The surface residual".
+//! sample size). The tables it printed are in docs/board-modes.md, "The surface residual".
 
 use pficp::board::on_board::{self, plan};
 use pficp::eval::realistic::{case, score, Family, Split};
@@ -17,7 +17,7 @@ use pficp::pf_icp::PfIcpSettings;
 use rayon::prelude::*;
 
 #[test]
-#[ignore = "a minute or two in release; prints the table of docs/decisions.md"]
+#[ignore = "a minute or two in release; prints the table of docs/board-modes.md"]
 fn the_board_alone_with_the_surface_residual() {
     let split = if std::env::var("PFICP_SPLIT").is_ok_and(|v| v == "test") { Split::Test } else { Split::Dev };
     let points =

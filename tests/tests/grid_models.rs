@@ -2,7 +2,7 @@
 //! quantises them (`pficp::board::fixed`): every normalised model fits the grid, the search
 //! equals the capped brute force on their scans at the truth and at poses off it, and the
 //! work it does (candidates a scan point, points capped) is printed for the design
-//! (docs/decisions.md, the grid search).
+//! (docs/search.md, "The grid and the cap").
 
 use pficp::board::fixed::{normalised_pose, quantise_pose, Normalisation};
 use pficp::datasets::{make, ModelId, Sampling, ScanSpec};

@@ -1,6 +1,6 @@
 //! The grid pipeline on the paper's models 1 to 3 as the host quantises them (2,000 model
 //! points): the Verilated `GridPipeline<16>` in lockstep with its cycle model on every clock,
-//! each result the capped search; and the figures (docs/decisions.md, the grid pipeline):
+//! each result the capped search; and the figures (docs/search.md, "Alternatives measured"):
 //! clocks per particle, distances a clock and lane use, against the brute-force pipeline,
 //! with the scan sample in random order and sorted by cell.
 //! `cargo test --release -p pficp-tests --test grid_pipeline_models -- --nocapture`

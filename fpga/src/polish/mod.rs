@@ -1,14 +1,14 @@
 //! The on-board polish: point-to-plane Gauss-Newton with scale over the board's own stores,
-//! the bit-exact reference of what the board is to run after its particle filter
-//! (docs/polish.md).
+//! the bit-exact reference of what the board runs after its particle filter
+//! (docs/on-board-polish.md; its RTL: docs/polish-datapath.md).
 //! This model fixes the arithmetic the RTL must match, and the host's figures
 //! (`host/tests/board_polish_figures.rs`) measure it. The arithmetic between passes (the
 //! gate, the solve, the update, the drift check) runs as programs ([`programs`], in the
 //! instruction set of [`program`]) on a datapath that is built
 //! (`crate::rtl::polish::PolishProgram`), and a pass's point ([`PassSums::add_point`],
 //! [`jacobian`]) has its RTL (`crate::rtl::polish::PolishPass`), and so has the sequence of
-//! [`polish_best`] (`crate::rtl::polish::PolishControl`); the polish's place in the board
-//! top is not built yet.
+//! [`polish_best`] (`crate::rtl::polish::PolishControl`); the board's engine runs them after
+//! the filter.
 //!
 //! **Why.** The filter minimises its cost over 50 particles x 50 iterations; among those
 //! 2,500 poses the lowest cost belongs to a pose a little off the truth (on 30 of the 32
@@ -305,7 +305,7 @@ pub fn polish_best(
 /// again as a start of its own (a statistics pass, `winner_steps` steps, the drift bounds
 /// from that pose: beyond them it stays as it was) and costed again. Many starts with a few
 /// steps each and the winner's further steps cost less than every start's steps in full
-/// (docs/polish.md, "Eight starts, the winner polished further"). Returns the winner's
+/// (docs/on-board-polish.md, "Eight starts, the winner polished further"). Returns the winner's
 /// index, its final polish (its steps the second polish's) and its final cost.
 pub fn polish_winner_over(
     search: &impl Search,

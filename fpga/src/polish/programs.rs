@@ -1,12 +1,13 @@
 //! The polish's programs (in [`super::program`]'s instruction set) and the ROM that holds
 //! them ([`rom`]): the arithmetic of [`super::polish`] between its passes, as the board
-//! runs it. The board's control (not built yet) loads a start's pose at [`POSE`], runs
-//! [`Entry::Start`] and [`Entry::Clear`], lets a pass add its sums and statistics, then per
-//! step runs [`Entry::Gate`] (and [`Entry::Clear`]), a gated pass, [`Entry::Solve`] and
-//! [`Entry::Update`]; at the end [`Entry::Drift`]. A failed program ends the steps (gate,
-//! solve) or drops the polish (drift). [`super::gate`], [`super::solve`], [`super::update`]
-//! and [`super::within_drift`] run these programs, so the programs are the reference; the
-//! module's tests hold them to the direct formulas of [`super`]'s module doc.
+//! runs it. The board's control (`crate::rtl::polish::PolishControl`) loads a start's pose
+//! at [`POSE`], runs [`Entry::Start`] and [`Entry::Clear`], lets a pass add its sums and
+//! statistics, then per step runs [`Entry::Gate`] (and [`Entry::Clear`]), a gated pass,
+//! [`Entry::Solve`] and [`Entry::Update`]; at the end [`Entry::Drift`]. A failed program
+//! ends the steps (gate, solve) or drops the polish (drift). [`super::gate`],
+//! [`super::solve`], [`super::update`] and [`super::within_drift`] run these programs, so
+//! the programs are the reference; the module's tests hold them to the direct formulas of
+//! [`super`]'s module doc.
 //!
 //! Every program writes its working registers before it reads them, so what an earlier
 //! program left there does not matter (a test fills them with noise).

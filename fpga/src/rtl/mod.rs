@@ -21,8 +21,8 @@
 //! - [`polish`]: the on-board polish's blocks: `PolishProgram`, the datapath of the
 //!   polish's programs ([`crate::polish::programs`]), `PolishPass`, a pass's point
 //!   ([`crate::polish::PassSums::add_point`]), and `PolishControl`, the sequence of
-//!   [`crate::polish::polish_best`], wired together in `PolishUnit`; not in the board top
-//!   yet;
+//!   [`crate::polish::polish_best`], wired together in `PolishUnit`, which the board's
+//!   engine runs after the filter;
 //! - [`board`]: the board top and its blocks, the sequencer among them
 //!   ([`crate::board::BoardModel`], [`crate::sequencer::SequencerModel`]).
 //!
@@ -166,7 +166,7 @@ pub fn word_pose(w: Bits<216>) -> crate::format::FxPose {
 }
 
 /// The Verilog of the polish's datapath alone with the polish's programs in ROM
-/// (`PolishProgram::polish`, docs/polish.md), top module
+/// (`PolishProgram::polish`, docs/polish-datapath.md), top module
 /// `top`; the register file marked `ram_style = "distributed"`
 /// ([`distributed_register_files`]).
 pub fn polish_program_verilog() -> String {
@@ -186,7 +186,7 @@ pub fn polish_bench_verilog() -> String {
     waive_unused_wires(&v, &["mul$busy", "mul$valid"])
 }
 
-/// The Verilog of the whole polish as the board will instantiate it (`PolishUnit`: the
+/// The Verilog of the whole polish as the board instantiates it (`PolishUnit`: the
 /// control, the program's datapath and the pass; the multiplier's ports at the top), top
 /// module `top`; the register file marked as in [`polish_program_verilog`]; the datapath's
 /// `read_data` above the 32 bits the control reads (a pose field, `TAU2`) waived as unused.

@@ -79,7 +79,8 @@ pub fn morton_key(p: FxPoint) -> u32 {
 /// frame, ties in the given order (a stable sort). The first protocol-3 board's grid
 /// pipeline swept the rows around batches of points and needed close points consecutive
 /// (2.3 to 3.2 times fewer clocks); the neighbour pipeline that replaced it searches each
-/// point's own rows, and the order changes its clocks by about 2% (docs/decisions.md). The
+/// point's own rows, and the order changes its clocks by about 2% (docs/board-modes.md,
+/// "The scan sample's order"). The
 /// costs are sums over the sample, so the order changes no result.
 pub fn morton_sorted(scan: &[FxPoint]) -> Vec<FxPoint> {
     let mut s = scan.to_vec();

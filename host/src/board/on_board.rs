@@ -1,14 +1,14 @@
 //! PF-ICP with the particle filter on the board (`pficp register --board`, the default):
 //! the host computes the start and the covariance (PF-ICP stages 1 and 2,
-//! [`crate::pf_icp::prior`]), uploads the model gridded (protocol 3: sorted by cell, with
-//! its cell table, [`pficp_fpga::grid::Grid`]) and a sample of `board_points` scan points
-//! in Morton order ([`super::morton_sorted`]) followed by the rest of the scan, sends the
-//! prior as a Run request ([`pf_config`]) with the polish's starts ([`polish_request`]),
-//! polls Status, reads Result and polishes the board's pose with ICP on the whole scan. The
-//! filter itself (steps 6 to 8 of Algorithm 6) runs on the board, bit-exact with
-//! `pficp_fpga::pf::run`, and so does the polish after it (protocol 6: [`POLISH_STARTS`]
-//! starts, the winner polished further; `pficp_fpga::run_request::execute`): the board's pose
-//! alone is the polished one.
+//! [`crate::pf_icp::prior`]), uploads the model gridded (sorted by cell, with its normals
+//! and its cell table, [`pficp_fpga::grid::Grid`]; docs/board-modes.md) and a sample of
+//! `board_points` scan points in Morton order ([`super::morton_sorted`]) followed by the
+//! rest of the scan, sends the prior as a Run request ([`pf_config`]) with the polish's
+//! starts ([`polish_request`]), polls Status, reads Result and polishes the board's pose
+//! with ICP on the whole scan. The filter itself (steps 6 to 8 of Algorithm 6) runs on the
+//! board, bit-exact with `pficp_fpga::pf::run`, and so does the polish after it (protocol
+//! 6: [`POLISH_STARTS`] starts, the winner polished further;
+//! `pficp_fpga::run_request::execute`): the board's pose alone is the polished one.
 
 use super::fixed::{normalised_pose, original_pose, quantise_pose, Normalisation};
 use super::{
@@ -31,14 +31,13 @@ use pficp_fpga::surface::FxNormal;
 use std::time::{Duration, Instant};
 
 /// The default number of scan points the on-board filter weighs each particle over
-/// (docs/decisions.md, "The on-board filter: scan points per weight" and "The grid search
-/// on the board: the host's side"): the smallest of 300, 500 and 1,000 whose polished
-/// result matches the software mode's success on models 1 to 3 and the realistic quick
-/// set (none of them makes the board's pose alone match it).
+/// (docs/board-modes.md, "Scan points per weight"): the smallest of 300, 500 and 1,000
+/// whose polished result matches the software mode's success on models 1 to 3 and the
+/// realistic quick set (none of them makes the board's pose alone match it).
 pub const DEFAULT_BOARD_POINTS: usize = 300;
 
 /// Starts of the on-board polish: the filter's pose and the first seven of the hypotheses
-/// the host's conclusion compares (docs/polish.md, "Eight starts, the winner polished
+/// the host's conclusion compares (docs/on-board-polish.md, "Eight starts, the winner polished
 /// further": on three dev seeds eight starts with 5 steps each and the winner's 5 more
 /// bring the board's pose alone level with the software mode, within the bench's 0.1 s).
 pub const POLISH_STARTS: usize = 8;
@@ -144,7 +143,7 @@ pub fn board_seed(seed: u64) -> u32 {
 ///   the surface residuals (distances to the tangent planes), not the point distances the
 ///   software's thresholds measure; a residual is at most the point distance (rounding
 ///   aside), so the board may stop earlier than the software on the same data
-///   (docs/decisions.md, the surface residual on the board);
+///   (docs/board-modes.md, "The stop thresholds on residuals");
 /// - the seed from [`board_seed`], particles and iterations from `settings`.
 pub fn pf_config(
     prior: &Prior,

@@ -13,7 +13,7 @@
 //! header and [`MAX_BODY_BYTES`] before anything is read or allocated for them.
 //! Points are written as `SIZE 4` `TYPE F` x y z, as PCL and Open3D write them, so that
 //! their readers take the file (PCL's typed loaders and Open3D's legacy reader do not take
-//! `F 8` coordinates, docs/decisions.md): the round trip is exact for values an `f32`
+//! `F 8` coordinates, docs/io.md, "PCD files"): the round trip is exact for values an `f32`
 //! holds and rounds others to the nearest `f32` ([`f32_range`] finds what does not fit).
 
 use std::io::{BufRead, Read};

@@ -25,11 +25,12 @@
 //!    `k^2 H^-1 M H^-1` of the surface residuals ([`Surface::curvature`]: `H = J^T J`, `M`
 //!    the residual gradients summed over spatial blocks, an eighth of the scan's diagonal
 //!    wide, never below the independent residuals' `sigma^2 H^-1`), `k` =
-//!    [`COVARIANCE_INFLATION`] (calibrated on the realistic benchmark's dev
-//!    split, docs/decisions.md), plus the spread of where restarts of the polish about
-//!    the answer end that fit as well ([`crate::pf_icp::probe`]: a bumpy surface's shallow
-//!    minima a few degrees apart, which the curvature at one of them does not see); with
-//!    the scale fixed, the scale is no parameter (its row and column 0). Parameters the scan cannot determine are named, and their rows and
+//!    [`COVARIANCE_INFLATION`] (calibrated on the realistic benchmark's dev split,
+//!    docs/global-registration.md, "Uncertainty"), plus the spread of where restarts of
+//!    the polish about the answer end that fit as well ([`crate::pf_icp::probe`]: a bumpy
+//!    surface's shallow minima a few degrees apart, which the curvature at one of them
+//!    does not see); with the scale fixed, the scale is no parameter (its row and column
+//!    0). Parameters the scan cannot determine are named, and their rows and
 //!    columns are left out (`None`) instead of printed as a confident number.
 //! 4. **Fit** (as Open3D's `fitness` and `inlier_rmse`, on the surface distance of
 //!    [`Surface::distance2`] rather than to the nearest model point, so that it does not

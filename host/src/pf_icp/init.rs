@@ -1,7 +1,7 @@
 //! The initial pose of PF-ICP (Algorithm 4 and Eq. 15): k-means on both clouds, pair the
 //! clusters, SVD on the paired centroids.
 //!
-//! Two pairings (docs/decisions.md):
+//! Two pairings (docs/algorithm.md, "Cluster pairing (Algorithm 4)"):
 //! - [`Pairing::Index`], the paper's: cluster `i` of the scan with cluster `i` of the model.
 //!   Valid when the scan is the model's own points in the same order.
 //! - [`Pairing::Nearest`], for scans sampled independently of the model, where no index

@@ -1,6 +1,6 @@
 //! PF-ICP (Algorithm 6): k-means start, ICP covariance, SIR particle filter over the
 //! 7 registration parameters, ICP polish; with a global search before the filter and a
-//! conclusion after it (docs/decisions.md, "Global registration").
+//! conclusion after it (docs/global-registration.md).
 //!
 //! Stages (each timed in [`StageTimes`]), one module each below this one (with
 //! [`kmeans`], the clustering, and [`hessian`], the cost curvature behind the covariance

@@ -20,7 +20,7 @@
 //!   scale.
 //!
 //! Else `ambiguous` when there are alternatives, else `confident`. The thresholds were set
-//! on the realistic benchmark's dev split (docs/benchmarks.md, "Verdicts"); the explained
+//! on the realistic benchmark's dev split (docs/global-registration.md, "The verdict"); the explained
 //! share assumes clutter of at most about 15% of the scan (a scan with more is judged
 //! unreliable: crop it first).
 

@@ -4,7 +4,7 @@
 //! Rotation: `C = sum w m_c d_c^T = U S V^T`, `R = V diag(1, 1, det(V U^T)) U^T`
 //! (the sign fix keeps `R` a rotation, never a reflection).
 //!
-//! Scale, two rules (see docs/decisions.md):
+//! Scale, two rules (see docs/algorithm.md, "Scale (Algorithm 2)"):
 //! - [`ScaleRule::LeastSquares`]: `s = sum w d_c . R m_c / sum w |m_c|^2`, the exact
 //!   minimiser of Eq. 3 for the given pairs (Umeyama). Used inside ICP and its variants.
 //! - [`ScaleRule::Ratio`]: `s = sqrt(sum w |d_c|^2 / sum w |m_c|^2)`, the paper's

@@ -1,9 +1,10 @@
 //! `PassQueue`: the polish pass's queue of found points between the residual stage and the
-//! pass (the engine, docs/polish.md): [`PASS_QUEUE`] entries in a small RAM, the head in a
-//! register. A point written is in the RAM at the next clock; the head is fetched from the
-//! RAM (one clock's read) once the last was taken, so the head comes back two clocks after
-//! a take. The writer counts the entries (credits): the queue does not guard against a
-//! write when full. A reset drops every entry. Test: `fpga/tests/pass_queue.rs`.
+//! pass (the engine, docs/polish-datapath.md, "The pass service and the queue"):
+//! [`PASS_QUEUE`] entries in a small RAM, the head in a register. A point written is in the
+//! RAM at the next clock; the head is fetched from the RAM (one clock's read) once the last
+//! was taken, so the head comes back two clocks after a take. The writer counts the entries
+//! (credits): the queue does not guard against a write when full. A reset drops every
+//! entry. Test: `fpga/tests/pass_queue.rs`.
 
 use rust_hdl::prelude::*;
 

@@ -1,5 +1,5 @@
 //! `RequestCheck`: the command engine's checks of a received request (docs/protocol.md,
-//! "Errors"): the command, then its lengths, then its capacities, registered two clocks
+//! "Commands"): the command, then its lengths, then its capacities, registered two clocks
 //! after the header is in (the sums, then the verdict); the engine adds what depends on
 //! the filter's state at the moment it dispatches (Busy first, NoResult last). The codes, lengths and limits are [`Constant`]s built from
 //! [`crate::protocol`], [`crate::messages`], [`crate::format`] and [`crate::pf`], the same

@@ -6,7 +6,7 @@
 //! at the program counter is there when `fetch` needs it.
 //!
 //! No DSP48A1, and no carry chain longer than 48 bits, so that the block stays within the
-//! board's 20 logic levels (docs/polish.md):
+//! board's 20 logic levels (docs/polish-datapath.md, "The datapath"):
 //! - **one 128-bit adder in four 32-bit segments**, each segment's carry in from a
 //!   register (`car`): `Alu` adds the operands, `Flush` adds the pending carries until none
 //!   is left; the 129-bit result's sign in `sign`. The operand selects and inversions are

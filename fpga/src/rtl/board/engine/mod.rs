@@ -9,7 +9,7 @@
 //! (`state.rs`), the state machine is `kernel.rs`, the scan stream into the pipeline is the
 //! [`ScanFeeder`].
 //!
-//! After the filter the engine runs the polish ([`PolishUnit`], docs/polish.md): it lends
+//! After the filter the engine runs the polish ([`PolishUnit`], docs/polish-datapath.md): it lends
 //! it the sequencer's multiplier, gives it its starts (the filter's pose, then the Run's
 //! hypotheses) and serves its passes: the pipeline at the unit's pose over the first
 //! `points` stored scan points, each found result (distance below `CAP_D2`) handed to the
