@@ -27,6 +27,9 @@ pub const PROBE_DEG: f64 = 3.0;
 pub const PROBE_DIAG: f64 = 0.01;
 /// Each restart's relative change of a free scale.
 pub const PROBE_SCALE: f64 = 0.02;
+/// Most polish iterations of a restart (a restart 3 deg off settles in its basin in a
+/// few; the polish's step then flips between sets of contacts).
+pub const PROBE_ITERATIONS: usize = 20;
 
 /// `pose` rotated by `rotation` (a rotation vector, model frame) about the image of `at`,
 /// that image moved by `offset` and the scale multiplied by `factor`.
@@ -83,7 +86,7 @@ pub fn probe(
     let ends: Vec<Option<[f64; 7]>> = starts(pose, at, diag, bounds)
         .par_iter()
         .map(|p| {
-            let q = surface.polish(points, p, iterations, bounds);
+            let q = surface.polish(points, p, iterations.min(PROBE_ITERATIONS), bounds);
             let c = evidence.tight_costs(surface, points, &q);
             fits_as_well(costs, &c).then(|| crate::pf_icp::conclusion::local_error(&q, pose, at))
         })
