@@ -82,6 +82,12 @@ fn transformed(scan: &[FxPoint], pose: &FxPose) -> Vec<FxPoint> {
 }
 
 #[test]
+fn both_lane_counts_are_verilated() {
+    assert_eq!(verilated_lanes(), vec![4, 16]);
+    println!("{}", pficp_sim::BUILD_REPORT);
+}
+
+#[test]
 fn random_cases_in_lockstep() {
     let seed: u64 = std::env::var("PFICP_COSIM_SEED").ok().and_then(|s| s.parse().ok()).unwrap_or(1);
     let cases: usize = std::env::var("PFICP_NBR_CASES").ok().and_then(|s| s.parse().ok()).unwrap_or(40);
