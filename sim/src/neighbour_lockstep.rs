@@ -5,7 +5,7 @@ use crate::lockstep::{LockstepOf, Mismatch};
 use crate::wrappers::VerilatedNeighbourPipeline;
 use pficp_fpga::format::{FxPoint, FxPose};
 use pficp_fpga::grid::Grid;
-use pficp_fpga::grid_pipeline::{upload, GridInputs};
+use pficp_fpga::neighbour_pipeline::{upload, GridInputs};
 use pficp_fpga::pipeline::Evaluation;
 
 /// The Verilated neighbour pipeline and `NeighbourPipelineModel` in lockstep.

@@ -12,9 +12,8 @@
 //! (magnitudes around 2^9 and 2^10), directed.
 
 use pficp_fpga::format::{pack_point, transform, FxPoint, FxPose, MAX_POINTS};
-use pficp_fpga::grid::{Grid, CELLS, CELL_LSBS};
-use pficp_fpga::grid_pipeline::{evaluate_grid, GridInputs};
-use pficp_fpga::neighbour_pipeline::evaluate_stored;
+use pficp_fpga::grid::{evaluate_grid, Grid, CELLS, CELL_LSBS};
+use pficp_fpga::neighbour_pipeline::{evaluate_stored, GridInputs};
 use pficp_sim::{verilated_lanes, NeighbourLockstep};
 
 mod support;
