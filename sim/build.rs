@@ -1,13 +1,7 @@
 //! Builds the Verilator models of the generated designs ([`DESIGNS`]):
 //!
-//! - `pipeline`: `NnPipeline<P>` from `pficp_fpga::rtl::pipeline_verilog(P)` (prefix `VpipeP`);
-//! - `particle_weights`: `ParticleWeightPipeline<P>` from
-//!   `pficp_fpga::rtl::particle_weights_verilog(P)` (prefix `VpwP`);
-//! - `grid_pipeline`: `GridPipeline<P>` from `pficp_fpga::rtl::grid_pipeline_verilog(P)`
-//!   (prefix `VgridP`);
 //! - `neighbour_pipeline`: `NeighbourPipeline<P>` from
-//!   `pficp_fpga::rtl::neighbour_pipeline_verilog(P)` (prefix `VnbrP`; the grid pipeline's ports
-//!   and `nn_point`);
+//!   `pficp_fpga::rtl::neighbour_pipeline_verilog(P)` (prefix `VnbrP`);
 //! - `weight_stage`: `WeightStage` from `pficp_fpga::rtl::weight_stage_verilog()` (prefix
 //!   `Vweights`);
 //! - `surface_residual`: `SurfaceResidual` from `pficp_fpga::rtl::surface_residual_verilog()`
@@ -76,38 +70,14 @@ struct Design {
 }
 
 /// Every design that is verilated.
-const DESIGNS: [Design; 12] = [
-    Design {
-        name: "pipeline",
-        prefix: "Vpipe",
-        per_lane: true,
-        verilog: pficp_fpga::rtl::pipeline_verilog,
-        ports: &[PIPELINE_PORTS],
-        spec: "docs/pipeline.md (sim/src/ports.rs PIPELINE_PORTS)",
-    },
-    Design {
-        name: "particle_weights",
-        prefix: "Vpw",
-        per_lane: true,
-        verilog: pficp_fpga::rtl::particle_weights_verilog,
-        ports: &[PIPELINE_PORTS, PW_EXTRA_PORTS],
-        spec: "fpga/src/rtl/particle_weights.rs (sim/src/ports.rs PIPELINE_PORTS + PW_EXTRA_PORTS)",
-    },
-    Design {
-        name: "grid_pipeline",
-        prefix: "Vgrid",
-        per_lane: true,
-        verilog: pficp_fpga::rtl::grid_pipeline_verilog,
-        ports: &[GRID_PIPELINE_PORTS],
-        spec: "docs/pipeline.md (sim/src/ports.rs GRID_PIPELINE_PORTS)",
-    },
+const DESIGNS: [Design; 9] = [
     Design {
         name: "neighbour_pipeline",
         prefix: "Vnbr",
         per_lane: true,
         verilog: pficp_fpga::rtl::neighbour_pipeline_verilog,
-        ports: &[GRID_PIPELINE_PORTS, NEIGHBOUR_EXTRA_PORTS],
-        spec: "docs/pipeline.md, the neighbour pipeline (sim/src/ports.rs GRID_PIPELINE_PORTS + NEIGHBOUR_EXTRA_PORTS)",
+        ports: &[NEIGHBOUR_PIPELINE_PORTS],
+        spec: "docs/pipeline.md, the neighbour pipeline (sim/src/ports.rs NEIGHBOUR_PIPELINE_PORTS)",
     },
     Design {
         name: "weight_stage",
@@ -422,16 +392,16 @@ fn lanes_to_build() -> Vec<usize> {
     lanes.dedup();
     for &p in &lanes {
         assert!(
-            pficp_fpga::rtl::SUPPORTED_LANES.contains(&p),
+            pficp_fpga::rtl::BOARD_LANES.contains(&p),
             "PFICP_SIM_LANES: {p} lanes is not one of {:?}",
-            pficp_fpga::rtl::SUPPORTED_LANES
+            pficp_fpga::rtl::BOARD_LANES
         );
     }
     assert!(!lanes.is_empty(), "PFICP_SIM_LANES is empty");
     lanes
 }
 
-/// One model to build: a design at a lane count (0 for the weight stage).
+/// One model to build: a design at a lane count (0 for a design without lanes).
 struct Job {
     design: &'static Design,
     lanes: usize,

@@ -1,6 +1,7 @@
 //! The model's cell grid for the board's nearest-neighbour search: the format the host
 //! builds and the board stores (LoadModel, LoadTable), and the search's bit-exact
-//! functional reference (docs/search.md).
+//! functional reference ([`Grid::nearest`], [`evaluate_grid`]; the RTL is the neighbour
+//! pipeline, `crate::neighbour_pipeline`; docs/search.md).
 //!
 //! **Cells.** The grid covers the cube `[-1, 1]^3` of normalised units (the host normalises
 //! the model into the unit ball, docs/fixed-point.md) with [`CELLS_PER_AXIS`] cells per
@@ -28,7 +29,8 @@
 //! the same rule as the host's capped surface cost: a point farther than `h` from the
 //! model (an outlier, a wrong pose) costs `h^2`, not its whole distance.
 
-use crate::format::{dist2, FxPoint, COORD_FRAC, MAX_POINTS};
+use crate::format::{dist2, transform, FxPoint, FxPose, COORD_FRAC, COST_MASK, MAX_POINTS};
+use crate::pipeline::Evaluation;
 
 /// Bits of a cell index along one axis.
 pub const GRID_BITS: u32 = 4;
@@ -184,6 +186,21 @@ pub fn nearest_capped(points: &[FxPoint], q: FxPoint) -> Nearest {
         }
     }
     best
+}
+
+/// The functional reference of the board's search: every transformed scan point's
+/// [`nearest_capped`] over the stored model, a capped point as index 0 and distance
+/// [`CAP_D2`]; the cost their sum.
+pub fn evaluate_grid(grid: &Grid, scan: &[FxPoint], pose: &FxPose) -> Evaluation {
+    let nearest: Vec<(u16, u64)> = scan
+        .iter()
+        .map(|&p| {
+            let n = nearest_capped(&grid.points, transform(pose, p));
+            (if n.index == NONE { 0 } else { n.index }, n.d2)
+        })
+        .collect();
+    let cost = nearest.iter().fold(0u64, |c, n| (c + n.1) & COST_MASK);
+    Evaluation { cost, nearest }
 }
 
 #[cfg(test)]

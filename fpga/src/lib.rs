@@ -4,17 +4,16 @@
 //! - [`format`]: the fixed-point formats shared by host, reference and RTL.
 //! - [`grid`]: the model's cell grid and the grid search's bit-exact reference (capped at
 //!   one cell).
-//! - [`grid_pipeline`]: the cycle-accurate reference of the grid pipeline (the
-//!   nearest-neighbour pipeline sweeping only the rows of cells around a batch).
-//! - [`pipeline`]: the cycle-accurate reference of the nearest-neighbour pipeline.
-//! - [`neighbour_pipeline`]: the cycle-accurate reference of the neighbour pipeline (lanes
-//!   over one scan point's candidates in its 27 cells) and its functional reference.
+//! - [`pipeline`]: what the nearest-neighbour search shares with its references (result
+//!   ports, transform stages, scan-stream driver) and the plain brute-force reference.
+//! - [`neighbour_pipeline`]: the cycle-accurate reference of the neighbour pipeline, the
+//!   board's search (lanes over one scan point's candidates in its 27 cells), and its
+//!   functional reference over the board's stores.
 //! - [`surface`]: the surface residual (distance to the nearest model point's tangent
 //!   plane), its normal format and bit-exact rule.
 //! - [`surface_residual`]: the cycle-accurate reference of the residual stage
 //!   (`SurfaceResidual`: the residual of each neighbour-pipeline result, and their sum).
 //! - [`weights`]: the cycle-accurate reference of the weight stage (minimum cost, exp table).
-//! - [`particle_weights`]: the two wired together, as the RTL top of that name.
 //! - [`pf`]: the on-board particle filter's bit-exact functional reference (`pf::run`), its
 //!   formats, CORDIC, pose program and PRNG.
 //! - [`polish`]: the on-board polish's bit-exact reference (point-to-plane Gauss-Newton
@@ -28,17 +27,15 @@
 //! - [`messages`]: each command's data layout, encoded and decoded.
 //! - [`board`]: the board's configuration and the byte-level reference board (`BoardModel`).
 //! - [`splitmix`]: the seeded generator of the tests' and fuzzers' stimulus.
-//! - `rtl` (feature `rtl`): the rust_hdl RTL of the pipeline, the weight stage, the board
-//!   top and its blocks, and their Verilog.
+//! - `rtl` (feature `rtl`): the rust_hdl RTL of the board top and its blocks (the neighbour
+//!   pipeline, the residual and weight stages, the sequencer, the polish), and their Verilog.
 #![warn(missing_docs)]
 
 pub mod board;
 pub mod format;
 pub mod grid;
-pub mod grid_pipeline;
 pub mod messages;
 pub mod neighbour_pipeline;
-pub mod particle_weights;
 pub mod pf;
 pub mod pipeline;
 pub mod polish;

@@ -2,9 +2,8 @@
 //! (`NeighbourPipeline<P>`, docs/pipeline.md "The neighbour pipeline"), and its functional
 //! reference over the raw stores ([`evaluate_stored`]).
 //!
-//! Where the grid pipeline puts one scan point in each lane and broadcasts the model, this
-//! one puts **the candidates of one scan point in the lanes**: scan points go through one at
-//! a time, each looks up the nine rows of its own 27-cell neighbourhood (a *slot* of two
+//! The board's search puts **the candidates of one scan point in the lanes**: scan points go
+//! through one at a time, each looks up the nine rows of its own 27-cell neighbourhood (a *slot* of two
 //! rows, A and B, a clock, from two copies of the cell table) and sends the slot's two
 //! stored ranges through two sets of `P` lanes **in the same clocks**, `P` consecutive
 //! addresses of range A through the A lanes and of range B through the B lanes a clock (a
@@ -26,19 +25,19 @@
 //! a table built by [`Grid::build`] the ranges are disjoint, increasing and inside the model,
 //! so this is the nearest stored point with the lowest index on ties, capped: exactly
 //! [`crate::grid::nearest_capped`] (capped ⇔ `nn_dist == CAP_D2`, index 0), i.e.
-//! [`crate::grid_pipeline::evaluate_grid`], whatever `P`. On a table that does not describe
+//! [`crate::grid::evaluate_grid`], whatever `P`. On a table that does not describe
 //! the model it differs from "the first strictly smaller distance in visiting order" only
 //! where a range wraps past 4,095 or the ranges overlap or go backwards: then the lowest
 //! index still wins a tie.
 //!
-//! [`NeighbourPipelineModel::step`] is one rising edge, [`NeighbourPipelineModel::outputs`]
-//! the output ports after it, as for [`crate::grid_pipeline::GridPipelineModel`]; the ports
-//! are the grid pipeline's ([`GridInputs`], [`Outputs`]) plus `nn_point`
-//! ([`Outputs::nn_point`]: each result's transformed scan point, registered with it).
+//! [`NeighbourPipelineModel::step`] is one rising edge: it takes the input ports
+//! ([`GridInputs`]) as they are before the edge and updates every register as the RTL does;
+//! [`NeighbourPipelineModel::outputs`] gives the output ports ([`Outputs`], with
+//! [`Outputs::nn_point`]: each result's transformed scan point, registered with it) after the
+//! edge. The co-simulation compares them with the Verilated RTL on every clock.
 
-use crate::format::{dist2, transform, unpack_point, FxPoint, FxPose, MAX_POINTS, POINT_WORD_BITS};
+use crate::format::{dist2, pack_point, transform, unpack_point, FxPoint, FxPose, MAX_POINTS, POINT_WORD_BITS};
 use crate::grid::{axis_cell, Grid, CAP_D2, CELLS, CELLS_PER_AXIS};
-use crate::grid_pipeline::{upload, GridInputs};
 use crate::pipeline::{
     stream_particle, transform_products, transform_result, transform_sums, Evaluation, Outputs, StreamModel, COST_MASK,
 };
@@ -77,12 +76,81 @@ fn key(d2: u64, index: u16) -> u64 {
 /// The neutral key: the capped result.
 const CAP_KEY: u64 = CAP_D2 << 12;
 
+/// Input ports (before an edge): the write ports of the grid's stores (the model RAM and the
+/// cell table), `start` with the pose, and the scan stream.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct GridInputs {
+    /// Write `model_wdata` at `model_waddr` (the model sorted by cell, [`Grid::points`]).
+    pub model_we: bool,
+    /// Model write address (12 bits).
+    pub model_waddr: u16,
+    /// Model write data (48 bits, [`pack_point`]).
+    pub model_wdata: u64,
+    /// Write `table_wdata` as cell-table entry `table_waddr` ([`Grid::first`]).
+    pub table_we: bool,
+    /// Cell-table entry, `0..=4096` (13 bits; larger values write nothing).
+    pub table_waddr: u16,
+    /// The entry (13 bits).
+    pub table_wdata: u16,
+    /// Begin a particle (when idle).
+    pub start: bool,
+    /// The pose, sampled with `start`.
+    pub pose: FxPose,
+    /// A scan point is offered.
+    pub scan_valid: bool,
+    /// The offered point (48 bits).
+    pub scan_data: u64,
+    /// The offered point is the last.
+    pub scan_last: bool,
+}
+
+impl GridInputs {
+    /// Begin a particle with `pose`.
+    pub fn start(pose: &FxPose) -> GridInputs {
+        GridInputs { start: true, pose: *pose, ..Default::default() }
+    }
+
+    /// If `offer`, offer scan point `next` of `scan` (`scan_last` on the last one);
+    /// otherwise nothing.
+    pub fn offer(scan: &[FxPoint], next: usize, offer: bool) -> GridInputs {
+        GridInputs {
+            scan_valid: offer,
+            scan_data: if offer { pack_point(scan[next]) } else { 0 },
+            scan_last: offer && next + 1 == scan.len(),
+            ..Default::default()
+        }
+    }
+}
+
+/// The input words that upload `grid` (model words, then the 4,097 table entries), one a
+/// clock, as the co-simulation and the benches drive them.
+pub fn upload(grid: &Grid) -> Vec<GridInputs> {
+    let mut v: Vec<GridInputs> = grid
+        .points
+        .iter()
+        .enumerate()
+        .map(|(a, &p)| GridInputs {
+            model_we: true,
+            model_waddr: a as u16,
+            model_wdata: pack_point(p),
+            ..Default::default()
+        })
+        .collect();
+    v.extend(grid.first.iter().enumerate().map(|(a, &f)| GridInputs {
+        table_we: true,
+        table_waddr: a as u16,
+        table_wdata: f,
+        ..Default::default()
+    }));
+    v
+}
+
 /// The functional reference over the board's raw stores, whatever they hold (the module
 /// doc's rule): the model RAM (`ram`, [`MAX_POINTS`] packed words) and the cell table as
 /// written (`first`, the [`CELLS`]` + 1` entries of 13 bits). Each transformed scan point's
 /// lexicographic minimum `(d2, address & 0xfff)` over its nine row ranges, starting at
 /// `(CAP_D2, 0)`; the cost the sum of the distances. Independent of the lane count. With a
-/// table built by [`Grid::build`] this is [`crate::grid_pipeline::evaluate_grid`].
+/// table built by [`Grid::build`] this is [`crate::grid::evaluate_grid`].
 pub fn evaluate_stored(ram: &[u64], first: &[u16], scan: &[FxPoint], pose: &FxPose) -> Evaluation {
     assert!(ram.len() == MAX_POINTS && first.len() == CELLS + 1);
     let n = CELLS_PER_AXIS as i32;
@@ -427,7 +495,7 @@ impl NeighbourPipelineModel {
                 };
             }
         }
-        // Lanes: difference, square, two sums (the brute-force pipeline's stages). The B
+        // Lanes: difference, square, two sums. The B
         // lanes (`p..2p`) square magnitudes below `B_SQUARE_LIMIT` only; a larger one gives
         // a capped key anyway, which `CAP_D2` in its square's place keeps.
         let (c0, q, v0, r0) = &self.c0;

@@ -384,9 +384,9 @@ impl Evaluated {
 
 /// The board's answer for a pose, by the functional reference: the grid search over the
 /// gridded model (the stored points and their table), every distance capped at
-/// `grid::CAP_D2` (docs/pipeline.md, "The grid pipeline").
+/// `grid::CAP_D2` (docs/pipeline.md, "The neighbour pipeline").
 pub fn evaluate(grid: &crate::grid::Grid, scan: &[crate::format::FxPoint], pose: &FxPose) -> Evaluated {
-    Evaluated::of(&crate::grid_pipeline::evaluate_grid(grid, scan, pose))
+    Evaluated::of(&crate::grid::evaluate_grid(grid, scan, pose))
 }
 
 /// One iteration, as the sequencer leaves it.

@@ -7,8 +7,7 @@ mod support;
 
 use support::*;
 
-use pficp_fpga::grid_pipeline::upload;
-use pficp_fpga::neighbour_pipeline::{run_particle as grid_run, NeighbourPipelineModel};
+use pficp_fpga::neighbour_pipeline::{run_particle as grid_run, upload, NeighbourPipelineModel};
 
 #[test]
 fn wire_bytes_are_exact() {

@@ -25,10 +25,10 @@ struct Cli {
     /// Number of parallel lanes P of the generated pipeline (default: the shipped board's).
     #[arg(long, value_name = "P", default_value_t = BoardConfig::default().lanes, conflicts_with = "verilog")]
     lanes: usize,
-    /// Which design to generate: the whole board (pins, UART, protocol engine, pipeline), the
-    /// particle-weight pipeline (nearest-neighbour pipeline and weight stage), the
-    /// nearest-neighbour pipeline alone, the grid pipeline alone, the neighbour pipeline alone, the weight stage alone, the surface residual stage alone, the polish's datapath alone, or the polish's blocks with a multiplier. Only the board has pins,
-    /// so only the board gets a UCF and an ISE script.
+    /// Which design to generate: the whole board (pins, UART, protocol engine, pipeline), or
+    /// one of the board's blocks alone: the neighbour pipeline, the weight stage, the surface
+    /// residual stage, the polish's datapath, the polish's blocks with a multiplier, or the
+    /// whole polish. Only the board has pins, so only the board gets a UCF and an ISE script.
     #[arg(long, value_enum, default_value_t = Design::Board, conflicts_with = "verilog")]
     design: Design,
     /// Use the Verilog in FILE (top module `top`) instead of generating a design; with
@@ -104,28 +104,20 @@ fn step<T>(cli: &Cli, label: &str, work: impl FnOnce() -> Result<T>) -> Result<T
 enum Design {
     /// `BoardTop`: the board top `top` (clock, reset_n, uart_rx, uart_tx, leds[3:0]).
     Board,
-    /// `ParticleWeightPipeline`: the nearest-neighbour pipeline feeding the weight stage.
-    ParticleWeights,
-    /// `NnPipeline` alone.
-    Nn,
-    /// `GridPipeline`: the grid search with one scan point a lane (on the board in protocol
-    /// 3's first version; replaced there by the neighbour pipeline).
-    GridPipeline,
     /// `NeighbourPipeline`: lanes over one scan point's candidates in its 27 cells (the
-    /// board's search; the grid pipeline's ports).
+    /// board's search).
     NeighbourPipeline,
     /// `WeightStage` alone.
     Weights,
     /// `SurfaceResidual`: the residual stage alone (no DSP48A1).
     SurfaceResidual,
-    /// `PolishProgram`: the polish's datapath with its programs in ROM (no DSP48A1; not in
-    /// the board top yet).
+    /// `PolishProgram`: the polish's datapath with its programs in ROM (no DSP48A1).
     PolishProgram,
     /// `PolishBench`: the polish's pass, a multiplier and the datapath (on the board the
     /// multiplier is the sequencer's).
     PolishBench,
-    /// `PolishUnit`: the whole polish (control, datapath, pass) as the board will
-    /// instantiate it, the multiplier's ports at the top.
+    /// `PolishUnit`: the whole polish (control, datapath, pass) as the board instantiates
+    /// it, the multiplier's ports at the top.
     PolishUnit,
 }
 
@@ -138,20 +130,12 @@ fn design_name(design: Design) -> String {
 /// The design's Verilog with `lanes` lanes, from the RTL crate, and where it came from.
 fn generated_verilog(design: Design, lanes: usize, board: &BoardConfig) -> Result<(String, String)> {
     use pficp_fpga::rtl::{
-        board_verilog, grid_pipeline_verilog, neighbour_pipeline_verilog, particle_weights_verilog, pipeline_verilog,
-        polish_bench_verilog, polish_program_verilog, polish_unit_verilog, surface_residual_verilog,
-        weight_stage_verilog, BOARD_LANES, SUPPORTED_LANES,
+        board_verilog, neighbour_pipeline_verilog, polish_bench_verilog, polish_program_verilog, polish_unit_verilog,
+        surface_residual_verilog, weight_stage_verilog, BOARD_LANES,
     };
-    let lane_free = matches!(
-        design,
-        Design::Weights | Design::SurfaceResidual | Design::PolishProgram | Design::PolishBench | Design::PolishUnit
-    );
-    if !lane_free && !SUPPORTED_LANES.contains(&lanes) {
-        bail!("--lanes {lanes} is not supported by the RTL; use one of {SUPPORTED_LANES:?}");
-    }
     Ok(match design {
         Design::Board | Design::NeighbourPipeline if !BOARD_LANES.contains(&lanes) => {
-            bail!("--lanes {lanes}: the neighbour pipeline (and so the board) takes one of {BOARD_LANES:?}")
+            bail!("--lanes {lanes} is not supported: the neighbour pipeline (and so the board) takes one of {BOARD_LANES:?}")
         }
         Design::Board => (
             board_verilog(board),
@@ -160,13 +144,6 @@ fn generated_verilog(design: Design, lanes: usize, board: &BoardConfig) -> Resul
                 board.lanes, board.clock_hz, board.baud
             ),
         ),
-        Design::ParticleWeights => {
-            (particle_weights_verilog(lanes), format!("pficp_fpga::rtl::particle_weights_verilog({lanes})"))
-        }
-        Design::Nn => (pipeline_verilog(lanes), format!("pficp_fpga::rtl::pipeline_verilog({lanes})")),
-        Design::GridPipeline => {
-            (grid_pipeline_verilog(lanes), format!("pficp_fpga::rtl::grid_pipeline_verilog({lanes})"))
-        }
         Design::NeighbourPipeline => {
             (neighbour_pipeline_verilog(lanes), format!("pficp_fpga::rtl::neighbour_pipeline_verilog({lanes})"))
         }

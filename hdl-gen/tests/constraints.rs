@@ -180,16 +180,7 @@ fn ise_script_names_the_part_and_the_files() {
 
 #[test]
 fn block_designs_get_no_ucf() {
-    for design in [
-        "nn",
-        "grid-pipeline",
-        "weights",
-        "particle-weights",
-        "surface-residual",
-        "polish-program",
-        "polish-bench",
-        "polish-unit",
-    ] {
+    for design in ["weights", "surface-residual", "polish-program", "polish-bench", "polish-unit"] {
         let dir = fresh_dir(&format!("constraints-block-{design}"));
         let (ok, stdout, stderr) = generate(&dir, &["--design", design]);
         assert!(ok, "{stdout}\n{stderr}");

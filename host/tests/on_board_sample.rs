@@ -3,8 +3,8 @@
 //! byte-level reference board runs for Run), its pose alone and after the host's polish,
 //! for several board sample sizes, beside the software mode, on models 1 to 3 (Table 1
 //! truths, 2,000 model points, an independent 1,000-point scan, 50 particles, 50
-//! iterations, several seeds); and the grid pipeline's clocks with the sample in Morton
-//! order against the sampler's order.
+//! iterations, several seeds); and the board's search's (the neighbour pipeline's) clocks
+//! with the sample in Morton order against the sampler's order.
 //!
 //! The figures are slow (minutes): ignored by default. Run them with
 //! `cargo test --release -p pficp-host --test on_board_sample -- --ignored --nocapture`

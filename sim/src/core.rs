@@ -8,9 +8,9 @@ use std::path::{Path, PathBuf};
 
 /// One Verilated model in the archive (a table of its shim's entry points).
 pub(crate) struct Model {
-    /// `pipeline`, `particle_weights` or `weight_stage`.
+    /// `neighbour_pipeline`, `weight_stage`, `board`, ... (`build.rs`'s `DESIGNS`).
     pub(crate) design: &'static str,
-    /// Lanes (0 for the weight stage).
+    /// Lanes (0 for a design without lanes).
     pub(crate) lanes: usize,
     pub(crate) prefix: &'static str,
     pub(crate) verilog: &'static str,
@@ -36,9 +36,6 @@ pub(crate) mod ffi {
 }
 pub use ffi::BUILD_REPORT;
 
-pub(crate) const PIPELINE: &str = "pipeline";
-pub(crate) const PARTICLE_WEIGHTS: &str = "particle_weights";
-pub(crate) const GRID_PIPELINE: &str = "grid_pipeline";
 pub(crate) const NEIGHBOUR_PIPELINE: &str = "neighbour_pipeline";
 pub(crate) const WEIGHT_STAGE: &str = "weight_stage";
 pub(crate) const SURFACE_RESIDUAL: &str = "surface_residual";
@@ -49,21 +46,16 @@ pub(crate) const POLISH_PROGRAM: &str = "polish_program";
 pub(crate) const POLISH_BENCH: &str = "polish_bench";
 pub(crate) const POLISH_UNIT: &str = "polish_unit";
 
-/// Lane counts with a Verilated pipeline (and particle-weight pipeline): the build verilates
-/// 4 and 16 unless `PFICP_SIM_LANES` says otherwise.
+/// Lane counts with a Verilated neighbour pipeline: the build verilates 4 and 16 unless
+/// `PFICP_SIM_LANES` says otherwise.
 pub fn verilated_lanes() -> Vec<usize> {
-    ffi::MODELS.iter().filter(|m| m.design == PIPELINE).map(|m| m.lanes).collect()
+    ffi::MODELS.iter().filter(|m| m.design == NEIGHBOUR_PIPELINE).map(|m| m.lanes).collect()
 }
 
-/// Every Verilated model: (design, lanes, Verilator prefix), e.g. `("particle_weights", 16,
-/// "Vpw16")`; the weight stage has 0 lanes.
+/// Every Verilated model: (design, lanes, Verilator prefix), e.g. `("neighbour_pipeline", 16,
+/// "Vnbr16")`; the designs without lanes have 0.
 pub fn verilated_models() -> Vec<(&'static str, usize, &'static str)> {
     ffi::MODELS.iter().map(|m| (m.design, m.lanes, m.prefix)).collect()
-}
-
-/// The Verilog file that was verilated for the `lanes`-lane pipeline, if there is a model.
-pub fn verilog_path(lanes: usize) -> Option<&'static Path> {
-    ffi::MODELS.iter().find(|m| m.design == PIPELINE && m.lanes == lanes).map(|m| Path::new(m.verilog))
 }
 
 /// A Verilated model with its own `VerilatedContext`, untyped (packed `u64` ports).
@@ -159,7 +151,7 @@ unsafe impl Send for Core {}
 macro_rules! verilated_common {
     ($ty:ident, $inputs:ty) => {
         impl $ty {
-            /// The Verilator prefix of the model (`Vpipe16`, `Vpw4`, `Vweights`).
+            /// The Verilator prefix of the model (`Vnbr16`, `Vweights`, `Vboard`).
             pub fn prefix(&self) -> &'static str {
                 self.core.model.prefix
             }

@@ -2,10 +2,7 @@
 //!
 //! | RTL (`build.rs` verilates it) | wrapper | reference | lockstep |
 //! |---|---|---|---|
-//! | `pipeline_verilog(P)` (docs/pipeline.md), P in [`verilated_lanes`] | [`VerilatedPipeline`] | [`PipelineModel`](pficp_fpga::pipeline::PipelineModel) | [`Lockstep`] |
-//! | `grid_pipeline_verilog(P)` (docs/pipeline.md, the grid pipeline), the same P | [`VerilatedGridPipeline`] | [`GridPipelineModel`](pficp_fpga::grid_pipeline::GridPipelineModel) | [`GridLockstep`] |
-//! | `neighbour_pipeline_verilog(P)` (docs/pipeline.md, the neighbour pipeline), the same P | [`VerilatedNeighbourPipeline`] | [`NeighbourPipelineModel`](pficp_fpga::neighbour_pipeline::NeighbourPipelineModel) | [`NeighbourLockstep`] |
-//! | `particle_weights_verilog(P)`, the same P | [`VerilatedParticleWeights`] | [`ParticleWeightModel`](pficp_fpga::particle_weights::ParticleWeightModel) | [`PwLockstep`] |
+//! | `neighbour_pipeline_verilog(P)` (docs/pipeline.md, the neighbour pipeline), P in [`verilated_lanes`] | [`VerilatedNeighbourPipeline`] | [`NeighbourPipelineModel`](pficp_fpga::neighbour_pipeline::NeighbourPipelineModel) | [`NeighbourLockstep`] |
 //! | `weight_stage_verilog()` (docs/weights.md) | [`VerilatedWeightStage`] | [`WeightModel`](pficp_fpga::weights::WeightModel) | [`WeightLockstep`] |
 //! | `surface_residual_verilog()` (docs/pipeline.md, the surface residual) | [`VerilatedSurfaceResidual`] | [`SurfaceResidualModel`](pficp_fpga::surface_residual::SurfaceResidualModel) | [`SurfaceLockstep`] |
 //! | the sequencer `PfSequencer` alone (docs/sequencer.md) | [`VerilatedSequencer`] | [`SequencerModel`](pficp_fpga::sequencer::SequencerModel) | [`SeqLockstep`] |
@@ -33,13 +30,13 @@
 #[macro_use]
 mod core;
 pub mod fuzz;
-mod grid_lockstep;
 mod lockstep;
+mod neighbour_lockstep;
 pub mod ports;
 pub mod serial;
 mod wrappers;
 
-pub use crate::core::{verilated_lanes, verilated_models, verilog_path, BUILD_REPORT};
-pub use grid_lockstep::{GridLockstep, NeighbourLockstep};
+pub use crate::core::{verilated_lanes, verilated_models, BUILD_REPORT};
 pub use lockstep::*;
+pub use neighbour_lockstep::NeighbourLockstep;
 pub use wrappers::*;

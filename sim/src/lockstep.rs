@@ -2,16 +2,14 @@
 //! harness that runs both clock for clock and compares every output port.
 
 use crate::wrappers::*;
-use pficp_fpga::format::{FxPoint, FxPose, WeightScale, MAX_POINTS};
-use pficp_fpga::particle_weights::{PwInputs, PwOutputs};
-use pficp_fpga::pipeline::{Evaluation, Inputs, Outputs};
+use pficp_fpga::format::WeightScale;
 use pficp_fpga::weights::{WeightInputs, WeightOutputs, MAX_PARTICLES};
 use std::fmt;
 use std::path::{Path, PathBuf};
 
 /// A Verilated design and its reference, as [`LockstepOf`] runs them (implemented by
-/// [`VerilatedPipeline`], [`VerilatedParticleWeights`], [`VerilatedWeightStage`] and
-/// [`VerilatedSequencer`]).
+/// [`VerilatedNeighbourPipeline`], [`VerilatedWeightStage`], [`VerilatedSurfaceResidual`]
+/// and [`VerilatedSequencer`]).
 pub trait Rtl: Sized {
     /// The input ports.
     type Inputs: Copy + PartialEq + fmt::Debug;
@@ -39,7 +37,7 @@ pub trait Rtl: Sized {
     fn tick(&mut self);
     /// Rising edges so far.
     fn cycle(&self) -> u64;
-    /// Lanes (0 for the weight stage).
+    /// Lanes (0 for a design without lanes).
     fn lanes(&self) -> usize;
     /// The Verilator prefix.
     fn prefix(&self) -> &'static str;
@@ -54,8 +52,8 @@ pub trait Rtl: Sized {
 pub struct Mismatch {
     /// Rising edges before the comparison (0: after reset); VCD time `10 * cycle`.
     pub cycle: u64,
-    /// The first differing output port (in the design's output port order:
-    /// [`OUTPUT_PORTS`], [`PW_OUTPUT_PORTS`] or [`WEIGHT_OUTPUT_PORTS`]).
+    /// The first differing output port (in the design's output port order, its
+    /// [`Rtl::OUTPUT_PORTS`]: [`NEIGHBOUR_OUTPUT_PORTS`], [`WEIGHT_OUTPUT_PORTS`], ...).
     pub signal: &'static str,
     /// The reference's value.
     pub expected: u64,
@@ -63,9 +61,9 @@ pub struct Mismatch {
     pub actual: u64,
     /// Other ports that differ at the same cycle.
     pub also: Vec<&'static str>,
-    /// Lanes of the RTL (0 for the weight stage).
+    /// Lanes of the RTL (0 for a design without lanes).
     pub lanes: usize,
-    /// The Verilator prefix of the RTL (`Vpipe4`, `Vpw16`, `Vweights`).
+    /// The Verilator prefix of the RTL (`Vnbr4`, `Vweights`, `Vseq`).
     pub prefix: &'static str,
     /// The VCD of the RTL run up to and including this cycle (`None` if it could not be
     /// written; the reason went to stderr).
@@ -143,11 +141,6 @@ pub struct LockstepOf<R: Rtl> {
 /// Mismatches a [`LockstepOf::collect_all`] run records (later ones are only counted).
 pub const MAX_RECORDED_MISMATCHES: usize = 1_000;
 
-/// The nearest-neighbour pipeline in lockstep with [`PipelineModel`](pficp_fpga::pipeline::PipelineModel).
-pub type Lockstep = LockstepOf<VerilatedPipeline>;
-/// The particle-weight pipeline in lockstep with
-/// [`ParticleWeightModel`](pficp_fpga::particle_weights::ParticleWeightModel).
-pub type PwLockstep = LockstepOf<VerilatedParticleWeights>;
 /// The weight stage in lockstep with [`WeightModel`](pficp_fpga::weights::WeightModel).
 pub type WeightLockstep = LockstepOf<VerilatedWeightStage>;
 /// The surface residual stage in lockstep with
@@ -389,105 +382,7 @@ impl<R: Rtl> LockstepOf<R> {
     }
 }
 
-/// A design whose ports include those of a block with inputs `I` and outputs `O` (the
-/// pipeline's [`Inputs`] and [`Outputs`], or the weight stage's [`WeightInputs`] and
-/// [`WeightOutputs`]): what the drivers of that block ([`LockstepOf::load_model`] and
-/// [`LockstepOf::particle`], or [`LockstepOf::clear`] and [`LockstepOf::weigh`]) step.
-pub trait Contains<I, O>: Rtl {
-    /// The design's inputs for the block's (the design's other inputs low).
-    const INPUTS: fn(&I) -> Self::Inputs;
-    /// The block's outputs among the design's.
-    const OUTPUTS: fn(Self::Outputs) -> O;
-}
-
-impl Contains<Inputs, Outputs> for VerilatedPipeline {
-    const INPUTS: fn(&Inputs) -> Inputs = |i| *i;
-    const OUTPUTS: fn(Outputs) -> Outputs = |o| o;
-}
-
-impl Contains<WeightInputs, WeightOutputs> for VerilatedWeightStage {
-    const INPUTS: fn(&WeightInputs) -> WeightInputs = |i| *i;
-    const OUTPUTS: fn(WeightOutputs) -> WeightOutputs = |o| o;
-}
-
-impl Contains<Inputs, Outputs> for VerilatedParticleWeights {
-    const INPUTS: fn(&Inputs) -> PwInputs = |i| PwInputs { nn: *i, ..Default::default() };
-    const OUTPUTS: fn(PwOutputs) -> Outputs = |o| o.nn;
-}
-
-/// The weight stage's controls (`clear`, `weigh`, `pre_shift`, `q_mul`; the costs come from
-/// the pipeline).
-impl Contains<WeightInputs, WeightOutputs> for VerilatedParticleWeights {
-    const INPUTS: fn(&WeightInputs) -> PwInputs =
-        |i| PwInputs { clear: i.clear, weigh: i.weigh, pre_shift: i.pre_shift, q_mul: i.q_mul, ..Default::default() };
-    const OUTPUTS: fn(PwOutputs) -> WeightOutputs = |o| o.w;
-}
-
-impl<R: Rtl> LockstepOf<R> {
-    /// For the drivers below, after the reset comparison: the block's outputs now, and a
-    /// step that applies the block's inputs for one clock in lockstep and returns the
-    /// block's outputs after it.
-    #[allow(clippy::type_complexity)] // (outputs, step): the two things every driver takes
-    fn driver<I, O>(&mut self) -> Result<(O, impl FnMut(&I) -> Result<O, Mismatch> + '_), Mismatch>
-    where
-        R: Contains<I, O>,
-    {
-        self.check_reset()?;
-        let now = (R::OUTPUTS)(self.outputs());
-        Ok((now, move |i: &I| {
-            self.step(&(R::INPUTS)(i))?;
-            Ok((R::OUTPUTS)(self.outputs()))
-        }))
-    }
-}
-
-impl<R: Contains<Inputs, Outputs>> LockstepOf<R> {
-    /// Write the model RAM, one point a clock from address 0 (other inputs low).
-    pub fn load_model(&mut self, model: &[FxPoint]) -> Result<(), Mismatch> {
-        load_model(|i| self.step(&(R::INPUTS)(i)), model)
-    }
-
-    /// One particle on the loaded model of `model_count` points: wait for `busy` to drop,
-    /// `start` with `pose`, then stream `scan`, offering a point on the clocks (counted from
-    /// the start edge = 1) where `gap(clock)` is false (the pipeline's `scan_ready` is the
-    /// back-pressure); collect the results until `cost_valid`. Returns the evaluation and the
-    /// clocks from `start` to `cost_valid` (as `pficp_fpga::pipeline::run_particle`). In the
-    /// particle-weight pipeline the particle's cost goes into the weight stage at the edge
-    /// after `cost_valid` (if the stage is idle and not full).
-    pub fn particle(
-        &mut self,
-        model_count: usize,
-        scan: &[FxPoint],
-        pose: &FxPose,
-        gap: impl FnMut(u64) -> bool,
-    ) -> Result<(Evaluation, u64), Mismatch> {
-        let (now, step) = self.driver::<Inputs, Outputs>()?;
-        drive_particle(step, now, model_count, scan, pose, gap)
-    }
-}
-
-impl LockstepOf<VerilatedPipeline> {
-    /// The `lanes`-lane RTL and `PipelineModel::new(lanes)`, both after reset; VCD (on
-    /// mismatch) under the system temp directory; see [`vcd`](Self::vcd).
-    pub fn new(lanes: usize) -> Self {
-        Self::from_rtl(VerilatedPipeline::new(lanes))
-    }
-
-    /// [`load_model`](Self::load_model) then [`particle`](Self::particle), all in lockstep.
-    pub fn run_particle(
-        &mut self,
-        model: &[FxPoint],
-        scan: &[FxPoint],
-        pose: &FxPose,
-        gap: impl FnMut(u64) -> bool,
-    ) -> Result<(Evaluation, u64), Mismatch> {
-        self.load_model(model)?;
-        self.particle(model.len(), scan, pose, gap)
-    }
-}
-
-/// The weights of one weight pass, as [`PwLockstep::weigh`] and [`WeightLockstep::weigh`]
-/// collect them.
+/// The weights of one weight pass, as [`WeightLockstep::weigh`] collects them.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct WeightPass {
     /// `w_index` of every `w_valid`, in order.
@@ -501,30 +396,6 @@ pub struct WeightPass {
     pub clocks: u64,
 }
 
-impl<R: Contains<WeightInputs, WeightOutputs>> LockstepOf<R> {
-    /// Wait for the weight stage to be idle, then `clear` for one clock.
-    pub fn clear(&mut self) -> Result<(), Mismatch> {
-        let (now, step) = self.driver::<WeightInputs, WeightOutputs>()?;
-        drive_clear(step, now)
-    }
-
-    /// Wait for the weight stage to be idle, hold `weigh` with `scale` until the pass starts
-    /// (a cost stored at the same edge has priority), and collect the weights until
-    /// `w_done`. Panics if the pass does not start (no cost stored).
-    pub fn weigh(&mut self, scale: &WeightScale) -> Result<WeightPass, Mismatch> {
-        let (now, step) = self.driver::<WeightInputs, WeightOutputs>()?;
-        drive_weigh(step, now, scale)
-    }
-}
-
-impl LockstepOf<VerilatedParticleWeights> {
-    /// The `lanes`-lane particle-weight RTL and `ParticleWeightModel::new(lanes)`, both after
-    /// reset; VCD (on mismatch) under the system temp directory; see [`vcd`](Self::vcd).
-    pub fn new(lanes: usize) -> Self {
-        Self::from_rtl(VerilatedParticleWeights::new(lanes))
-    }
-}
-
 impl LockstepOf<VerilatedWeightStage> {
     /// The weight-stage RTL and `WeightModel::new()`, both after reset; VCD (on mismatch)
     /// under the system temp directory; see [`vcd`](Self::vcd).
@@ -532,10 +403,38 @@ impl LockstepOf<VerilatedWeightStage> {
         Self::from_rtl(VerilatedWeightStage::new())
     }
 
+    /// For the drivers below, after the reset comparison: the outputs now, and a step that
+    /// applies inputs for one clock in lockstep and returns the outputs after it.
+    #[allow(clippy::type_complexity)] // (outputs, step): the two things every driver takes
+    fn driver(
+        &mut self,
+    ) -> Result<(WeightOutputs, impl FnMut(&WeightInputs) -> Result<WeightOutputs, Mismatch> + '_), Mismatch> {
+        self.check_reset()?;
+        let now = self.outputs();
+        Ok((now, move |i: &WeightInputs| {
+            self.step(i)?;
+            Ok(self.outputs())
+        }))
+    }
+
+    /// Wait for the weight stage to be idle, then `clear` for one clock.
+    pub fn clear(&mut self) -> Result<(), Mismatch> {
+        let (now, step) = self.driver()?;
+        drive_clear(step, now)
+    }
+
+    /// Wait for the weight stage to be idle, hold `weigh` with `scale` until the pass starts
+    /// (a cost stored at the same edge has priority), and collect the weights until
+    /// `w_done`. Panics if the pass does not start (no cost stored).
+    pub fn weigh(&mut self, scale: &WeightScale) -> Result<WeightPass, Mismatch> {
+        let (now, step) = self.driver()?;
+        drive_weigh(step, now, scale)
+    }
+
     /// Wait for the stage to be idle, then offer `cost` for one clock (stored unless 256
     /// costs are stored).
     pub fn push_cost(&mut self, cost: u64) -> Result<(), Mismatch> {
-        let (now, mut step) = self.driver::<WeightInputs, WeightOutputs>()?;
+        let (now, mut step) = self.driver()?;
         wait_weight_idle(&mut step, now)?;
         step(&WeightInputs { cost_valid: true, cost, ..Default::default() })?;
         Ok(())
@@ -617,95 +516,6 @@ pub(crate) fn drive_weigh<E>(
             return Ok(pass);
         }
         assert!(pass.clocks <= MAX_PARTICLES as u64 + 16, "no w_done after {} clocks", pass.clocks);
-    }
-}
-
-impl VerilatedPipeline {
-    /// Write the model RAM, one point a clock from address 0 (RTL only, no reference).
-    pub fn load_model(&mut self, model: &[FxPoint]) {
-        let r: Result<(), std::convert::Infallible> = load_model(
-            |i| {
-                self.step(i);
-                Ok(())
-            },
-            model,
-        );
-        r.unwrap()
-    }
-
-    /// [`Lockstep::particle`] on the RTL alone (no reference; for speed measurements and
-    /// long runs checked against `pficp_fpga::pipeline::evaluate`).
-    pub fn particle(
-        &mut self,
-        model_count: usize,
-        scan: &[FxPoint],
-        pose: &FxPose,
-        gap: impl FnMut(u64) -> bool,
-    ) -> (Evaluation, u64) {
-        let now = self.outputs();
-        let r: Result<_, std::convert::Infallible> = drive_particle(
-            |i| {
-                self.step(i);
-                Ok(self.outputs())
-            },
-            now,
-            model_count,
-            scan,
-            pose,
-            gap,
-        );
-        r.unwrap()
-    }
-}
-
-pub(crate) fn load_model<E>(mut step: impl FnMut(&Inputs) -> Result<(), E>, model: &[FxPoint]) -> Result<(), E> {
-    assert!(model.len() <= MAX_POINTS);
-    for (a, &p) in model.iter().enumerate() {
-        step(&Inputs::write_model(a, p))?;
-    }
-    Ok(())
-}
-
-/// The particle driver shared by the lockstep types and [`VerilatedPipeline`]: `step`
-/// applies inputs for one edge and returns the outputs after it; `now` are the outputs
-/// before.
-pub(crate) fn drive_particle<E>(
-    mut step: impl FnMut(&Inputs) -> Result<Outputs, E>,
-    mut now: Outputs,
-    model_count: usize,
-    scan: &[FxPoint],
-    pose: &FxPose,
-    mut gap: impl FnMut(u64) -> bool,
-) -> Result<(Evaluation, u64), E> {
-    assert!(!scan.is_empty() && (1..=MAX_POINTS).contains(&model_count));
-    let mut wait = 0u64;
-    while now.busy {
-        now = step(&Inputs::default())?;
-        wait += 1;
-        assert!(wait < 1 << 32, "the pipeline never became idle");
-    }
-    now = step(&Inputs::start(pose, model_count))?;
-    let mut next = 0;
-    let mut nearest = Vec::with_capacity(scan.len());
-    let mut clocks = 1u64;
-    // Generous bound: every batch sweeps the model once.
-    let limit = 1000 + (scan.len() as u64 + 1) * (model_count as u64 + 100) * 4;
-    loop {
-        let offer = next < scan.len() && !gap(clocks);
-        let inputs = Inputs::offer(scan, next, offer);
-        let took = offer && now.scan_ready;
-        now = step(&inputs)?;
-        clocks += 1;
-        if took {
-            next += 1;
-        }
-        if now.nn_valid {
-            nearest.push((now.nn_index, now.nn_dist));
-        }
-        if now.cost_valid {
-            return Ok((Evaluation { cost: now.cost, nearest }, clocks));
-        }
-        assert!(clocks < limit, "no cost_valid after {clocks} clocks ({next} of {} points taken)", scan.len());
     }
 }
 

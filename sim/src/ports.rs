@@ -7,31 +7,9 @@
 /// A port: (name, is_input, width). `clock` is driven by `tick`.
 pub type PortSpec = (&'static str, bool, usize);
 
-/// The ports of the nearest-neighbour pipeline's `top` (docs/pipeline.md), in the order of
-/// the packed input/output arrays the shim exchanges with Rust.
-pub const PIPELINE_PORTS: &[PortSpec] = &[
-    ("clock", true, 1),
-    ("model_we", true, 1),
-    ("model_waddr", true, 12),
-    ("model_wdata", true, 48),
-    ("model_count", true, 13),
-    ("start", true, 1),
-    ("pose", true, 216),
-    ("scan_valid", true, 1),
-    ("scan_data", true, 48),
-    ("scan_last", true, 1),
-    ("scan_ready", false, 1),
-    ("busy", false, 1),
-    ("nn_valid", false, 1),
-    ("nn_index", false, 12),
-    ("nn_dist", false, 34),
-    ("cost_valid", false, 1),
-    ("cost", false, 48),
-];
-
-/// The ports of the grid pipeline's `top` (docs/pipeline.md, "The grid pipeline"): the
-/// nearest-neighbour pipeline's with the cell table's write port instead of `model_count`.
-pub const GRID_PIPELINE_PORTS: &[PortSpec] = &[
+/// The ports of the neighbour pipeline's `top` (docs/pipeline.md, "The neighbour pipeline"),
+/// in the order of the packed input/output arrays the shim exchanges with Rust.
+pub const NEIGHBOUR_PIPELINE_PORTS: &[PortSpec] = &[
     ("clock", true, 1),
     ("model_we", true, 1),
     ("model_waddr", true, 12),
@@ -51,28 +29,7 @@ pub const GRID_PIPELINE_PORTS: &[PortSpec] = &[
     ("nn_dist", false, 34),
     ("cost_valid", false, 1),
     ("cost", false, 48),
-];
-
-/// The ports the neighbour pipeline's `top` (docs/pipeline.md, "The neighbour pipeline")
-/// adds to [`GRID_PIPELINE_PORTS`]: `nn_point`, each result's transformed scan point.
-pub const NEIGHBOUR_EXTRA_PORTS: &[PortSpec] = &[("nn_point", false, 48)];
-
-/// The ports the particle-weight pipeline (`fpga/src/rtl/particle_weights.rs`) adds to
-/// [`PIPELINE_PORTS`]: the weight stage's controls and outputs (docs/weights.md; `busy` and
-/// `count` renamed `w_busy` and `w_count`).
-pub const PW_EXTRA_PORTS: &[PortSpec] = &[
-    ("clear", true, 1),
-    ("weigh", true, 1),
-    ("pre_shift", true, 6),
-    ("q_mul", true, 17),
-    ("w_busy", false, 1),
-    ("w_count", false, 9),
-    ("min_cost", false, 48),
-    ("w_valid", false, 1),
-    ("w_index", false, 8),
-    ("weight", false, 16),
-    ("w_done", false, 1),
-    ("w_sum", false, 24),
+    ("nn_point", false, 48),
 ];
 
 /// The ports of the weight stage (docs/weights.md).

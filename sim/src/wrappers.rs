@@ -6,12 +6,8 @@ use crate::lockstep::Rtl;
 use crate::ports;
 use pficp_fpga::board::BoardConfig;
 use pficp_fpga::format::{pack_point, unpack_point};
-use pficp_fpga::grid_pipeline::{GridInputs, GridPipelineModel};
-use pficp_fpga::neighbour_pipeline::NeighbourPipelineModel;
-use pficp_fpga::particle_weights::ParticleWeightModel;
-use pficp_fpga::particle_weights::{PwInputs, PwOutputs};
-use pficp_fpga::pipeline::PipelineModel;
-use pficp_fpga::pipeline::{Inputs, Outputs};
+use pficp_fpga::neighbour_pipeline::{GridInputs, NeighbourPipelineModel};
+use pficp_fpga::pipeline::Outputs;
 use pficp_fpga::sequencer::SequencerModel;
 use pficp_fpga::sequencer::{SeqInputs, SeqOutputs};
 use pficp_fpga::surface_residual::SurfaceResidualModel;
@@ -21,108 +17,8 @@ use pficp_fpga::weights::{WeightInputs, WeightOutputs};
 use std::fmt;
 use std::path::Path;
 
-/// The Verilated pipeline with its own `VerilatedContext` (instances are independent and
-/// may live on different threads).
-pub struct VerilatedPipeline {
-    pub(crate) core: Core,
-}
-
-verilated_common!(VerilatedPipeline, Inputs);
-
-pub(crate) fn pipeline_input_words(i: &Inputs) -> [u64; 12] {
-    let pose = i.pose.pack();
-    [
-        i.model_we as u64,
-        i.model_waddr as u64,
-        i.model_wdata,
-        i.model_count as u64,
-        i.start as u64,
-        pose[0],
-        pose[1],
-        pose[2],
-        pose[3],
-        i.scan_valid as u64,
-        i.scan_data,
-        i.scan_last as u64,
-    ]
-}
-
-pub(crate) fn pipeline_outputs(o: &[u64]) -> Outputs {
-    Outputs {
-        scan_ready: o[0] != 0,
-        busy: o[1] != 0,
-        nn_valid: o[2] != 0,
-        nn_index: o[3] as u16,
-        nn_dist: o[4],
-        cost_valid: o[5] != 0,
-        cost: o[6],
-        nn_point: [0, 0, 0],
-    }
-}
-
-/// The neighbour pipeline's outputs: the grid pipeline's seven words, then `nn_point`.
-pub(crate) fn neighbour_outputs(o: &[u64; 8]) -> Outputs {
-    Outputs { nn_point: unpack_point(o[7]), ..pipeline_outputs(&o[..7]) }
-}
-
-impl VerilatedPipeline {
-    /// A pipeline with `lanes` lanes after reset (all inputs low, evaluated once).
-    ///
-    /// Panics if no model was verilated for `lanes` (see [`verilated_lanes`]).
-    pub fn new(lanes: usize) -> Self {
-        VerilatedPipeline { core: Core::new(PIPELINE, lanes, 12, &OUTPUT_PORTS) }
-    }
-
-    /// Number of lanes.
-    pub fn lanes(&self) -> usize {
-        self.core.model.lanes
-    }
-
-    /// Drive the input ports (sampled at the next [`tick`](Self::tick)'s rising edge).
-    /// Values are masked to the port widths.
-    pub fn set_inputs(&mut self, i: &Inputs) {
-        self.core.set_inputs(&pipeline_input_words(i))
-    }
-
-    /// The output ports now.
-    pub fn outputs(&self) -> Outputs {
-        pipeline_outputs(&self.core.outputs::<7>())
-    }
-}
-
-/// The Verilated grid pipeline (`GridPipeline<P>`: the nearest-neighbour pipeline with the
-/// grid search; its outputs are the nearest-neighbour pipeline's).
-pub struct VerilatedGridPipeline {
-    pub(crate) core: Core,
-}
-
-verilated_common!(VerilatedGridPipeline, GridInputs);
-
-impl VerilatedGridPipeline {
-    /// The `lanes`-lane grid pipeline after reset.
-    ///
-    /// Panics if no model was verilated for `lanes` (see [`verilated_lanes`]).
-    pub fn new(lanes: usize) -> Self {
-        VerilatedGridPipeline { core: Core::new(GRID_PIPELINE, lanes, 14, &GRID_OUTPUT_PORTS) }
-    }
-
-    /// Number of lanes.
-    pub fn lanes(&self) -> usize {
-        self.core.model.lanes
-    }
-
-    /// Drive the input ports (masked to the port widths).
-    pub fn set_inputs(&mut self, i: &GridInputs) {
-        self.core.set_inputs(&grid_input_words(i))
-    }
-
-    /// The output ports now.
-    pub fn outputs(&self) -> Outputs {
-        pipeline_outputs(&self.core.outputs::<7>())
-    }
-}
-
-pub(crate) fn grid_input_words(i: &GridInputs) -> [u64; 14] {
+/// The neighbour pipeline's input ports as the shim's words.
+pub(crate) fn neighbour_input_words(i: &GridInputs) -> [u64; 14] {
     let pose = i.pose.pack();
     [
         i.model_we as u64,
@@ -142,8 +38,22 @@ pub(crate) fn grid_input_words(i: &GridInputs) -> [u64; 14] {
     ]
 }
 
+/// The neighbour pipeline's outputs from the shim's words.
+pub(crate) fn neighbour_outputs(o: &[u64; 8]) -> Outputs {
+    Outputs {
+        scan_ready: o[0] != 0,
+        busy: o[1] != 0,
+        nn_valid: o[2] != 0,
+        nn_index: o[3] as u16,
+        nn_dist: o[4],
+        cost_valid: o[5] != 0,
+        cost: o[6],
+        nn_point: unpack_point(o[7]),
+    }
+}
+
 /// The Verilated neighbour pipeline (`NeighbourPipeline<P>`: lanes over one scan point's
-/// candidates; the grid pipeline's ports and `nn_point`).
+/// candidates; the board's search).
 pub struct VerilatedNeighbourPipeline {
     pub(crate) core: Core,
 }
@@ -165,49 +75,12 @@ impl VerilatedNeighbourPipeline {
 
     /// Drive the input ports (masked to the port widths).
     pub fn set_inputs(&mut self, i: &GridInputs) {
-        self.core.set_inputs(&grid_input_words(i))
+        self.core.set_inputs(&neighbour_input_words(i))
     }
 
     /// The output ports now.
     pub fn outputs(&self) -> Outputs {
         neighbour_outputs(&self.core.outputs::<8>())
-    }
-}
-
-/// The Verilated particle-weight pipeline (`ParticleWeightPipeline<P>`: the nearest-neighbour
-/// pipeline whose costs feed the weight stage).
-pub struct VerilatedParticleWeights {
-    pub(crate) core: Core,
-}
-
-verilated_common!(VerilatedParticleWeights, PwInputs);
-
-impl VerilatedParticleWeights {
-    /// The `lanes`-lane particle-weight pipeline after reset.
-    ///
-    /// Panics if no model was verilated for `lanes` (see [`verilated_lanes`]).
-    pub fn new(lanes: usize) -> Self {
-        VerilatedParticleWeights { core: Core::new(PARTICLE_WEIGHTS, lanes, 16, &PW_OUTPUT_PORTS) }
-    }
-
-    /// Number of lanes.
-    pub fn lanes(&self) -> usize {
-        self.core.model.lanes
-    }
-
-    /// Drive the input ports (masked to the port widths).
-    pub fn set_inputs(&mut self, i: &PwInputs) {
-        let nn = pipeline_input_words(&i.nn);
-        let mut w = [0u64; 16];
-        w[..12].copy_from_slice(&nn);
-        w[12..].copy_from_slice(&[i.clear as u64, i.weigh as u64, i.pre_shift as u64, i.q_mul as u64]);
-        self.core.set_inputs(&w)
-    }
-
-    /// The output ports now.
-    pub fn outputs(&self) -> PwOutputs {
-        let o = self.core.outputs::<15>();
-        PwOutputs { nn: pipeline_outputs(&o[..7]), w: weight_outputs(&o[7..]) }
     }
 }
 
@@ -752,35 +625,25 @@ impl Default for VerilatedSurfaceResidual {
 /// [`SurfaceLockstep`](crate::SurfaceLockstep) compares them.
 pub const SURFACE_OUTPUT_PORTS: [&str; 9] = ports::outputs(&[ports::SURFACE_RESIDUAL_PORTS]);
 
-/// Output port names of the pipeline in the order [`Lockstep`](crate::Lockstep) compares them.
-pub const OUTPUT_PORTS: [&str; 7] = ports::outputs(&[ports::PIPELINE_PORTS]);
-
-/// Output port names of the grid pipeline in the order [`GridLockstep`](crate::GridLockstep) compares them.
-pub const GRID_OUTPUT_PORTS: [&str; 7] = ports::outputs(&[ports::GRID_PIPELINE_PORTS]);
-
 /// Output port names of the neighbour pipeline in the order
-/// [`NeighbourLockstep`](crate::NeighbourLockstep) compares them (the grid pipeline's, then
-/// `nn_point`).
-pub const NEIGHBOUR_OUTPUT_PORTS: [&str; 8] =
-    ports::outputs(&[ports::GRID_PIPELINE_PORTS, ports::NEIGHBOUR_EXTRA_PORTS]);
-
-/// Output port names of the particle-weight pipeline in the order [`PwLockstep`](crate::PwLockstep) compares
-/// them (the pipeline's, then the weight stage's).
-pub const PW_OUTPUT_PORTS: [&str; 15] = ports::outputs(&[ports::PIPELINE_PORTS, ports::PW_EXTRA_PORTS]);
+/// [`NeighbourLockstep`](crate::NeighbourLockstep) compares them.
+pub const NEIGHBOUR_OUTPUT_PORTS: [&str; 8] = ports::outputs(&[ports::NEIGHBOUR_PIPELINE_PORTS]);
 
 /// Output port names of the weight stage in the order [`WeightLockstep`](crate::WeightLockstep) compares them.
 pub const WEIGHT_OUTPUT_PORTS: [&str; 8] = ports::outputs(&[ports::WEIGHT_STAGE_PORTS]);
 
-/// The ports the brute-force and grid pipelines have (not `nn_point`: their models leave it
-/// zero, and it is not compared).
-pub(crate) fn port_values(o: &Outputs) -> [u64; 7] {
-    [o.scan_ready as u64, o.busy as u64, o.nn_valid as u64, o.nn_index as u64, o.nn_dist, o.cost_valid as u64, o.cost]
-}
-
-/// The neighbour pipeline's ports: the grid pipeline's, then `nn_point` (packed).
+/// The neighbour pipeline's ports in [`NEIGHBOUR_OUTPUT_PORTS`] order (`nn_point` packed).
 pub(crate) fn neighbour_port_values(o: &Outputs) -> [u64; 8] {
-    let v = port_values(o);
-    [v[0], v[1], v[2], v[3], v[4], v[5], v[6], pack_point(o.nn_point)]
+    [
+        o.scan_ready as u64,
+        o.busy as u64,
+        o.nn_valid as u64,
+        o.nn_index as u64,
+        o.nn_dist,
+        o.cost_valid as u64,
+        o.cost,
+        pack_point(o.nn_point),
+    ]
 }
 
 pub(crate) fn weight_port_values(o: &WeightOutputs) -> [u64; 8] {
@@ -827,52 +690,6 @@ macro_rules! rtl_common {
     };
 }
 
-impl Rtl for VerilatedPipeline {
-    type Inputs = Inputs;
-    type Outputs = Outputs;
-    type Reference = PipelineModel;
-    const OUTPUT_PORTS: &'static [&'static str] = &OUTPUT_PORTS;
-    fn port_values(o: &Outputs) -> Vec<u64> {
-        port_values(o).to_vec()
-    }
-    fn new_reference(&self) -> PipelineModel {
-        PipelineModel::new(self.lanes())
-    }
-    fn reference_outputs(r: &PipelineModel) -> Outputs {
-        r.outputs()
-    }
-    fn reference_step(r: &mut PipelineModel, i: &Inputs) {
-        r.step(i)
-    }
-    fn fresh(&self) -> Self {
-        Self::new(self.lanes())
-    }
-    rtl_common!(Inputs);
-}
-
-impl Rtl for VerilatedGridPipeline {
-    type Inputs = GridInputs;
-    type Outputs = Outputs;
-    type Reference = GridPipelineModel;
-    const OUTPUT_PORTS: &'static [&'static str] = &GRID_OUTPUT_PORTS;
-    fn port_values(o: &Outputs) -> Vec<u64> {
-        port_values(o).to_vec()
-    }
-    fn new_reference(&self) -> GridPipelineModel {
-        GridPipelineModel::new(self.lanes())
-    }
-    fn reference_outputs(r: &GridPipelineModel) -> Outputs {
-        r.outputs()
-    }
-    fn reference_step(r: &mut GridPipelineModel, i: &GridInputs) {
-        r.step(i)
-    }
-    fn fresh(&self) -> Self {
-        Self::new(self.lanes())
-    }
-    rtl_common!(GridInputs);
-}
-
 impl Rtl for VerilatedNeighbourPipeline {
     type Inputs = GridInputs;
     type Outputs = Outputs;
@@ -894,29 +711,6 @@ impl Rtl for VerilatedNeighbourPipeline {
         Self::new(self.lanes())
     }
     rtl_common!(GridInputs);
-}
-
-impl Rtl for VerilatedParticleWeights {
-    type Inputs = PwInputs;
-    type Outputs = PwOutputs;
-    type Reference = ParticleWeightModel;
-    const OUTPUT_PORTS: &'static [&'static str] = &PW_OUTPUT_PORTS;
-    fn port_values(o: &PwOutputs) -> Vec<u64> {
-        port_values(&o.nn).into_iter().chain(weight_port_values(&o.w)).collect()
-    }
-    fn new_reference(&self) -> ParticleWeightModel {
-        ParticleWeightModel::new(self.lanes())
-    }
-    fn reference_outputs(r: &ParticleWeightModel) -> PwOutputs {
-        r.outputs()
-    }
-    fn reference_step(r: &mut ParticleWeightModel, i: &PwInputs) {
-        r.step(i)
-    }
-    fn fresh(&self) -> Self {
-        Self::new(self.lanes())
-    }
-    rtl_common!(PwInputs);
 }
 
 /// The sequencer's output words as [`Rtl::OUTPUT_PORTS`] (a wide port's words numbered).

@@ -12,9 +12,8 @@
 //! (magnitudes around 2^9 and 2^10), directed.
 
 use pficp_fpga::format::{pack_point, transform, FxPoint, FxPose, MAX_POINTS};
-use pficp_fpga::grid::{Grid, CELLS, CELL_LSBS};
-use pficp_fpga::grid_pipeline::{evaluate_grid, GridInputs};
-use pficp_fpga::neighbour_pipeline::evaluate_stored;
+use pficp_fpga::grid::{evaluate_grid, Grid, CELLS, CELL_LSBS};
+use pficp_fpga::neighbour_pipeline::{evaluate_stored, GridInputs};
 use pficp_sim::{verilated_lanes, NeighbourLockstep};
 
 mod support;
@@ -79,6 +78,12 @@ fn random_pose(r: &mut Rng) -> FxPose {
 /// The transformed scan points the results must present as `nn_point`, in scan order.
 fn transformed(scan: &[FxPoint], pose: &FxPose) -> Vec<FxPoint> {
     scan.iter().map(|&p| transform(pose, p)).collect()
+}
+
+#[test]
+fn both_lane_counts_are_verilated() {
+    assert_eq!(verilated_lanes(), vec![4, 16]);
+    println!("{}", pficp_sim::BUILD_REPORT);
 }
 
 #[test]

@@ -1,23 +1,18 @@
 //! The rust_hdl RTL (feature `rtl`), each block under the name of its model in the crate's
-//! root (`crate::pipeline` and [`pipeline`], `crate::weights` and [`weights`], ...).
+//! root (`crate::neighbour_pipeline` and [`neighbour_pipeline`], `crate::weights` and
+//! [`weights`], ...): the board top and the blocks it instantiates.
 //!
 //! One block a file:
 //! - [`mul18`]: `Mul18`, a registered 18 x 18 signed multiplier (Verilog wrapper, one DSP48A1);
 //! - [`transform`]: `Transform`, the pose register and the transform pipeline (9 `Mul18`);
-//! - [`lane`]: `Lane`, one scan point's distance pipeline and running minimum (3 `Mul18`);
-//! - [`pipeline`]: `NnPipeline<P>`, the nearest-neighbour top: state machine, model RAM,
-//!   `P` lanes, Reduce ([`crate::pipeline::PipelineModel`]);
-//! - [`grid_pipeline`]: `GridPipeline<P>`, the same with the grid search: model sorted by
-//!   cell, cell table, rows around a batch ([`crate::grid_pipeline::GridPipelineModel`]);
-//! - [`neighbour_pipeline`]: `NeighbourPipeline<P>`, lanes over one scan point's candidates
-//!   in its 27 cells, with [`neighbour_lane`]'s lanes and model-RAM banks
-//!   ([`crate::neighbour_pipeline::NeighbourPipelineModel`]);
+//! - [`neighbour_pipeline`]: `NeighbourPipeline<P>`, the board's nearest-neighbour search:
+//!   lanes over one scan point's candidates in its 27 cells, with [`neighbour_lane`]'s lanes
+//!   and model-RAM banks ([`crate::neighbour_pipeline::NeighbourPipelineModel`]);
 //! - [`surface_residual`]: `SurfaceResidual`, the residual stage: each result's surface
 //!   residual and their sum, without DSP48A1s
 //!   ([`crate::surface_residual::SurfaceResidualModel`]);
 //! - [`weights`]: `WeightStage`, minimum cost and exp-table weights
 //!   ([`crate::weights::WeightModel`]);
-//! - [`particle_weights`]: the two wired together ([`crate::particle_weights`]);
 //! - [`polish`]: the on-board polish's blocks: `PolishProgram`, the datapath of the
 //!   polish's programs ([`crate::polish::programs`]), `PolishPass`, a pass's point
 //!   ([`crate::polish::PassSums::add_point`]), and `PolishControl`, the sequence of
@@ -30,36 +25,26 @@
 //! simulator, sim/tests under Verilator). The `*_verilog` functions give the Verilog.
 
 pub mod board;
-pub mod grid_pipeline;
-pub mod lane;
 pub mod mul18;
 pub mod neighbour_lane;
 pub mod neighbour_pipeline;
-pub mod particle_weights;
-pub mod pipeline;
 pub mod polish;
 pub mod surface_residual;
 pub mod transform;
 pub mod weights;
 
-pub use grid_pipeline::GridPipeline;
-pub use lane::Lane;
 pub use mul18::{Mul18, MUL18_MODULE};
 pub use neighbour_lane::NeighbourLane;
 pub use neighbour_pipeline::NeighbourPipeline;
-pub use pipeline::NnPipeline;
 pub use polish::PolishProgram;
 pub use surface_residual::SurfaceResidual;
 pub use transform::Transform;
 
 use rust_hdl::prelude::*;
 
-/// Lane counts [`pipeline_verilog`] accepts (16 lanes use 9 + 3 * 16 = 57 of the
-/// XC6SLX45's 58 DSP48A1).
-pub const SUPPORTED_LANES: [usize; 5] = [1, 2, 4, 8, 16];
-
-/// Lane counts the neighbour pipeline, and so the board, accepts: [`SUPPORTED_LANES`]
-/// without 1 (its model RAM is banked `P` ways, its tree pads to 16 leaves).
+/// Lane counts the neighbour pipeline, and so the board, accepts (its model RAM is banked
+/// `P` ways, its tree pads to 16 leaves; 16 lanes use 9 + 3 * 16 = 57 of the XC6SLX45's 58
+/// DSP48A1).
 pub const BOARD_LANES: [usize; 4] = [2, 4, 8, 16];
 
 /// Sign extension that is correct for every value (rust_hdl 0.46's `signed_bit_cast`
@@ -106,33 +91,6 @@ pub fn dedup_modules(v: &str) -> String {
         out.push(line);
     }
     out.join("\n") + "\n"
-}
-
-fn verilog_of<const P: usize>() -> String {
-    let mut uut = NnPipeline::<P>::new();
-    uut.connect_all();
-    dedup_modules(&generate_verilog(&uut))
-}
-
-fn particle_weights_of<const P: usize>() -> String {
-    let mut uut = particle_weights::ParticleWeightPipeline::<P>::default();
-    uut.connect_all();
-    dedup_modules(&generate_verilog(&uut))
-}
-
-/// The Verilog of `ParticleWeightPipeline<lanes>` (the nearest-neighbour pipeline feeding
-/// the weight stage; ports in docs/pipeline.md and docs/weights.md), top module `top`.
-///
-/// Panics unless `lanes` is one of [`SUPPORTED_LANES`].
-pub fn particle_weights_verilog(lanes: usize) -> String {
-    match lanes {
-        1 => particle_weights_of::<1>(),
-        2 => particle_weights_of::<2>(),
-        4 => particle_weights_of::<4>(),
-        8 => particle_weights_of::<8>(),
-        16 => particle_weights_of::<16>(),
-        _ => panic!("particle_weights_verilog: {lanes} lanes is not supported; use one of {SUPPORTED_LANES:?}"),
-    }
 }
 
 /// The Verilog of the weight stage alone, top module `top` (docs/weights.md).
@@ -203,42 +161,6 @@ pub fn distributed_register_files(v: &str) -> String {
     v.replace("    reg[127:0] mem[63:0];", "    (* ram_style = \"distributed\" *) reg[127:0] mem[63:0];")
 }
 
-/// The Verilog of `NnPipeline<lanes>`: top module `top` (ports as docs/pipeline.md), one
-/// module per block instance, the multiplier module ([`MUL18_MODULE`]) defined once.
-///
-/// Panics unless `lanes` is one of [`SUPPORTED_LANES`].
-pub fn pipeline_verilog(lanes: usize) -> String {
-    match lanes {
-        1 => verilog_of::<1>(),
-        2 => verilog_of::<2>(),
-        4 => verilog_of::<4>(),
-        8 => verilog_of::<8>(),
-        16 => verilog_of::<16>(),
-        _ => panic!("pipeline_verilog: {lanes} lanes is not supported; use one of {SUPPORTED_LANES:?}"),
-    }
-}
-
-fn grid_of<const P: usize>() -> String {
-    let mut uut = GridPipeline::<P>::new();
-    uut.connect_all();
-    dedup_modules(&generate_verilog(&uut))
-}
-
-/// The Verilog of `GridPipeline<lanes>` (the nearest-neighbour pipeline with the grid search,
-/// docs/pipeline.md), top module `top`.
-///
-/// Panics unless `lanes` is one of [`SUPPORTED_LANES`].
-pub fn grid_pipeline_verilog(lanes: usize) -> String {
-    match lanes {
-        1 => grid_of::<1>(),
-        2 => grid_of::<2>(),
-        4 => grid_of::<4>(),
-        8 => grid_of::<8>(),
-        16 => grid_of::<16>(),
-        _ => panic!("grid_pipeline_verilog: {lanes} lanes is not supported; use one of {SUPPORTED_LANES:?}"),
-    }
-}
-
 fn neighbour_of<const P: usize>() -> String {
     let mut uut = NeighbourPipeline::<P>::new();
     uut.connect_all();
@@ -246,8 +168,7 @@ fn neighbour_of<const P: usize>() -> String {
 }
 
 /// The Verilog of `NeighbourPipeline<lanes>` (lanes over one scan point's candidates,
-/// docs/pipeline.md "The neighbour pipeline"), top module `top`; the ports are the grid
-/// pipeline's.
+/// docs/pipeline.md "The neighbour pipeline"), top module `top`.
 ///
 /// Panics unless `lanes` is one of [`BOARD_LANES`].
 pub fn neighbour_pipeline_verilog(lanes: usize) -> String {

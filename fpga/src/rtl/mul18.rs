@@ -4,7 +4,7 @@
 //! rust_hdl's `*` only multiplies 16 x 16, so this block is a Verilog [`Wrapper`]: each
 //! instance's module instantiates [`MUL18_MODULE`], a real (synthesisable, simulatable)
 //! implementation that Yosys maps onto a DSP48A1 and Verilator runs as is. rust_hdl emits
-//! the `cores` text once per instance; [`super::pipeline_verilog`] keeps only the first copy.
+//! the `cores` text once per instance; [`super::dedup_modules`] keeps only the first copy.
 //! The Rust `update()` is the simulation model of the same register.
 
 use rust_hdl::prelude::*;

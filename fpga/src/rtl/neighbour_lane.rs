@@ -284,7 +284,9 @@ impl Logic for NeighbourLane {
         self.front.model_we.next = self.model_we.val();
         self.front.model_waddr.next = self.model_waddr.val();
         self.front.model_wdata.next = self.model_wdata.val();
-        // s1: differences (17-bit), twice (see `Lane`: Yosys 0.23 and the DSP48A1 pre-adder).
+        // s1: differences (17-bit), twice: with A and B from one register, Yosys 0.23 packs
+        // the subtraction into the DSP48A1 pre-adder of B and leaves A undriven (a wrong
+        // netlist); two registers both go into the DSP (A1REG, B1REG), the pre-adder unused.
         for k in 0..3 {
             self.mq[k].next = signed_cast(self.front.point.val().get_bits::<16>(16 * k));
             self.qq[k].next = signed_cast(self.q.val().get_bits::<16>(16 * k));

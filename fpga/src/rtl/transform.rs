@@ -1,7 +1,8 @@
 //! `Transform`: the pose register and the three-edge transform pipeline of a scan point
-//! (docs/pipeline.md, Load): edge `k` registers the 9 products `m_ij * p_j` (9 [`Mul18`]),
-//! edge `k+1` registers `sum_j + (t_i << 15) + 2^14`, and `result` (combinational from that
-//! register) is `>> 15` saturated to 16 bits, written into a lane at edge `k+2`.
+//! (docs/pipeline.md, the neighbour pipeline's scan input): edge `k` registers the 9 products
+//! `m_ij * p_j` (9 [`Mul18`]), edge `k+1` registers `sum_j + (t_i << 15) + 2^14`, and
+//! `result` (combinational from that register) is `>> 15` saturated to 16 bits, taken at
+//! edge `k+2` (into the neighbour pipeline's point queue).
 
 use super::mul18::Mul18;
 use super::signed_bit_cast_safe;

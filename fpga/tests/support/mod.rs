@@ -8,7 +8,6 @@ pub use pficp_fpga::format::{unpack_point, FxPoint, WeightScale};
 pub use pficp_fpga::messages::{point_bytes, pose_bytes, IDENTITY_BYTES};
 pub use pficp_fpga::messages::{Identity, ResultReply, StatusReply, FLAG_FIRST, FLAG_LAST, MAX_LOAD_POINTS};
 pub use pficp_fpga::pf::{PfConfig, PfOutcome};
-pub use pficp_fpga::pipeline::{run_particle, PipelineModel};
 pub use pficp_fpga::protocol::{cobs_encode, crc16, FrameError, MAX_FRAME};
 pub use pficp_fpga::protocol::{ErrorCode, Frame};
 pub use pficp_fpga::run_request::{PolishRequest, RunOutcome, RunRequest};

@@ -1,7 +1,8 @@
 //! `ScanFeeder`: streams scan points `from_index .. to_index` of the scan store into the
 //! nearest-neighbour pipeline, one a clock while the pipeline takes them, through a
 //! two-entry queue that hides the store's one-clock read (the order and the `last` flag
-//! are what [`crate::pipeline::PipelineModel`] expects; test: `fpga/tests/scan_feeder.rs`).
+//! are what [`crate::neighbour_pipeline::NeighbourPipelineModel`] expects; test:
+//! `fpga/tests/scan_feeder.rs`).
 //! While `hold` is high it reads no further point from the store (the points already read
 //! still go out); `issued` marks each read, so a consumer can count the points it has let in.
 
