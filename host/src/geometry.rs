@@ -152,6 +152,15 @@ impl Pose {
         ((rel.trace() - 1.0) / 2.0).clamp(-1.0, 1.0).acos()
     }
 
+    /// The local parameter error of `self` against `reference`
+    /// ([`crate::pf_icp::surface::LOCAL_NAMES`]: the translation of the image of `at`, the
+    /// scale, the rotation vector of `R R_ref^T`).
+    pub fn local_error(&self, reference: &Pose, at: &Point3<f64>) -> [f64; 7] {
+        let t = self.apply(at) - reference.apply(at);
+        let r = rotation_vector(&(self.rotation * reference.rotation.transpose()));
+        [t.x, t.y, t.z, self.scale - reference.scale, r.x, r.y, r.z]
+    }
+
     /// Rows of the rotation matrix, for JSON.
     pub fn rotation_rows(&self) -> [[f64; 3]; 3] {
         let r = &self.rotation;
@@ -173,6 +182,18 @@ impl Pose {
         let m = Matrix3::from_fn(|i, j| r.rotation[i][j]);
         Pose { scale: r.scale, rotation: m, translation: Vector3::from(r.translation) }
     }
+}
+
+/// The rotation vector (axis times angle) of a rotation matrix, from its skew part and its
+/// trace by `atan2`: finite and accurate near the identity even when rounding has put the
+/// trace a hair above 3 (where nalgebra's `scaled_axis`, by `acos`, gives NaN).
+pub fn rotation_vector(r: &Matrix3<f64>) -> Vector3<f64> {
+    let v = 0.5 * Vector3::new(r[(2, 1)] - r[(1, 2)], r[(0, 2)] - r[(2, 0)], r[(1, 0)] - r[(0, 1)]);
+    let (sin, cos) = (v.norm(), 0.5 * (r.trace() - 1.0));
+    if sin < 1e-300 {
+        return Vector3::zeros();
+    }
+    v * (sin.atan2(cos) / sin)
 }
 
 /// What the user knows of the scale (scan to model): the interval it lies in. `lo == hi`
@@ -355,5 +376,25 @@ mod tests {
     fn wrap() {
         assert!((wrap_angle(3.0 * std::f64::consts::PI) - std::f64::consts::PI).abs() < 1e-12);
         assert!((wrap_angle(-0.5) + 0.5).abs() < 1e-15);
+    }
+}
+
+#[cfg(test)]
+mod rotation_vector_tests {
+    use super::rotation_vector;
+    use nalgebra::{Matrix3, Rotation3, Vector3};
+
+    #[test]
+    fn the_rotation_vector_is_finite_near_the_identity_and_exact_elsewhere() {
+        for v in [Vector3::new(0.3, -0.2, 0.5), Vector3::new(1e-7, 0.0, -2e-7), Vector3::new(0.0, 2.5, 0.1)] {
+            let r = Rotation3::new(v).into_inner();
+            assert!((rotation_vector(&r) - v).norm() < 1e-12, "{v:?}");
+        }
+        // A near-identity matrix whose trace rounding put above 3.
+        let mut r = Rotation3::new(Vector3::new(1e-9, 0.0, 0.0)).into_inner();
+        r += Matrix3::identity() * 1e-12;
+        assert!(r.trace() > 3.0);
+        let e = rotation_vector(&r);
+        assert!(e.iter().all(|x| x.is_finite()) && (e.x - 1e-9).abs() < 1e-12, "{e:?}");
     }
 }

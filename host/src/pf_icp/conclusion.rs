@@ -157,26 +157,6 @@ fn paired_excess(best: &[f64], other: &[f64]) -> f64 {
     mean / (var / n).sqrt().max(1e-300)
 }
 
-/// The local parameter error of `pose` against `reference` ([`LOCAL_NAMES`], about the
-/// image of `at`).
-pub fn local_error(pose: &Pose, reference: &Pose, at: &Point3<f64>) -> [f64; 7] {
-    let t = pose.apply(at) - reference.apply(at);
-    let r = rotation_vector(&(pose.rotation * reference.rotation.transpose()));
-    [t.x, t.y, t.z, pose.scale - reference.scale, r.x, r.y, r.z]
-}
-
-/// The rotation vector (axis times angle) of a rotation matrix, from its skew part and its
-/// trace by `atan2`: finite and accurate near the identity even when rounding has put the
-/// trace a hair above 3 (where nalgebra's `scaled_axis`, by `acos`, gives NaN).
-pub fn rotation_vector(r: &nalgebra::Matrix3<f64>) -> nalgebra::Vector3<f64> {
-    let v = 0.5 * nalgebra::Vector3::new(r[(2, 1)] - r[(1, 2)], r[(0, 2)] - r[(2, 0)], r[(1, 0)] - r[(0, 1)]);
-    let (sin, cos) = (v.norm(), 0.5 * (r.trace() - 1.0));
-    if sin < 1e-300 {
-        return nalgebra::Vector3::zeros();
-    }
-    v * (sin.atan2(cos) / sin)
-}
-
 /// The poses polished and compared at the end (step 1 of the module doc): the filter's
 /// first, then the search's first [`ARBITRATED`] + 1 hypotheses and any other within
 /// [`CANDIDATE_COST_FACTOR`] of the best's cost, [`MAX_CANDIDATES`] in all.
@@ -475,26 +455,6 @@ mod tests {
             "{:?}",
             c.uncertainty.sigma
         );
-    }
-}
-
-#[cfg(test)]
-mod rotation_vector_tests {
-    use super::rotation_vector;
-    use nalgebra::{Matrix3, Rotation3, Vector3};
-
-    #[test]
-    fn the_rotation_vector_is_finite_near_the_identity_and_exact_elsewhere() {
-        for v in [Vector3::new(0.3, -0.2, 0.5), Vector3::new(1e-7, 0.0, -2e-7), Vector3::new(0.0, 2.5, 0.1)] {
-            let r = Rotation3::new(v).into_inner();
-            assert!((rotation_vector(&r) - v).norm() < 1e-12, "{v:?}");
-        }
-        // A near-identity matrix whose trace rounding put above 3.
-        let mut r = Rotation3::new(Vector3::new(1e-9, 0.0, 0.0)).into_inner();
-        r += Matrix3::identity() * 1e-12;
-        assert!(r.trace() > 3.0);
-        let e = rotation_vector(&r);
-        assert!(e.iter().all(|x| x.is_finite()) && (e.x - 1e-9).abs() < 1e-12, "{e:?}");
     }
 }
 

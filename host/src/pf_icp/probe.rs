@@ -61,7 +61,7 @@ pub fn starts(pose: &Pose, at: &Point3<f64>, diag: f64, bounds: &ScaleBounds) ->
 #[derive(Clone, Debug)]
 pub struct Probe {
     /// Second moment of the kept restarts' local errors against the answer
-    /// ([`crate::pf_icp::conclusion::local_error`]; model units, scale, rad).
+    /// ([`Pose::local_error`]; model units, scale, rad).
     pub spread: nalgebra::SMatrix<f64, 7, 7>,
     /// Restarts that ended fitting as well as the answer.
     pub kept: usize,
@@ -88,7 +88,7 @@ pub fn probe(
         .map(|p| {
             let q = surface.polish(points, p, iterations.min(PROBE_ITERATIONS), bounds);
             let c = evidence.tight_costs(surface, points, &q);
-            fits_as_well(costs, &c).then(|| crate::pf_icp::conclusion::local_error(&q, pose, at))
+            fits_as_well(costs, &c).then(|| q.local_error(pose, at))
         })
         .collect();
     let mut spread = nalgebra::SMatrix::<f64, 7, 7>::zeros();
@@ -115,7 +115,7 @@ mod tests {
         let r = Vector3::new(0.0, 0.02, 0.0);
         let t = Vector3::new(0.01, 0.0, -0.02);
         let q = perturbed(&pose, &at, &r, &t, 1.02);
-        let e = crate::pf_icp::conclusion::local_error(&q, &pose, &at);
+        let e = q.local_error(&pose, &at);
         for (k, want) in [t.x, t.y, t.z, pose.scale * 0.02, r.x, r.y, r.z].iter().enumerate() {
             assert!((e[k] - want).abs() < 1e-12, "{k}: {} against {want}", e[k]);
         }

@@ -100,7 +100,7 @@ pub fn inside_95(d2: f64, dof: usize) -> bool {
 /// over the determined parameters, and their number (`None` if the covariance is not
 /// positive definite).
 pub fn mahalanobis2(c: &crate::pf_icp::conclusion::Conclusion, truth: &Pose, at: &Point3<f64>) -> Option<(f64, usize)> {
-    let e = crate::pf_icp::conclusion::local_error(&c.pose, truth, at);
+    let e = c.pose.local_error(truth, at);
     // A parameter the user fixed (sigma 0, the scale under `--scale`) has no error to weigh.
     let k: Vec<usize> = (0..7).filter(|&i| c.uncertainty.sigma[i].is_some_and(|s| s > 0.0)).collect();
     let n = k.len();

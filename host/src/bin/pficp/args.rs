@@ -1,0 +1,433 @@
+//! The command line: subcommands and their flags (clap).
+
+use anyhow::{bail, Result};
+use clap::{Parser, Subcommand, ValueEnum};
+use pficp::board::BoardClient;
+use pficp::datasets::ModelId;
+use pficp::geometry::ScaleBounds;
+use pficp::pf_icp::init::InitMode;
+use pficp::pf_icp::PfIcpSettings;
+use pficp::registration::methods::Method;
+use pficp_fpga::messages::Identity;
+use std::path::PathBuf;
+use std::time::Duration;
+
+#[derive(Parser)]
+#[command(name = "pficp", version, about = "PF-ICP point-cloud registration (particle filter + ICP + k-means)")]
+pub(crate) struct Cli {
+    /// No progress bars or progress lines on stderr (errors and warnings still print).
+    #[arg(long, short, global = true)]
+    pub(crate) quiet: bool,
+    #[command(subcommand)]
+    pub(crate) command: Command,
+}
+
+#[derive(Subcommand)]
+pub(crate) enum Command {
+    /// Register built-in model-1 twice: the paper's scan (the model's own points under the
+    /// Table 1 transform) and a realistic one (independently sampled, partial, noisy), with
+    /// PF-ICP and plain ICP against the truth, and PF-ICP's one-sigma uncertainty.
+    #[command(after_help = "Example:\n  pficp demo")]
+    Demo(DemoArgs),
+    /// Register a scan to a model: the pose maps scan to model, d = s R m + T.
+    #[command(after_help = "Example:\n  pficp register --model part.ply --scan scan.pcd --json > pose.json")]
+    Register(RegisterArgs),
+    /// Write a built-in model, its scan and the truth pose to files.
+    #[command(after_help = "Example:\n  pficp gen --model model-2 --out-dir data --sampling independent --noise 0.1")]
+    Gen(GenArgs),
+    /// Reproduce the paper's Tables 2 to 7, the success rates and the figures, or run the
+    /// realistic benchmark.
+    #[command(after_help = "Example:\n  pficp eval --suite realistic --quick --out eval-out")]
+    Eval(EvalArgs),
+    /// Time one PF-ICP registration per stage (model-1, 2,000 + 2,000 points, K = 100,
+    /// 50 particles, 50 iterations; --large: 200,000 + 100,000); build with --release.
+    #[command(after_help = "Example:\n  pficp bench --runs 7\n  pficp bench --large --runs 3")]
+    Bench(BenchArgs),
+    /// Talk to the board over its serial port.
+    #[command(subcommand)]
+    Board(BoardCommand),
+}
+
+#[derive(Subcommand)]
+pub(crate) enum BoardCommand {
+    /// Print the board's Identify reply: protocol version, limits, clock, baud, sizes.
+    #[command(after_help = "Example:\n  pficp board info --port /dev/ttyUSB0")]
+    Info(BoardInfoArgs),
+}
+
+#[derive(clap::Args)]
+pub(crate) struct LinkArgs {
+    /// Serial line baud rate (the board's is set when it is generated) [default: the rate the
+    /// board answers Identify at, trying 3000000, 921600, then 115200].
+    #[arg(long)]
+    pub(crate) baud: Option<u32>,
+    /// Time allowed per reply in milliseconds (plus the board's modelled transfer and compute time).
+    #[arg(long, default_value_t = pficp::board::DEFAULT_TIMEOUT.as_millis() as u64)]
+    pub(crate) timeout_ms: u64,
+}
+
+impl LinkArgs {
+    /// Open the port and identify the board (at --baud, or at the rate it answers).
+    pub(crate) fn connect(&self, port: &str) -> Result<(BoardClient, Identity)> {
+        use pficp::board::{MAX_BAUD, MAX_TIMEOUT, MIN_BAUD};
+        if self.timeout_ms == 0 || self.timeout_ms > MAX_TIMEOUT.as_millis() as u64 {
+            bail!("--timeout-ms {}: must be 1 to {}", self.timeout_ms, MAX_TIMEOUT.as_millis());
+        }
+        if let Some(baud) = self.baud.filter(|b| !(MIN_BAUD..=MAX_BAUD).contains(b)) {
+            bail!("--baud {baud}: the client runs {MIN_BAUD} to {MAX_BAUD} baud");
+        }
+        Ok(BoardClient::connect(port, self.baud, Duration::from_millis(self.timeout_ms))?)
+    }
+}
+
+#[derive(clap::Args)]
+pub(crate) struct BoardInfoArgs {
+    /// The board's serial port (e.g. /dev/ttyUSB0).
+    #[arg(long)]
+    pub(crate) port: String,
+    #[command(flatten)]
+    pub(crate) link: LinkArgs,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub(crate) enum MethodArg {
+    PfIcp,
+    Icp,
+    Welsch,
+    Cauchy,
+    SparseIcp,
+    EmIcp,
+}
+
+impl From<MethodArg> for Method {
+    fn from(m: MethodArg) -> Method {
+        match m {
+            MethodArg::PfIcp => Method::PfIcp,
+            MethodArg::Icp => Method::Icp,
+            MethodArg::Welsch => Method::Welsch,
+            MethodArg::Cauchy => Method::Cauchy,
+            MethodArg::SparseIcp => Method::SparseIcp,
+            MethodArg::EmIcp => Method::EmIcp,
+        }
+    }
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub(crate) enum InitArg {
+    Auto,
+    Index,
+    Nearest,
+}
+
+impl From<InitMode> for InitArg {
+    fn from(m: InitMode) -> InitArg {
+        match m {
+            InitMode::Auto => InitArg::Auto,
+            InitMode::Index => InitArg::Index,
+            InitMode::Nearest => InitArg::Nearest,
+        }
+    }
+}
+
+#[derive(clap::Args)]
+pub(crate) struct PfArgs {
+    /// Clusters K per cloud (PF-ICP).
+    #[arg(long, default_value_t = PfIcpSettings::default().clusters)]
+    pub(crate) clusters: usize,
+    /// Particles (PF-ICP).
+    #[arg(long, default_value_t = PfIcpSettings::default().particles)]
+    pub(crate) particles: usize,
+    /// Iteration cap (the filter's for PF-ICP, the method's own otherwise).
+    #[arg(long, default_value_t = PfIcpSettings::default().iterations)]
+    pub(crate) iterations: usize,
+    /// Seed of every random choice.
+    #[arg(long, default_value_t = PfIcpSettings::default().seed)]
+    pub(crate) seed: u64,
+    /// Cluster pairing for PF-ICP's start: index (scan = model's points in order),
+    /// nearest (independent scan) or auto (try both).
+    #[arg(long, value_enum, default_value_t = InitArg::from(PfIcpSettings::default().init))]
+    pub(crate) init: InitArg,
+    /// The scale (scan to model) when it is known: 1 when model and scan share their units
+    /// (a metric depth camera and a model in the same units). Nothing then changes it.
+    #[arg(long, value_name = "S", conflicts_with = "scale_range", allow_hyphen_values = true)]
+    pub(crate) scale: Option<f64>,
+    /// Bounds on the scale (scan to model): every estimate stays within LO to HI.
+    #[arg(long, value_name = "LO,HI", value_delimiter = ',', num_args = 1, allow_hyphen_values = true)]
+    pub(crate) scale_range: Vec<f64>,
+    /// Where the sensor was, in the scan's coordinates (a depth camera's scans: the origin,
+    /// 0,0,0): model surface that would face it inside the scan's view but has no scan point
+    /// near it counts against a pose.
+    #[arg(long, value_name = "X,Y,Z", value_delimiter = ',', num_args = 1, allow_hyphen_values = true)]
+    pub(crate) viewpoint: Vec<f64>,
+}
+
+impl PfArgs {
+    pub(crate) fn settings(&self) -> Result<PfIcpSettings> {
+        if self.particles == 0 {
+            bail!("--particles must be at least 1");
+        }
+        if self.iterations == 0 {
+            bail!("--iterations must be at least 1");
+        }
+        if self.clusters == 0 {
+            bail!("--clusters must be at least 1");
+        }
+        use pficp::pf_icp::{MAX_CLUSTERS, MAX_ITERATIONS, MAX_PARTICLES};
+        for (flag, value, limit) in [
+            ("--particles", self.particles, MAX_PARTICLES),
+            ("--iterations", self.iterations, MAX_ITERATIONS),
+            ("--clusters", self.clusters, MAX_CLUSTERS),
+        ] {
+            if value > limit {
+                bail!("{flag} must be at most {limit} (got {value})");
+            }
+        }
+        let scale = match (self.scale, self.scale_range.as_slice()) {
+            (Some(s), _) => {
+                if !(s.is_finite() && s > 0.0) {
+                    bail!("--scale must be a positive finite number (got {s})");
+                }
+                ScaleBounds::fixed(s)
+            }
+            (None, []) => ScaleBounds::FREE,
+            (None, &[lo, hi]) => {
+                if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && hi > 0.0) {
+                    bail!("--scale-range takes two positive finite numbers LO,HI (got {lo},{hi})");
+                }
+                if lo > hi {
+                    bail!("--scale-range LO,HI needs LO <= HI (got {lo},{hi})");
+                }
+                ScaleBounds::range(lo, hi)
+            }
+            (None, v) => bail!("--scale-range takes two numbers LO,HI (got {})", v.len()),
+        };
+        let viewpoint = match self.viewpoint.as_slice() {
+            [] => None,
+            &[x, y, z] => {
+                if ![x, y, z].iter().all(|v| v.is_finite()) {
+                    bail!("--viewpoint takes three finite numbers X,Y,Z (got {x},{y},{z})");
+                }
+                Some(nalgebra::Point3::new(x, y, z))
+            }
+            v => bail!("--viewpoint takes three numbers X,Y,Z (got {})", v.len()),
+        };
+        Ok(PfIcpSettings {
+            clusters: self.clusters,
+            particles: self.particles,
+            iterations: self.iterations,
+            seed: self.seed,
+            init: match self.init {
+                InitArg::Auto => InitMode::Auto,
+                InitArg::Index => InitMode::Index,
+                InitArg::Nearest => InitMode::Nearest,
+            },
+            scale,
+            viewpoint,
+            ..Default::default()
+        })
+    }
+}
+
+#[derive(clap::Args)]
+pub(crate) struct RegisterArgs {
+    /// Model cloud D (PLY, PCD, XYZ or CSV).
+    #[arg(long)]
+    pub(crate) model: PathBuf,
+    /// Scan cloud M (PLY, PCD, XYZ or CSV).
+    #[arg(long)]
+    pub(crate) scan: PathBuf,
+    /// Registration method.
+    #[arg(long, value_enum, default_value_t = MethodArg::PfIcp)]
+    pub(crate) method: MethodArg,
+    #[command(flatten)]
+    pub(crate) pf: PfArgs,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    pub(crate) json: bool,
+    /// Write the scan, transformed into the model frame, to this file.
+    #[arg(long)]
+    pub(crate) out_aligned: Option<PathBuf>,
+    /// Run PF-ICP's particle filter on the board at this serial port (PF-ICP only): the
+    /// start, covariance and polish on the host, the filter on the board.
+    #[arg(long, value_name = "PORT")]
+    pub(crate) board: Option<String>,
+    /// With --board: the host runs the filter and the board only weighs each iteration's
+    /// particles (the mode of protocol version 1 boards).
+    #[arg(long)]
+    pub(crate) host_driven: bool,
+    /// With --board: scan points the on-board filter weighs each particle over [default: 300].
+    #[arg(long, value_name = "N")]
+    pub(crate) board_points: Option<usize>,
+    #[command(flatten)]
+    pub(crate) link: LinkArgs,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub(crate) enum ModelArg {
+    #[value(name = "model-1")]
+    Model1,
+    #[value(name = "model-2")]
+    Model2,
+    #[value(name = "model-3")]
+    Model3,
+}
+
+impl From<ModelArg> for ModelId {
+    fn from(m: ModelArg) -> ModelId {
+        match m {
+            ModelArg::Model1 => ModelId::Model1,
+            ModelArg::Model2 => ModelId::Model2,
+            ModelArg::Model3 => ModelId::Model3,
+        }
+    }
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub(crate) enum SamplingArg {
+    /// The model's own points, same order (the paper's setting).
+    Paper,
+    /// Sampled independently from the same surface.
+    Independent,
+    /// Thin, uneven sampling (Table 7).
+    Thin,
+}
+
+#[derive(clap::Args)]
+pub(crate) struct GenArgs {
+    /// Which built-in model.
+    #[arg(long, value_enum)]
+    pub(crate) model: ModelArg,
+    /// Folder for <model>.ply, <model>-scan.ply and <model>-truth.json.
+    #[arg(long)]
+    pub(crate) out_dir: PathBuf,
+    /// Model points.
+    #[arg(long, default_value_t = 2000)]
+    pub(crate) points: usize,
+    /// Scan sampling.
+    #[arg(long, value_enum, default_value_t = SamplingArg::Paper)]
+    pub(crate) sampling: SamplingArg,
+    /// Scan points (independent and thin sampling).
+    #[arg(long, default_value_t = 2000)]
+    pub(crate) scan_points: usize,
+    /// Noise amplitude: U(0, noise) added to every scan coordinate.
+    #[arg(long, default_value_t = 0.0)]
+    pub(crate) noise: f64,
+    /// Use a random transform (angles +-45 deg, scale 0.7..1.3) instead of Table 1's.
+    #[arg(long)]
+    pub(crate) random_transform: bool,
+    /// Seed for sampling, noise and the random transform.
+    #[arg(long, default_value_t = 1)]
+    pub(crate) seed: u64,
+    /// File format: ply, pcd, xyz or csv (ply and pcd are written binary).
+    #[arg(long, default_value = "ply")]
+    pub(crate) format: String,
+}
+
+#[derive(clap::Args)]
+pub(crate) struct EvalArgs {
+    /// Folder for the figures and results.json.
+    #[arg(long, default_value = "eval-out")]
+    pub(crate) out: PathBuf,
+    /// Random transforms per model for the success rates.
+    #[arg(long, default_value_t = 100)]
+    pub(crate) trials: usize,
+    /// Model points.
+    #[arg(long, default_value_t = 2000)]
+    pub(crate) points: usize,
+    /// Scan points of the independent scans.
+    #[arg(long, default_value_t = 2000)]
+    pub(crate) scan_points: usize,
+    /// Seed of the random transforms.
+    #[arg(long, default_value_t = 1)]
+    pub(crate) seed: u64,
+    /// Skip the success rates (the slow part).
+    #[arg(long)]
+    pub(crate) no_success: bool,
+    /// Which experiments: the paper's (Tables 2 to 7, success rates, figures) or the
+    /// realistic benchmark (real and synthetic near-symmetric shapes, partial views,
+    /// noise, outliers; writes realistic.json).
+    #[arg(long, value_enum, default_value_t = SuiteArg::Paper)]
+    pub(crate) suite: SuiteArg,
+    /// Realistic suite: cases per family [default: 100, or 8 with --quick].
+    #[arg(long)]
+    pub(crate) cases: Option<usize>,
+    /// Realistic suite: the quick size (8 cases per family).
+    #[arg(long)]
+    pub(crate) quick: bool,
+    /// Realistic suite: dev (development shapes and seeds, for tuning) or test (every shape,
+    /// held-out ones included, other seeds: what is reported).
+    #[arg(long, value_enum, default_value_t = SplitArg::Test)]
+    pub(crate) split: SplitArg,
+    /// Realistic suite: only these families (comma-separated) [default: all].
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub(crate) family: Vec<FamilyArg>,
+    /// Realistic suite: also run these methods (comma-separated), beside pf-icp.
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub(crate) with: Vec<MethodArg>,
+    /// Also run PF-ICP with the filter and its polish on the board, the board's part by its
+    /// bit-exact reference (what the board computes): columns pf-icp-board (then the
+    /// host's polish) and pf-icp-board-filter (the board's pose alone), in the realistic
+    /// suite and in the paper suite's success rates.
+    #[arg(long)]
+    pub(crate) board_reference: bool,
+    /// With --board-reference: scan points the on-board filter weighs each particle over
+    /// [default: the register command's].
+    #[arg(long, requires = "board_reference")]
+    pub(crate) board_points: Option<usize>,
+    /// Realistic suite: do not tell PF-ICP where the camera was in the camera-view families.
+    #[arg(long)]
+    pub(crate) without_viewpoint: bool,
+    /// Realistic suite: export every case (model, scan, truth, symmetries) to this folder
+    /// for the peers' script (tests/peers).
+    #[arg(long, value_name = "DIR")]
+    pub(crate) export: Option<PathBuf>,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub(crate) enum SuiteArg {
+    Paper,
+    Realistic,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub(crate) enum FamilyArg {
+    Real,
+    RealOutliers,
+    Parts,
+    #[value(name = "hard-180")]
+    Hard180,
+    Camera,
+    CameraAny,
+    CameraMetric,
+    CameraAnyMetric,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub(crate) enum SplitArg {
+    Dev,
+    Test,
+}
+
+#[derive(clap::Args)]
+pub(crate) struct DemoArgs {
+    /// Seed of the realistic scan (sampling, view, noise) and of every method.
+    #[arg(long, default_value_t = PfIcpSettings::default().seed)]
+    pub(crate) seed: u64,
+}
+
+/// Most `bench --runs`.
+pub(crate) const MAX_BENCH_RUNS: usize = 1000;
+
+#[derive(clap::Args)]
+pub(crate) struct BenchArgs {
+    /// Repetitions (the median is reported; at most 1000).
+    #[arg(long, default_value_t = 5)]
+    pub(crate) runs: usize,
+    /// Scan sampling: the paper's or an independent scan.
+    #[arg(long, value_enum, default_value_t = SamplingArg::Independent)]
+    pub(crate) sampling: SamplingArg,
+    /// A large registration: 200,000 model points, a 100,000-point independent scan (the
+    /// paper's: the model's own 200,000), noise 0.01 (PF-ICP's large-cloud path).
+    #[arg(long)]
+    pub(crate) large: bool,
+}
