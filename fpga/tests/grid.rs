@@ -2,8 +2,8 @@
 //! rule), on random models (surfaces, clumps on cell boundaries, the cube's corners) and
 //! queries anywhere in the coordinate range; and the work it saves on two surfaces.
 
-use pficp_fpga::format::{self, FxPoint};
-use pficp_fpga::grid::{nearest_capped, Grid, CAP_D2, CELL_LSBS, NONE};
+use pficp_fpga::common::format::{self, FxPoint};
+use pficp_fpga::search::grid::{nearest_capped, Grid, CAP_D2, CELL_LSBS, NONE};
 use proptest::prelude::*;
 
 /// A coordinate inside the grid's cube, drawn near cell boundaries a third of the time.

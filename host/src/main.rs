@@ -18,7 +18,7 @@ use pficp::pf_icp::PfIcpSettings;
 use pficp::progress::{self, note, Progress};
 use pficp::registration::methods::Method;
 use pficp::request::{BoardProgress, BoardRun, Engine, Registered, Request};
-use pficp_fpga::messages::Identity;
+use pficp_fpga::protocol::messages::Identity;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 

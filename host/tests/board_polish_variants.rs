@@ -28,8 +28,8 @@ use pficp::eval::realistic::{case, score, Family, Split};
 use pficp::geometry::Pose;
 use pficp::nn::NearestNeighbours;
 use pficp::pf_icp::{self, PfIcpSettings};
-use pficp_fpga::format::{FxPoint, FxPose};
-use pficp_fpga::messages::ResultReply;
+use pficp_fpga::common::format::{FxPoint, FxPose};
+use pficp_fpga::protocol::messages::ResultReply;
 use rayon::prelude::*;
 use std::time::Duration;
 

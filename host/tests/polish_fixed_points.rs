@@ -15,7 +15,7 @@ use pficp::eval::realistic::{case, Family, Split};
 use pficp::geometry::Pose;
 use pficp::nn::NearestNeighbours;
 use pficp::pf_icp::PfIcpSettings;
-use pficp_fpga::format::FxPose;
+use pficp_fpga::common::format::FxPose;
 use pficp_fpga::polish::{gate, pass_over, solve, update, GridSearch};
 use rayon::prelude::*;
 

@@ -37,10 +37,10 @@ use crate::nn::NearestNeighbours;
 use crate::pf_icp::particle_filter::{tempered_q, WeighError, Weighed};
 use crate::pf_icp::{register_with, ParticleWeights, PfIcpResult, PfIcpSettings};
 use nalgebra::Point3;
-use pficp_fpga::format::{FxPoint, FxPose, WeightScale, DIST_FRAC};
-use pficp_fpga::grid::Grid;
-use pficp_fpga::messages::{Identity, POINT_BYTES};
+use pficp_fpga::common::format::{FxPoint, FxPose, WeightScale, DIST_FRAC};
+use pficp_fpga::protocol::messages::{Identity, POINT_BYTES};
 use pficp_fpga::protocol::VERSION;
+use pficp_fpga::search::grid::Grid;
 use pficp_fpga::surface::FxNormal;
 use std::sync::Mutex;
 
