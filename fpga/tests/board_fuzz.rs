@@ -10,9 +10,10 @@ use pficp_fpga::common::format::{unpack_point, FxPoint, WeightScale};
 use pficp_fpga::common::splitmix::SplitMix64;
 use pficp_fpga::filter::pf::{self, RUN_BYTES};
 use pficp_fpga::filter::weights::weights;
+use pficp_fpga::protocol::layout::pose_from_bytes;
 use pficp_fpga::protocol::messages::{
-    parse_two_u16, pose_from_bytes, EvaluateReply, Identity, NearestReply, NearestRequest, ResultReply, RunState,
-    StatusReply, FLAG_FIRST, FLAG_LAST,
+    parse_two_u16, EvaluateReply, Identity, NearestReply, NearestRequest, ResultReply, RunState, StatusReply,
+    FLAG_FIRST, FLAG_LAST,
 };
 use pficp_fpga::protocol::run_request::{execute, RunOutcome, RunRequest};
 use pficp_fpga::protocol::{digest_update, Deframer, ErrorCode, Frame, DIGEST_INIT, MAX_FRAME};

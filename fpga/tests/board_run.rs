@@ -47,7 +47,7 @@ fn direct_run(b: &BoardModel, r: &RunRequest) -> RunOutcome {
     let grid = pficp_fpga::search::grid::Grid::build(&model).unwrap();
     assert_eq!(&grid.first[..], b.table_store(), "the board's table is the model's");
     let normals: Vec<_> = b.normal_store()[..m as usize].iter().map(|&w| unpack_point(w)).collect();
-    let search = pficp_fpga::polish::GridSearch { grid: &grid, normals: &normals };
+    let search = pficp_fpga::surface::GridSearch { grid: &grid, normals: &normals };
     pficp_fpga::protocol::run_request::execute(
         r,
         |pose| pficp_fpga::surface::evaluate(&grid, &normals, &scan, pose),

@@ -16,7 +16,8 @@ use pficp::geometry::Pose;
 use pficp::nn::NearestNeighbours;
 use pficp::pf_icp::PfIcpSettings;
 use pficp_fpga::common::format::FxPose;
-use pficp_fpga::polish::{gate, pass_over, solve, update, GridSearch};
+use pficp_fpga::polish::{gate, pass_over, solve, update};
+use pficp_fpga::surface::GridSearch;
 use rayon::prelude::*;
 
 fn on_board_pose(plan: &OnBoardPlan, pose: &Pose) -> FxPose {

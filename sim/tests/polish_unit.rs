@@ -11,9 +11,10 @@
 use pficp_fpga::common::format::{FxPoint, FxPose};
 use pficp_fpga::filter::sequencer::unpack_pose;
 use pficp_fpga::polish::cases::{pose, surface, window_scan};
-use pficp_fpga::polish::{polish_best, GridSearch, Search};
+use pficp_fpga::polish::polish_best;
 use pficp_fpga::search::grid::Grid;
 use pficp_fpga::surface::{evaluate, signed_residual, FxNormal};
+use pficp_fpga::surface::{GridSearch, Search};
 use pficp_sim::{UnitInputs, VerilatedPolishUnit};
 use std::collections::VecDeque;
 

@@ -142,11 +142,12 @@ impl std::fmt::Display for BitPeriod {
 use crate::common::format::{unpack_point, FxPoint, WeightScale, MAX_POINTS};
 use crate::filter::pf::ConfigError;
 use crate::filter::weights::{weights, COST_MAX, MAX_PARTICLES};
+use crate::protocol::layout::{pose_from_bytes, POINT_BYTES, POSE_BYTES};
 use crate::protocol::messages::{
-    pose_from_bytes, two_u16, EvaluateReply, Identity, NearestReply, ResultReply, RunState, StatusReply, WeightSummary,
+    two_u16, EvaluateReply, Identity, NearestReply, ResultReply, RunState, StatusReply, WeightSummary,
     EVALUATE_HEADER_BYTES, FLAG_FIRST, FLAG_LAST, LOAD_HEADER_BYTES, MAX_LOAD_ENTRIES, MAX_LOAD_POINTS, MAX_NEAREST,
-    MAX_POSES, MODEL_WORDS, NEAREST_REQUEST_BYTES, NORMALS_OFFSET, POINT_BYTES, POSE_BYTES, RUN_REPLY_BYTES,
-    TABLE_ENTRIES, TABLE_ENTRY_BYTES, TABLE_ENTRY_MASK, TWO_U16_BYTES, W_SUM_MASK,
+    MAX_POSES, MODEL_WORDS, NEAREST_REQUEST_BYTES, NORMALS_OFFSET, RUN_REPLY_BYTES, TABLE_ENTRIES, TABLE_ENTRY_BYTES,
+    TABLE_ENTRY_MASK, TWO_U16_BYTES, W_SUM_MASK,
 };
 use crate::protocol::run_request::{execute, RunOutcome, RunRequest};
 use crate::protocol::{digest_update, Command, Deframer, ErrorCode, Frame, DIGEST_INIT, DIGEST_NONE};

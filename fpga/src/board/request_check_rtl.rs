@@ -7,9 +7,10 @@
 //! board's co-simulation compares the replies byte for byte).
 
 use crate::common::format::{MAX_PARTICLES, MAX_POINTS};
+use crate::protocol::layout::{POINT_BYTES, POSE_BYTES};
 use crate::protocol::messages::{
     EVALUATE_HEADER_BYTES, FLAG_FIRST, FLAG_LAST, LOAD_HEADER_BYTES, MAX_LOAD_ENTRIES, MAX_LOAD_POINTS, MAX_NEAREST,
-    MAX_POSES, NEAREST_REQUEST_BYTES, POINT_BYTES, POSE_BYTES, TABLE_ENTRIES, TABLE_ENTRY_BYTES, TWO_U16_BYTES,
+    MAX_POSES, NEAREST_REQUEST_BYTES, TABLE_ENTRIES, TABLE_ENTRY_BYTES, TWO_U16_BYTES,
 };
 use crate::protocol::run_request::run_bytes;
 use crate::protocol::{Command, ErrorCode};

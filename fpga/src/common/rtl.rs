@@ -79,7 +79,7 @@ pub fn surface_residual_verilog() -> String {
 /// A pose as the pipelines' 216-bit pose word (the layout of
 /// [`crate::common::format::FxPose::pack`] and of the protocol's pose bytes), for driving the RTL.
 pub fn pose_word(p: &crate::common::format::FxPose) -> Bits<216> {
-    crate::protocol::messages::pose_bytes(p)
+    crate::protocol::layout::pose_bytes(p)
         .iter()
         .enumerate()
         .fold(Bits::<216>::default(), |w, (k, &b)| w | (Bits::<216>::from(b as u64) << (8 * k as u64)))
@@ -88,7 +88,7 @@ pub fn pose_word(p: &crate::common::format::FxPose) -> Bits<216> {
 /// The pose of a 216-bit pose word ([`pose_word`]'s inverse).
 pub fn word_pose(w: Bits<216>) -> crate::common::format::FxPose {
     let bytes: Vec<u8> = (0..27).map(|k| w.get_bits::<8>(8 * k).to_u64() as u8).collect();
-    crate::protocol::messages::pose_from_bytes(&bytes)
+    crate::protocol::layout::pose_from_bytes(&bytes)
 }
 
 /// The Verilog of the polish's datapath alone with the polish's programs in ROM

@@ -74,10 +74,10 @@ pub mod programs;
 #[cfg(feature = "rtl")]
 pub mod unit_rtl;
 
-use crate::common::format::{transform, FxPoint, FxPose};
+use crate::common::format::{FxPoint, FxPose};
 use crate::filter::pf::sat18;
-use crate::search::grid::{Grid, NONE};
-use crate::surface::{signed_residual, FxNormal, NORMAL_FRAC};
+use crate::search::grid::Grid;
+use crate::surface::{signed_residual, FxNormal, GridSearch, Search, NORMAL_FRAC};
 use programs::Entry;
 
 /// Unknowns of a step: a small rotation (3), a translation (3), a relative scale.
@@ -157,40 +157,6 @@ pub fn jacobian(q: FxPoint, t: [i32; 3], n: FxNormal) -> [i64; UNKNOWNS] {
     let dot: i64 = (0..3).map(|k| x[k] * n[k]).sum();
     let jac = |v: i64| sat18(round_shift(v as i128, shift) as i64) as i64;
     [jac(cross[0]), jac(cross[1]), jac(cross[2]), n[0], n[1], n[2], jac(dot)]
-}
-
-/// What a pass needs of the board's search: under a pose, each scan point's image `q` with
-/// its nearest stored point and that point's normal, capped points left out; and the pose's
-/// evaluation (the residual stage's cost, wrapping at 48 bits, and largest residual).
-pub trait Search {
-    /// `(q, p, n)` of every found scan point, in scan order.
-    fn found(&self, scan: &[FxPoint], pose: &FxPose) -> Vec<(FxPoint, FxPoint, FxNormal)>;
-    /// The evaluation of `scan` under `pose`.
-    fn evaluate(&self, scan: &[FxPoint], pose: &FxPose) -> crate::filter::pf::Evaluated;
-}
-
-/// The search over a [`Grid`] and its normals ([`Grid::nearest`], [`crate::surface::evaluate`]).
-#[derive(Clone, Copy, Debug)]
-pub struct GridSearch<'a> {
-    /// The model by cell.
-    pub grid: &'a Grid,
-    /// One normal per stored point.
-    pub normals: &'a [FxNormal],
-}
-
-impl Search for GridSearch<'_> {
-    fn found(&self, scan: &[FxPoint], pose: &FxPose) -> Vec<(FxPoint, FxPoint, FxNormal)> {
-        scan.iter()
-            .filter_map(|&p| {
-                let q = transform(pose, p);
-                let nr = self.grid.nearest(q);
-                (nr.index != NONE).then(|| (q, self.grid.points[nr.index as usize], self.normals[nr.index as usize]))
-            })
-            .collect()
-    }
-    fn evaluate(&self, scan: &[FxPoint], pose: &FxPose) -> crate::filter::pf::Evaluated {
-        crate::surface::evaluate(self.grid, self.normals, scan, pose)
-    }
 }
 
 /// One pass over `scan` under `pose` (module doc): the normal equations of the points whose
@@ -359,6 +325,7 @@ pub fn polish_best_over(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::common::format::transform;
 
     /// The solve as the module doc writes it, in `i128` (the test profile checks overflow):
     /// the oracle of the program.

@@ -2,15 +2,12 @@
 //! the host's board client and the board reference. Everything is little-endian; points
 //! are 6 bytes, poses 27 (the 216-bit word of [`FxPose::pack`]).
 
-use crate::common::format::{pack_point, unpack_point, FxPoint, FxPose, WeightScale, MAX_POINTS, POSE_BITS};
+use crate::common::format::{FxPoint, FxPose, WeightScale, MAX_POINTS};
 use crate::filter::pf::{Particle, PARAMS};
 use crate::filter::weights::MAX_PARTICLES;
+use crate::protocol::layout::{point_bytes, pose_bytes, pose_from_bytes, POINT_BYTES, POSE_BYTES};
 use crate::protocol::VERSION;
 
-/// Bytes of a point on the wire.
-pub const POINT_BYTES: usize = 6;
-/// Bytes of a pose on the wire.
-pub const POSE_BYTES: usize = 27;
 /// Most points in one LoadModel / LoadScan frame.
 pub const MAX_LOAD_POINTS: usize = 170;
 /// Bytes of a cell-table entry on the wire (13 bits used).
@@ -109,37 +106,6 @@ fn le(data: &[u8]) -> u64 {
 
 fn put(out: &mut Vec<u8>, v: u64, bytes: usize) {
     out.extend((0..bytes).map(|k| (v >> (8 * k)) as u8));
-}
-
-/// A point's 6 bytes.
-pub fn point_bytes(p: FxPoint) -> [u8; POINT_BYTES] {
-    let w = pack_point(p);
-    std::array::from_fn(|k| (w >> (8 * k)) as u8)
-}
-
-/// The point of 6 bytes.
-pub fn point_from_bytes(b: &[u8]) -> FxPoint {
-    unpack_point(le(&b[..POINT_BYTES]))
-}
-
-/// A pose's 27 bytes.
-pub fn pose_bytes(pose: &FxPose) -> [u8; POSE_BYTES] {
-    let w = pose.pack();
-    std::array::from_fn(|k| (w[k / 8] >> (8 * (k % 8))) as u8)
-}
-
-/// The pose of 27 bytes (fields sign-extended from 18 bits).
-pub fn pose_from_bytes(b: &[u8]) -> FxPose {
-    let field = |k: usize| -> i32 {
-        let at = k * POSE_BITS as usize;
-        let mut raw = 0u64;
-        for bit in 0..POSE_BITS as usize {
-            let i = at + bit;
-            raw |= (((b[i / 8] >> (i % 8)) & 1) as u64) << bit;
-        }
-        (((raw << (64 - POSE_BITS)) as i64) >> (64 - POSE_BITS)) as i32
-    };
-    FxPose { m: std::array::from_fn(field), t: std::array::from_fn(|k| field(9 + k)) }
 }
 
 /// The Identify reply: version, limits, clock, baud and the current sizes.
@@ -616,6 +582,7 @@ impl ResultReply {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::protocol::layout::point_from_bytes;
 
     #[test]
     fn points_and_poses_round_trip() {

@@ -6,13 +6,14 @@
 //! of the command; an error reply is command [`Command::Error`] `| 0x80` with one error
 //! code byte and the offending command.
 
+pub mod layout;
 pub mod messages;
 pub mod run_request;
 
 /// Largest body (command, sequence and data) in bytes.
 pub const MAX_BODY: usize = HEADER_BYTES
     + crate::protocol::messages::LOAD_HEADER_BYTES
-    + crate::protocol::messages::MAX_LOAD_POINTS * crate::protocol::messages::POINT_BYTES;
+    + crate::protocol::messages::MAX_LOAD_POINTS * crate::protocol::layout::POINT_BYTES;
 /// Bytes of a frame's header: the command code, then the sequence number.
 pub const HEADER_BYTES: usize = 2;
 /// Data bytes of an error reply: the error code, then the failed command.

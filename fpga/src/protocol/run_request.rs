@@ -8,12 +8,13 @@
 //! starts (its low four bits; 0 is taken as 1), then the polish word (6 bytes: `points` u16,
 //! `steps` in the low four bits of the next byte, `winner_steps` in the low four bits of
 //! the next, two zero bytes), then `starts - 1`
-//! hypothesis poses of 27 bytes ([`crate::protocol::messages::pose_bytes`]).
+//! hypothesis poses of 27 bytes ([`crate::protocol::layout::pose_bytes`]).
 
 use crate::common::format::{FxPose, MAX_POINTS};
 use crate::filter::pf::{ConfigError, PfConfig, PfOutcome, RUN_BYTES, RUN_WORD_BYTES};
-use crate::polish::{polish_winner_over, Search};
-use crate::protocol::messages::{pose_bytes, pose_from_bytes, POSE_BYTES};
+use crate::polish::polish_winner_over;
+use crate::protocol::layout::{pose_bytes, pose_from_bytes, POSE_BYTES};
+use crate::surface::Search;
 
 /// Most starts of the polish: the filter's pose and fourteen hypotheses (the Run's starts
 /// field is four bits; the board keeps the hypotheses in a 16-word RAM).

@@ -102,7 +102,7 @@ pub fn evaluate_stored(ram: &[u64], normals: &[u64], first: &[u16], scan: &[FxPo
     Scored::new(nearest, residuals)
 }
 
-/// The board's search over its raw stores for the polish ([`crate::polish::Search`]): a
+/// The board's search over its raw stores for the polish ([`Search`]): a
 /// scan point is found when its squared distance from [`evaluate_stored`] is below
 /// [`CAP_D2`]; its stored point and normal are the words at its index.
 #[derive(Clone, Copy, Debug)]
@@ -115,7 +115,7 @@ pub struct StoredSearch<'a> {
     pub first: &'a [u16],
 }
 
-impl crate::polish::Search for StoredSearch<'_> {
+impl Search for StoredSearch<'_> {
     fn found(&self, scan: &[FxPoint], pose: &FxPose) -> Vec<(FxPoint, FxPoint, FxNormal)> {
         let nearest = crate::search::neighbour_pipeline::evaluate_stored(self.ram, self.first, scan, pose).nearest;
         scan.iter()
@@ -152,6 +152,40 @@ impl Scored {
     /// What the filter takes: the cost and the largest residual.
     pub fn evaluated(&self) -> crate::filter::pf::Evaluated {
         crate::filter::pf::Evaluated { cost: self.cost, max_d2: self.residuals.iter().copied().max().unwrap_or(0) }
+    }
+}
+
+/// What a pass needs of the board's search: under a pose, each scan point's image `q` with
+/// its nearest stored point and that point's normal, capped points left out; and the pose's
+/// evaluation (the residual stage's cost, wrapping at 48 bits, and largest residual).
+pub trait Search {
+    /// `(q, p, n)` of every found scan point, in scan order.
+    fn found(&self, scan: &[FxPoint], pose: &FxPose) -> Vec<(FxPoint, FxPoint, FxNormal)>;
+    /// The evaluation of `scan` under `pose`.
+    fn evaluate(&self, scan: &[FxPoint], pose: &FxPose) -> crate::filter::pf::Evaluated;
+}
+
+/// The search over a [`Grid`] and its normals ([`Grid::nearest`], [`evaluate`]).
+#[derive(Clone, Copy, Debug)]
+pub struct GridSearch<'a> {
+    /// The model by cell.
+    pub grid: &'a Grid,
+    /// One normal per stored point.
+    pub normals: &'a [FxNormal],
+}
+
+impl Search for GridSearch<'_> {
+    fn found(&self, scan: &[FxPoint], pose: &FxPose) -> Vec<(FxPoint, FxPoint, FxNormal)> {
+        scan.iter()
+            .filter_map(|&p| {
+                let q = transform(pose, p);
+                let nr = self.grid.nearest(q);
+                (nr.index != NONE).then(|| (q, self.grid.points[nr.index as usize], self.normals[nr.index as usize]))
+            })
+            .collect()
+    }
+    fn evaluate(&self, scan: &[FxPoint], pose: &FxPose) -> crate::filter::pf::Evaluated {
+        evaluate(self.grid, self.normals, scan, pose)
     }
 }
 

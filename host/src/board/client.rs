@@ -51,10 +51,11 @@
 
 use super::BoardError;
 use pficp_fpga::common::format::{FxPoint, FxPose, WeightScale};
+use pficp_fpga::protocol::layout::POINT_BYTES;
 use pficp_fpga::protocol::messages::{
     load_request, parse_two_u16, table_request, two_u16, EvaluateReply, EvaluateRequest, Identity, MessageError,
     NearestReply, NearestRequest, WeightSummary, IDENTITY_BYTES, MAX_LOAD_ENTRIES, MAX_LOAD_POINTS, MAX_NEAREST,
-    MAX_POSES, NORMALS_OFFSET, POINT_BYTES, TABLE_ENTRIES, TABLE_ENTRY_BYTES, TABLE_ENTRY_MASK,
+    MAX_POSES, NORMALS_OFFSET, TABLE_ENTRIES, TABLE_ENTRY_BYTES, TABLE_ENTRY_MASK,
 };
 use pficp_fpga::protocol::{Command, Deframer, VERSION};
 use pficp_fpga::search::grid::{Grid, CAP_D2};

@@ -323,7 +323,7 @@ impl OnBoardPlan {
     /// then the polish over [`Self::stored_scan`]): the software mode's board emulation,
     /// equal to the board's Result to the bit.
     pub fn emulate(&self) -> RunOutcome {
-        let search = pficp_fpga::polish::GridSearch { grid: &self.grid, normals: &self.normals };
+        let search = pficp_fpga::surface::GridSearch { grid: &self.grid, normals: &self.normals };
         let stored = self.stored_scan();
         pficp_fpga::protocol::run_request::execute(
             &self.run_request(),

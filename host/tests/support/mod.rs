@@ -200,7 +200,7 @@ pub fn run_reference(
     run: &pficp_fpga::protocol::run_request::RunRequest,
 ) -> pficp_fpga::protocol::run_request::RunOutcome {
     let (g, n) = (grid(model), normals(model));
-    let search = pficp_fpga::polish::GridSearch { grid: &g, normals: &n };
+    let search = pficp_fpga::surface::GridSearch { grid: &g, normals: &n };
     let polish_scan = &scan[..run.polish.points as usize];
     pficp_fpga::protocol::run_request::execute(
         run,
