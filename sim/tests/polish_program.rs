@@ -1,5 +1,5 @@
 //! The Verilated polish datapath (`PolishProgram` with the polish's programs in ROM, the
-//! Verilog that `pficp_fpga::common::rtl::polish_program_verilog` generates) against
+//! Verilog that `pficp_fpga::common::verilog::polish_program_verilog` generates) against
 //! `pficp_fpga::polish::program::run`: after each program, every one of the 64 registers
 //! and the failed flag equal the model's. The files are `polish::cases::program_cases`
 //! (seed `PFICP_COSIM_SEED`, default 1; `PFICP_POLISH_CASES` random cases a program,

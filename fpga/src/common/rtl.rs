@@ -1,7 +1,6 @@
 //! What the rust_hdl RTL (feature `rtl`) shares: sign extension, the post-processing of
-//! rust_hdl's Verilog (repeated modules, attributes, waivers), the pose word, and the
-//! `*_verilog` functions that give the Verilog of each design (the board top
-//! [`crate::board::top_rtl`] and the blocks tested alone).
+//! rust_hdl's Verilog (repeated modules, attributes, waivers) and the pose word; the
+//! Verilog of each design is [`super::verilog`]'s.
 //!
 //! Each RTL block lives beside its model, in the model's folder under the model's name with
 //! `_rtl` (`search/neighbour_pipeline.rs` and `search/neighbour_pipeline_rtl.rs`, ...), and
@@ -61,21 +60,6 @@ pub fn dedup_modules(v: &str) -> String {
     out.join("\n") + "\n"
 }
 
-/// The Verilog of the weight stage alone, top module `top` (docs/weights.md).
-pub fn weight_stage_verilog() -> String {
-    let mut uut = crate::filter::weights_rtl::WeightStage::new();
-    uut.connect_all();
-    dedup_modules(&generate_verilog(&uut))
-}
-
-/// The Verilog of the residual stage alone (`SurfaceResidual`, docs/pipeline.md "The
-/// surface residual"), top module `top`.
-pub fn surface_residual_verilog() -> String {
-    let mut uut = crate::surface::surface_residual_rtl::SurfaceResidual::new();
-    uut.connect_all();
-    dedup_modules(&generate_verilog(&uut))
-}
-
 /// A pose as the pipelines' 216-bit pose word (the layout of
 /// [`crate::common::format::FxPose::pack`] and of the protocol's pose bytes), for driving the RTL.
 pub fn pose_word(p: &crate::common::format::FxPose) -> Bits<216> {
@@ -91,68 +75,10 @@ pub fn word_pose(w: Bits<216>) -> crate::common::format::FxPose {
     crate::protocol::layout::pose_from_bytes(&bytes)
 }
 
-/// The Verilog of the polish's datapath alone with the polish's programs in ROM
-/// (`PolishProgram::polish`, docs/polish-datapath.md), top module
-/// `top`; the register file marked `ram_style = "distributed"`
-/// ([`distributed_register_files`]).
-pub fn polish_program_verilog() -> String {
-    let mut uut = crate::polish::program_rtl::PolishProgram::polish();
-    uut.connect_all();
-    distributed_register_files(&dedup_modules(&generate_verilog(&uut)))
-}
-
-/// The Verilog of the polish's blocks with a multiplier of their own (`PolishBench`: the
-/// pass, a `PipeMul` and the program's datapath), top module `top`; the register file
-/// marked as in [`polish_program_verilog`]; the multiplier's `busy` and `valid`, which the
-/// pass does not need (it counts the clocks), waived as unused.
-pub fn polish_bench_verilog() -> String {
-    let mut uut = crate::polish::bench_rtl::PolishBench::new();
-    uut.connect_all();
-    let v = distributed_register_files(&dedup_modules(&generate_verilog(&uut)));
-    waive_unused_wires(&v, &["mul$busy", "mul$valid"])
-}
-
-/// The Verilog of the whole polish as the board instantiates it (`PolishUnit`: the
-/// control, the program's datapath and the pass; the multiplier's ports at the top), top
-/// module `top`; the register file marked as in [`polish_program_verilog`]; the datapath's
-/// `read_data` above the 32 bits the control reads (a pose field, `TAU2`) waived as unused.
-pub fn polish_unit_verilog() -> String {
-    let mut uut = crate::polish::unit_rtl::PolishUnit::new();
-    uut.connect_all();
-    let v = distributed_register_files(&dedup_modules(&generate_verilog(&uut)));
-    waive_unused_wires(&v, &["prog$read_data"])
-}
-
 /// The 64 x 128-bit register files marked for distributed RAM: without the attribute Yosys
 /// maps one to 4 RAMB16 (rust_hdl emits no attributes).
 pub fn distributed_register_files(v: &str) -> String {
     v.replace("    reg[127:0] mem[63:0];", "    (* ram_style = \"distributed\" *) reg[127:0] mem[63:0];")
-}
-
-fn neighbour_of<const P: usize>() -> String {
-    let mut uut = crate::search::neighbour_pipeline_rtl::NeighbourPipeline::<P>::new();
-    uut.connect_all();
-    dedup_modules(&generate_verilog(&uut))
-}
-
-/// The Verilog of `NeighbourPipeline<lanes>` (lanes over one scan point's candidates,
-/// docs/pipeline.md "The neighbour pipeline"), top module `top`.
-///
-/// Panics unless `lanes` is one of [`BOARD_LANES`].
-pub fn neighbour_pipeline_verilog(lanes: usize) -> String {
-    match lanes {
-        2 => neighbour_of::<2>(),
-        4 => neighbour_of::<4>(),
-        8 => neighbour_of::<8>(),
-        16 => neighbour_of::<16>(),
-        _ => panic!("neighbour_pipeline_verilog: {lanes} lanes is not supported; use one of {BOARD_LANES:?}"),
-    }
-}
-
-fn board_of<const P: usize>(config: &crate::board::BoardConfig) -> String {
-    let mut uut = crate::board::top_rtl::BoardTop::<P>::new(config);
-    uut.connect_all();
-    waive_probe_ports(&dedup_modules(&generate_verilog(&uut)))
 }
 
 /// The sequencer's particle-RAM write port (`p_we`, `p_waddr`, `p_wdata`) is a probe for the
@@ -186,26 +112,4 @@ pub fn waive_unused_wires(v: &str, names: &[&str]) -> String {
         }
     }
     out
-}
-
-/// The Verilog of the whole board (`BoardTop<lanes>`, top module `top`, pins `clock`,
-/// `reset_n`, `uart_rx`, `uart_tx`, `leds[3:0]`) as `config` says.
-///
-/// Panics unless `config.lanes` is one of [`BOARD_LANES`] and the UART has at least 4
-/// clocks per bit.
-pub fn board_verilog(config: &crate::board::BoardConfig) -> String {
-    match config.lanes {
-        2 => board_of::<2>(config),
-        4 => board_of::<4>(config),
-        8 => board_of::<8>(config),
-        16 => board_of::<16>(config),
-        n => panic!("board_verilog: {n} lanes is not supported; use one of {BOARD_LANES:?}"),
-    }
-}
-
-/// Verilog of the particle-filter sequencer alone (`PfSequencer`, the co-simulation's unit).
-pub fn sequencer_verilog() -> String {
-    let mut uut = crate::filter::sequencer_rtl::PfSequencer::new();
-    uut.connect_all();
-    dedup_modules(&generate_verilog(&uut))
 }

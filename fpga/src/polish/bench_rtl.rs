@@ -3,7 +3,7 @@
 //! multiplier, its adds into the program's registers. On the board the multiplier is the
 //! sequencer's, idle after the filter; here the bench has its own, so that the blocks can
 //! be tested together in rust_hdl's simulator (`fpga/tests/polish_pass.rs`) and under
-//! Verilator (`sim/tests/polish_pass.rs`, from [`crate::common::rtl::polish_bench_verilog`]).
+//! Verilator (`sim/tests/polish_pass.rs`, from [`crate::common::verilog::polish_bench_verilog`]).
 //! A pass's points go in at `in_*`; the programs run on `go` at `entry`.
 
 use super::pass_rtl::PolishPass;
