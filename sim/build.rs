@@ -101,7 +101,7 @@ const DESIGNS: [Design; 9] = [
         per_lane: false,
         verilog: |_| pficp_fpga::common::verilog::polish_program_verilog(),
         ports: &[POLISH_PROGRAM_PORTS],
-        spec: "fpga/src/rtl/polish/program.rs (sim/src/ports.rs POLISH_PROGRAM_PORTS)",
+        spec: "fpga/src/polish/program_rtl.rs (sim/src/ports.rs POLISH_PROGRAM_PORTS)",
     },
     Design {
         name: "polish_bench",
@@ -109,7 +109,7 @@ const DESIGNS: [Design; 9] = [
         per_lane: false,
         verilog: |_| pficp_fpga::common::verilog::polish_bench_verilog(),
         ports: &[POLISH_BENCH_PORTS],
-        spec: "fpga/src/rtl/polish/bench.rs (sim/src/ports.rs POLISH_BENCH_PORTS)",
+        spec: "fpga/src/polish/bench_rtl.rs (sim/src/ports.rs POLISH_BENCH_PORTS)",
     },
     Design {
         name: "polish_unit",
@@ -117,7 +117,7 @@ const DESIGNS: [Design; 9] = [
         per_lane: false,
         verilog: |_| pficp_fpga::common::verilog::polish_unit_verilog(),
         ports: &[POLISH_UNIT_PORTS],
-        spec: "fpga/src/rtl/polish/unit.rs (sim/src/ports.rs POLISH_UNIT_PORTS)",
+        spec: "fpga/src/polish/unit_rtl.rs (sim/src/ports.rs POLISH_UNIT_PORTS)",
     },
     Design {
         name: "board",
@@ -125,7 +125,7 @@ const DESIGNS: [Design; 9] = [
         per_lane: false,
         verilog: |_| pficp_fpga::common::verilog::board_verilog(&pficp_fpga::board::BoardConfig::default()),
         ports: &[BOARD_PORTS],
-        spec: "fpga/src/rtl/board/top.rs (sim/src/ports.rs BOARD_PORTS)",
+        spec: "fpga/src/board/top_rtl.rs (sim/src/ports.rs BOARD_PORTS)",
     },
     Design {
         name: "sequencer",
@@ -133,7 +133,7 @@ const DESIGNS: [Design; 9] = [
         per_lane: false,
         verilog: |_| pficp_fpga::common::verilog::sequencer_verilog(),
         ports: &[SEQUENCER_PORTS],
-        spec: "fpga/src/rtl/board/sequencer/ (sim/src/ports.rs SEQUENCER_PORTS)",
+        spec: "fpga/src/filter/sequencer_rtl.rs (sim/src/ports.rs SEQUENCER_PORTS)",
     },
     Design {
         name: "board_fast",
@@ -141,7 +141,7 @@ const DESIGNS: [Design; 9] = [
         per_lane: false,
         verilog: |_| pficp_fpga::common::verilog::board_verilog(&pficp_fpga::board::BoardConfig::FAST_SIM),
         ports: &[BOARD_PORTS],
-        spec: "fpga/src/rtl/board/top.rs (sim/src/ports.rs BOARD_PORTS)",
+        spec: "fpga/src/board/top_rtl.rs (sim/src/ports.rs BOARD_PORTS)",
     },
 ];
 

@@ -1,4 +1,4 @@
-//! The grid search against the brute-force capped search it must equal (`fpga::grid`'s
+//! The grid search against the brute-force capped search it must equal (`fpga::search::grid`'s
 //! rule), on random models (surfaces, clumps on cell boundaries, the cube's corners) and
 //! queries anywhere in the coordinate range; and the work it saves on two surfaces.
 

@@ -1,4 +1,4 @@
-//! The neighbour pipeline's cycle model (`fpga::neighbour_pipeline`) against its functional
+//! The neighbour pipeline's cycle model (`fpga::search::neighbour_pipeline`) against its functional
 //! reference over the raw stores (`evaluate_stored`, any table) and, with the model's own
 //! table, against the capped search (`grid::evaluate_grid`, `Grid::nearest`): random
 //! models in the cube, scans under poses that put points outside it, gaps in the scan

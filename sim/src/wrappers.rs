@@ -84,7 +84,7 @@ impl VerilatedNeighbourPipeline {
     }
 }
 
-/// The Verilated board top (`BoardTop`, `fpga/src/rtl/board/top.rs`): pins only.
+/// The Verilated board top (`BoardTop`, `fpga/src/board/top_rtl.rs`): pins only.
 pub struct VerilatedBoard {
     pub(crate) core: Core,
 }

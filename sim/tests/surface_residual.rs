@@ -12,7 +12,7 @@
 //! (default 300).
 //!
 //! Mutation check (by hand): with the rounding constant `2^13 - 1` instead of `2^13` in
-//! `fpga/src/rtl/surface_residual.rs`, seed 1 fails at cycle 91 (`nn_resid` 3,600 for 3,481);
+//! `fpga/src/surface/surface_residual_rtl.rs`, seed 1 fails at cycle 91 (`nn_resid` 3,600 for 3,481);
 //! without the multiples of 2^12 among the normals it passed.
 
 use pficp_fpga::common::format::{dist2, pack_point, FxPoint, COST_MASK};

@@ -1,5 +1,5 @@
 //! The on-board particle filter (PF-ICP Algorithm 6, steps 6 to 8) in bit-exact integer
-//! arithmetic: the functional reference of the RTL sequencer (`rtl::board::sequencer`)
+//! arithmetic: the functional reference of the RTL sequencer (`filter::sequencer_rtl`)
 //! and of the board's Run command (docs/sequencer.md).
 //!
 //! Everything here is integers with the formats below; the RTL computes the same values

@@ -1,5 +1,5 @@
 //! The cycle-accurate reference of the particle-filter sequencer
-//! (`rtl::board::sequencer::PfSequencer`, docs/sequencer.md): its ports, and
+//! (`filter::sequencer_rtl::PfSequencer`, docs/sequencer.md): its ports, and
 //! [`SequencerModel`], register for register and clock for clock the RTL, whose datapath
 //! results are those of the functional reference [`crate::filter::pf::run`].
 //!
