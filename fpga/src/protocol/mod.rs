@@ -9,6 +9,7 @@
 pub mod layout;
 pub mod messages;
 pub mod run_request;
+pub mod versions;
 
 /// Largest body (command, sequence and data) in bytes.
 pub const MAX_BODY: usize = HEADER_BYTES

@@ -57,6 +57,7 @@ use pficp_fpga::protocol::messages::{
     NearestReply, NearestRequest, WeightSummary, IDENTITY_BYTES, MAX_LOAD_ENTRIES, MAX_LOAD_POINTS, MAX_NEAREST,
     MAX_POSES, NORMALS_OFFSET, TABLE_ENTRIES, TABLE_ENTRY_BYTES, TABLE_ENTRY_MASK,
 };
+use pficp_fpga::protocol::versions::capabilities;
 use pficp_fpga::protocol::{Command, Deframer, VERSION};
 use pficp_fpga::search::grid::{Grid, CAP_D2};
 use pficp_fpga::search::pipeline::COST_MASK;
@@ -374,7 +375,7 @@ impl BoardClient {
         progress: impl FnMut(usize, usize),
     ) -> Result<bool, BoardError> {
         let id = self.identify()?;
-        if id.version >= 4
+        if capabilities(id.version).grid_with_normals
             && normals.len() == grid.points.len()
             && id.model_digest == pficp_fpga::protocol::messages::grid_digest(grid, normals)
         {
@@ -643,7 +644,7 @@ impl BoardClient {
             // Before protocol 4 the cost is the distances' sum. Since, it is the residuals'
             // sum, which the reply does not carry: each residual is at most CAP_D2 and a
             // capped point's is CAP_D2, so the cost lies between those bounds.
-            if self.identity.is_some_and(|i| i.version < 4) {
+            if self.identity.is_some_and(|i| !capabilities(i.version).grid_with_normals) {
                 let sum = r.results.iter().fold(0u64, |c, n| (c + n.1) & COST_MASK);
                 if r.cost != sum {
                     return Err(bad(MessageError::Field { field: "cost", got: r.cost, expected: sum }));

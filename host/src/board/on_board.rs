@@ -25,7 +25,8 @@ use pficp_fpga::filter::pf::{
 };
 use pficp_fpga::protocol::messages::{Identity, ResultReply, RunState, MAX_D2_MASK, NO_COST};
 use pficp_fpga::protocol::run_request::{PolishRequest, RunOutcome, RunRequest, MAX_STARTS};
-use pficp_fpga::protocol::{Command, ErrorCode, VERSION};
+use pficp_fpga::protocol::versions::{refusal, Mode};
+use pficp_fpga::protocol::{Command, ErrorCode};
 use pficp_fpga::search::grid::Grid;
 use pficp_fpga::surface::FxNormal;
 use std::time::{Duration, Instant};
@@ -505,12 +506,8 @@ pub fn register_on_board(
     progress: &mut (dyn FnMut(OnBoardStep, usize, usize) + Send),
 ) -> Result<OnBoardResult, BoardError> {
     let identity = client.identify()?;
-    if identity.version != VERSION {
-        return Err(BoardError::Limit(format!(
-            "the board speaks protocol version {}, this host {VERSION} (the on-board filter and its polish \
-             need {VERSION}; --host-driven works with versions 1, 2 and 4 to {VERSION})",
-            identity.version
-        )));
+    if let Some(why) = refusal(identity.version, Mode::OnBoard) {
+        return Err(BoardError::Limit(why));
     }
     let max_particles = (identity.max_particles as usize).min(MAX_PARTICLES);
     if settings.particles == 0 || settings.particles > max_particles {
