@@ -6,7 +6,8 @@
 //!
 //! The data path through the folders, as the board runs a Run request:
 //! - [`protocol`]: the wire (COBS framing, CRC-16, the command table, error codes) and each
-//!   message's layout ([`protocol::messages`], the Run request in [`protocol::run_request`]);
+//!   message's layout ([`protocol::messages`], the Run request in [`protocol::run_request`]),
+//!   and what each protocol version allows ([`protocol::versions`]);
 //! - [`board`]: the board's configuration and the byte-level reference board
 //!   ([`board::BoardModel`]) beside the RTL top and its blocks (UART, frame receiver, reply
 //!   sender, command engine, ...), which take the frames in and send the replies;
