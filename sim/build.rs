@@ -1,20 +1,20 @@
 //! Builds the Verilator models of the generated designs ([`DESIGNS`]):
 //!
 //! - `neighbour_pipeline`: `NeighbourPipeline<P>` from
-//!   `pficp_fpga::rtl::neighbour_pipeline_verilog(P)` (prefix `VnbrP`);
-//! - `weight_stage`: `WeightStage` from `pficp_fpga::rtl::weight_stage_verilog()` (prefix
+//!   `pficp_fpga::common::verilog::neighbour_pipeline_verilog(P)` (prefix `VnbrP`);
+//! - `weight_stage`: `WeightStage` from `pficp_fpga::common::verilog::weight_stage_verilog()` (prefix
 //!   `Vweights`);
-//! - `surface_residual`: `SurfaceResidual` from `pficp_fpga::rtl::surface_residual_verilog()`
+//! - `surface_residual`: `SurfaceResidual` from `pficp_fpga::common::verilog::surface_residual_verilog()`
 //!   (prefix `Vsurf`);
 //! - `polish_program`: `PolishProgram` with the polish's programs, from
-//!   `pficp_fpga::rtl::polish_program_verilog()` (prefix `Vpolish`);
+//!   `pficp_fpga::common::verilog::polish_program_verilog()` (prefix `Vpolish`);
 //! - `polish_bench`: `PolishBench`, the pass, a multiplier and the program's datapath, from
-//!   `pficp_fpga::rtl::polish_bench_verilog()` (prefix `Vpbench`);
+//!   `pficp_fpga::common::verilog::polish_bench_verilog()` (prefix `Vpbench`);
 //! - `polish_unit`: `PolishUnit`, the whole polish as the board instantiates it (the
-//!   multiplier's ports outside), from `pficp_fpga::rtl::polish_unit_verilog()` (prefix
+//!   multiplier's ports outside), from `pficp_fpga::common::verilog::polish_unit_verilog()` (prefix
 //!   `Vpunit`);
-//! - `sequencer`: `PfSequencer` alone, from `pficp_fpga::rtl::sequencer_verilog()`;
-//! - `board` and `board_fast`: the whole board top, `pficp_fpga::rtl::board_verilog` of the
+//! - `sequencer`: `PfSequencer` alone, from `pficp_fpga::common::verilog::sequencer_verilog()`;
+//! - `board` and `board_fast`: the whole board top, `pficp_fpga::common::verilog::board_verilog` of the
 //!   default and of the fast-UART configuration;
 //!
 //! the lane-parametrised ones for every `P` in [`DEFAULT_LANES`] (or `PFICP_SIM_LANES=4,16`).
@@ -75,7 +75,7 @@ const DESIGNS: [Design; 9] = [
         name: "neighbour_pipeline",
         prefix: "Vnbr",
         per_lane: true,
-        verilog: pficp_fpga::rtl::neighbour_pipeline_verilog,
+        verilog: pficp_fpga::common::verilog::neighbour_pipeline_verilog,
         ports: &[NEIGHBOUR_PIPELINE_PORTS],
         spec: "docs/pipeline.md, the neighbour pipeline (sim/src/ports.rs NEIGHBOUR_PIPELINE_PORTS)",
     },
@@ -83,7 +83,7 @@ const DESIGNS: [Design; 9] = [
         name: "weight_stage",
         prefix: "Vweights",
         per_lane: false,
-        verilog: |_| pficp_fpga::rtl::weight_stage_verilog(),
+        verilog: |_| pficp_fpga::common::verilog::weight_stage_verilog(),
         ports: &[WEIGHT_STAGE_PORTS],
         spec: "docs/weights.md (sim/src/ports.rs WEIGHT_STAGE_PORTS)",
     },
@@ -91,7 +91,7 @@ const DESIGNS: [Design; 9] = [
         name: "surface_residual",
         prefix: "Vsurf",
         per_lane: false,
-        verilog: |_| pficp_fpga::rtl::surface_residual_verilog(),
+        verilog: |_| pficp_fpga::common::verilog::surface_residual_verilog(),
         ports: &[SURFACE_RESIDUAL_PORTS],
         spec: "docs/pipeline.md, the surface residual (sim/src/ports.rs SURFACE_RESIDUAL_PORTS)",
     },
@@ -99,49 +99,49 @@ const DESIGNS: [Design; 9] = [
         name: "polish_program",
         prefix: "Vpolish",
         per_lane: false,
-        verilog: |_| pficp_fpga::rtl::polish_program_verilog(),
+        verilog: |_| pficp_fpga::common::verilog::polish_program_verilog(),
         ports: &[POLISH_PROGRAM_PORTS],
-        spec: "fpga/src/rtl/polish/program.rs (sim/src/ports.rs POLISH_PROGRAM_PORTS)",
+        spec: "fpga/src/polish/program_rtl.rs (sim/src/ports.rs POLISH_PROGRAM_PORTS)",
     },
     Design {
         name: "polish_bench",
         prefix: "Vpbench",
         per_lane: false,
-        verilog: |_| pficp_fpga::rtl::polish_bench_verilog(),
+        verilog: |_| pficp_fpga::common::verilog::polish_bench_verilog(),
         ports: &[POLISH_BENCH_PORTS],
-        spec: "fpga/src/rtl/polish/bench.rs (sim/src/ports.rs POLISH_BENCH_PORTS)",
+        spec: "fpga/src/polish/bench_rtl.rs (sim/src/ports.rs POLISH_BENCH_PORTS)",
     },
     Design {
         name: "polish_unit",
         prefix: "Vpunit",
         per_lane: false,
-        verilog: |_| pficp_fpga::rtl::polish_unit_verilog(),
+        verilog: |_| pficp_fpga::common::verilog::polish_unit_verilog(),
         ports: &[POLISH_UNIT_PORTS],
-        spec: "fpga/src/rtl/polish/unit.rs (sim/src/ports.rs POLISH_UNIT_PORTS)",
+        spec: "fpga/src/polish/unit_rtl.rs (sim/src/ports.rs POLISH_UNIT_PORTS)",
     },
     Design {
         name: "board",
         prefix: "Vboard",
         per_lane: false,
-        verilog: |_| pficp_fpga::rtl::board_verilog(&pficp_fpga::board::BoardConfig::default()),
+        verilog: |_| pficp_fpga::common::verilog::board_verilog(&pficp_fpga::board::BoardConfig::default()),
         ports: &[BOARD_PORTS],
-        spec: "fpga/src/rtl/board/top.rs (sim/src/ports.rs BOARD_PORTS)",
+        spec: "fpga/src/board/top_rtl.rs (sim/src/ports.rs BOARD_PORTS)",
     },
     Design {
         name: "sequencer",
         prefix: "Vseq",
         per_lane: false,
-        verilog: |_| pficp_fpga::rtl::sequencer_verilog(),
+        verilog: |_| pficp_fpga::common::verilog::sequencer_verilog(),
         ports: &[SEQUENCER_PORTS],
-        spec: "fpga/src/rtl/board/sequencer/ (sim/src/ports.rs SEQUENCER_PORTS)",
+        spec: "fpga/src/filter/sequencer_rtl.rs (sim/src/ports.rs SEQUENCER_PORTS)",
     },
     Design {
         name: "board_fast",
         prefix: "Vboardfast",
         per_lane: false,
-        verilog: |_| pficp_fpga::rtl::board_verilog(&pficp_fpga::board::BoardConfig::FAST_SIM),
+        verilog: |_| pficp_fpga::common::verilog::board_verilog(&pficp_fpga::board::BoardConfig::FAST_SIM),
         ports: &[BOARD_PORTS],
-        spec: "fpga/src/rtl/board/top.rs (sim/src/ports.rs BOARD_PORTS)",
+        spec: "fpga/src/board/top_rtl.rs (sim/src/ports.rs BOARD_PORTS)",
     },
 ];
 
@@ -392,9 +392,9 @@ fn lanes_to_build() -> Vec<usize> {
     lanes.dedup();
     for &p in &lanes {
         assert!(
-            pficp_fpga::rtl::BOARD_LANES.contains(&p),
+            pficp_fpga::common::rtl::BOARD_LANES.contains(&p),
             "PFICP_SIM_LANES: {p} lanes is not one of {:?}",
-            pficp_fpga::rtl::BOARD_LANES
+            pficp_fpga::common::rtl::BOARD_LANES
         );
     }
     assert!(!lanes.is_empty(), "PFICP_SIM_LANES is empty");

@@ -1,51 +1,33 @@
 //! PF-ICP hardware side: the formats, the bit-exact references, the wire protocol (always)
-//! and the rust_hdl RTL (feature `rtl`).
+//! and the rust_hdl RTL (feature `rtl`), one folder a concept. Each block's RTL twin lives
+//! beside its model, in the same folder under the same name with `_rtl`
+//! (`search/neighbour_pipeline.rs` and `search/neighbour_pipeline_rtl.rs`), behind the
+//! feature `rtl`.
 //!
-//! - [`format`]: the fixed-point formats shared by host, reference and RTL.
-//! - [`grid`]: the model's cell grid and the grid search's bit-exact reference (capped at
-//!   one cell).
-//! - [`pipeline`]: what the nearest-neighbour search shares with its references (result
-//!   ports, transform stages, scan-stream driver) and the plain brute-force reference.
-//! - [`neighbour_pipeline`]: the cycle-accurate reference of the neighbour pipeline, the
-//!   board's search (lanes over one scan point's candidates in its 27 cells), and its
-//!   functional reference over the board's stores.
-//! - [`surface`]: the surface residual (distance to the nearest model point's tangent
-//!   plane), its normal format and bit-exact rule.
-//! - [`surface_residual`]: the cycle-accurate reference of the residual stage
-//!   (`SurfaceResidual`: the residual of each neighbour-pipeline result, and their sum).
-//! - [`weights`]: the cycle-accurate reference of the weight stage (minimum cost, exp table).
-//! - [`pf`]: the on-board particle filter's bit-exact functional reference (`pf::run`), its
-//!   formats, CORDIC, pose program and PRNG.
-//! - [`polish`]: the on-board polish's bit-exact reference (point-to-plane Gauss-Newton
-//!   with scale over the board's stores); its arithmetic between passes is a set of
-//!   programs ([`polish::programs`]) for the datapath that is the polish's first RTL block.
-//! - [`sequencer`]: the cycle-accurate model of the filter's RTL (`PfSequencer`) and its
-//!   clock formulas; [`seq_state`]: their one list of states.
-//! - [`run_request`]: the Run request (the filter, then the polish) and what the board
-//!   computes for it.
-//! - [`protocol`]: the wire protocol (COBS framing, CRC-16, commands, error codes).
-//! - [`messages`]: each command's data layout, encoded and decoded.
-//! - [`board`]: the board's configuration and the byte-level reference board (`BoardModel`).
-//! - [`splitmix`]: the seeded generator of the tests' and fuzzers' stimulus.
-//! - `rtl` (feature `rtl`): the rust_hdl RTL of the board top and its blocks (the neighbour
-//!   pipeline, the residual and weight stages, the sequencer, the polish), and their Verilog.
+//! The data path through the folders, as the board runs a Run request:
+//! - [`protocol`]: the wire (COBS framing, CRC-16, the command table, error codes) and each
+//!   message's layout ([`protocol::messages`], the Run request in [`protocol::run_request`]),
+//!   and what each protocol version allows ([`protocol::versions`]);
+//! - [`board`]: the board's configuration and the byte-level reference board
+//!   ([`board::BoardModel`]) beside the RTL top and its blocks (UART, frame receiver, reply
+//!   sender, command engine, ...), which take the frames in and send the replies;
+//! - [`filter`]: the on-board particle filter: its functional reference ([`filter::pf`]),
+//!   its cycle-accurate model ([`filter::sequencer`]) beside the sequencer's RTL and its
+//!   arithmetic blocks, and the weight stage;
+//! - [`search`]: the nearest-neighbour search each particle's pose is scored with: the cell
+//!   grid, the transform and the neighbour pipeline (model and RTL);
+//! - [`surface`]: the surface residual (distance to the nearest model point's tangent plane)
+//!   and the residual stage after the search (model and RTL);
+//! - [`polish`]: the on-board polish after the filter (point-to-plane Gauss-Newton with
+//!   scale; its programs, its datapath, pass and control beside their models);
+//! - [`common`]: the fixed-point formats, the stimulus generator, and the RTL's shared
+//!   helpers and Verilog emission.
 #![warn(missing_docs)]
 
 pub mod board;
-pub mod format;
-pub mod grid;
-pub mod messages;
-pub mod neighbour_pipeline;
-pub mod pf;
-pub mod pipeline;
+pub mod common;
+pub mod filter;
 pub mod polish;
 pub mod protocol;
-#[cfg(feature = "rtl")]
-pub mod rtl;
-pub mod run_request;
-pub mod seq_state;
-pub mod sequencer;
-pub mod splitmix;
+pub mod search;
 pub mod surface;
-pub mod surface_residual;
-pub mod weights;

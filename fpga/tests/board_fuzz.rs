@@ -6,17 +6,18 @@
 //! normal request gets its normal reply.
 
 use pficp_fpga::board::{BoardConfig, BoardModel};
-use pficp_fpga::format::{unpack_point, FxPoint, WeightScale};
-use pficp_fpga::messages::{
-    parse_two_u16, pose_from_bytes, EvaluateReply, Identity, NearestReply, NearestRequest, ResultReply, RunState,
-    StatusReply, FLAG_FIRST, FLAG_LAST,
+use pficp_fpga::common::format::{unpack_point, FxPoint, WeightScale};
+use pficp_fpga::common::splitmix::SplitMix64;
+use pficp_fpga::filter::pf::{self, RUN_BYTES};
+use pficp_fpga::filter::weights::weights;
+use pficp_fpga::protocol::layout::pose_from_bytes;
+use pficp_fpga::protocol::messages::{
+    parse_two_u16, EvaluateReply, Identity, NearestReply, NearestRequest, ResultReply, RunState, StatusReply,
+    FLAG_FIRST, FLAG_LAST,
 };
-use pficp_fpga::pf::{self, RUN_BYTES};
+use pficp_fpga::protocol::run_request::{execute, RunOutcome, RunRequest};
 use pficp_fpga::protocol::{digest_update, Deframer, ErrorCode, Frame, DIGEST_INIT, MAX_FRAME};
-use pficp_fpga::run_request::{execute, RunOutcome, RunRequest};
-use pficp_fpga::splitmix::SplitMix64;
 use pficp_fpga::surface::{evaluate_stored, Scored, StoredSearch};
-use pficp_fpga::weights::weights;
 use proptest::prelude::*;
 
 /// SplitMix64: a small deterministic generator (seed from `PFICP_FUZZ_SEED`).
@@ -93,7 +94,7 @@ impl Snapshot {
 
     /// The neighbour pipeline's search and the surface residual over the stores before the
     /// command (any lane count).
-    fn search(&self, scan: &[FxPoint], pose: &pficp_fpga::format::FxPose) -> Scored {
+    fn search(&self, scan: &[FxPoint], pose: &pficp_fpga::common::format::FxPose) -> Scored {
         evaluate_stored(&self.model, &self.normals, &self.table, scan, pose)
     }
 }

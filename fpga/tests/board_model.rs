@@ -7,7 +7,7 @@ mod support;
 
 use support::*;
 
-use pficp_fpga::neighbour_pipeline::{run_particle as grid_run, upload, NeighbourPipelineModel};
+use pficp_fpga::search::neighbour_pipeline::{run_particle as grid_run, upload, NeighbourPipelineModel};
 
 #[test]
 fn wire_bytes_are_exact() {
@@ -131,7 +131,7 @@ fn evaluate_and_nearest_match_the_cycle_accurate_pipeline() {
         pipe.step(&w);
     }
     let want = grid_run(&mut pipe, &scan, &pose, |_| false).evaluation;
-    let capped = want.nearest.iter().filter(|n| n.1 == pficp_fpga::grid::CAP_D2).count();
+    let capped = want.nearest.iter().filter(|n| n.1 == pficp_fpga::search::grid::CAP_D2).count();
     assert!((1..30).contains(&capped), "{capped} of 40 capped");
     // The costs: the pipeline's results, then each one's surface residual (the test's
     // normals are axes, `test_normal`).
@@ -139,7 +139,7 @@ fn evaluate_and_nearest_match_the_cycle_accurate_pipeline() {
         part.iter()
             .zip(nearest)
             .map(|(&p, &(i, d2))| {
-                let q = pficp_fpga::format::transform(&pose, p);
+                let q = pficp_fpga::common::format::transform(&pose, p);
                 pficp_fpga::surface::residual(q, g.points[i as usize], test_normal(i as usize), d2)
             })
             .sum()
@@ -169,7 +169,7 @@ fn fifty_costs(n_scan: usize) -> Vec<u64> {
             }
             // x saturates at 32767, far outside the grid: every point costs the cap.
             assert!(g.iter().all(|p| p[0] <= 3000));
-            n_scan as u64 * pficp_fpga::grid::CAP_D2
+            n_scan as u64 * pficp_fpga::search::grid::CAP_D2
         })
         .collect()
 }
@@ -313,8 +313,8 @@ fn load_checks() {
     }
     // A load across the points' end goes on into the normals.
     ok(&mut b, req(LOAD_MODEL, 8, load_data(4095, 2, &[[4, 5, 6], [7, 8, 9]])));
-    assert_eq!(b.model_store()[4095], pficp_fpga::format::pack_point([4, 5, 6]));
-    assert_eq!(b.normal_store()[0], pficp_fpga::format::pack_point([7, 8, 9]));
+    assert_eq!(b.model_store()[4095], pficp_fpga::common::format::pack_point([4, 5, 6]));
+    assert_eq!(b.normal_store()[0], pficp_fpga::common::format::pack_point([7, 8, 9]));
 }
 
 #[test]
@@ -489,7 +489,7 @@ fn every_error_code_but_busy_is_reachable() {
 
 #[test]
 fn the_model_digest_follows_model_and_table_loads() {
-    use pficp_fpga::messages::{grid_digest, table_request};
+    use pficp_fpga::protocol::messages::{grid_digest, table_request};
     use pficp_fpga::protocol::{digest_update, DIGEST_INIT, DIGEST_NONE};
     let digest = |b: &mut BoardModel| le_at(&ok(b, req(IDENTIFY, 9, vec![])), 26, 4) as u32;
     let mut b = BoardModel::new(BoardConfig::default());

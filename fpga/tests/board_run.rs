@@ -9,7 +9,7 @@ use support::*;
 /// A Run configuration for the grid: centre at the identity, a region of a few hundred
 /// LSB (the scan's offsets), `seed` given.
 fn run_cfg(particles: u16, iterations: u16, seed: u32) -> PfConfig {
-    use pficp_fpga::pf::SCALE_FRAC;
+    use pficp_fpga::filter::pf::SCALE_FRAC;
     PfConfig {
         particles,
         iterations,
@@ -44,11 +44,11 @@ fn direct_run(b: &BoardModel, r: &RunRequest) -> RunOutcome {
     let store = |n: usize| b.scan_store()[..n].iter().map(|&w| unpack_point(w)).collect::<Vec<FxPoint>>();
     let model = b.model_store()[..m as usize].iter().map(|&w| unpack_point(w)).collect::<Vec<FxPoint>>();
     let (scan, polish_scan) = (store(s as usize), store(r.polish.points as usize));
-    let grid = pficp_fpga::grid::Grid::build(&model).unwrap();
+    let grid = pficp_fpga::search::grid::Grid::build(&model).unwrap();
     assert_eq!(&grid.first[..], b.table_store(), "the board's table is the model's");
     let normals: Vec<_> = b.normal_store()[..m as usize].iter().map(|&w| unpack_point(w)).collect();
-    let search = pficp_fpga::polish::GridSearch { grid: &grid, normals: &normals };
-    pficp_fpga::run_request::execute(
+    let search = pficp_fpga::surface::GridSearch { grid: &grid, normals: &normals };
+    pficp_fpga::protocol::run_request::execute(
         r,
         |pose| pficp_fpga::surface::evaluate(&grid, &normals, &scan, pose),
         &search,
@@ -69,7 +69,7 @@ fn run_then_status_then_result() {
     let costs = b.stored_costs().to_vec();
     let cfg = run_req(12, 6, 77);
     let data = cfg.encode();
-    assert_eq!(data.len(), pficp_fpga::run_request::run_bytes(2));
+    assert_eq!(data.len(), pficp_fpga::protocol::run_request::run_bytes(2));
     let d = ok(&mut b, req(RUN, 4, data.clone()));
     assert_eq!(d, vec![12, 0, 6, 0], "particles and iterations echoed");
     assert_eq!(d, data[..4].to_vec());
@@ -92,9 +92,9 @@ fn run_then_status_then_result() {
     assert_eq!(le_at(&d, 2, 6), want.best.cost);
     assert_eq!(le_at(&d, 8, 5), want.best.max_d2);
     for k in 0..7 {
-        assert_eq!(pficp_fpga::pf::wrap24(le_at(&d, 13 + 3 * k, 3) as i64), want.params[k], "parameter {k}");
+        assert_eq!(pficp_fpga::filter::pf::wrap24(le_at(&d, 13 + 3 * k, 3) as i64), want.params[k], "parameter {k}");
     }
-    assert_eq!(&d[34..61], &pose_bytes(&pficp_fpga::pf::pose_of(&want.params))[..]);
+    assert_eq!(&d[34..61], &pose_bytes(&pficp_fpga::filter::pf::pose_of(&want.params))[..]);
     assert_eq!(d[61], polish.winner);
     assert_eq!(le_at(&d, 62, 6), polish.cost);
     assert_eq!(&d[68..], &pose_bytes(&polish.pose)[..]);
@@ -134,7 +134,7 @@ fn the_filter_on_the_board_finds_a_shifted_grid() {
     let o = b.run_outcome().unwrap().filter.clone();
     assert!(o.best.cost * 10 < o.start.cost, "{} vs {}", o.best.cost, o.start.cost);
     for (a, &shift) in t.iter().enumerate() {
-        let got = pficp_fpga::pf::translation(o.params[a]);
+        let got = pficp_fpga::filter::pf::translation(o.params[a]);
         assert!((got + shift as i32).abs() < 100, "axis {a}: {got}");
     }
     assert_eq!(o.iterations, 15, "no threshold: every iteration runs");
@@ -204,7 +204,7 @@ fn run_checks() {
     r.polish.winner_steps = 2;
     r.polish.hypotheses = (0..14).map(|k| shift([8 * k, -4 * k, 0])).collect();
     let data = r.encode();
-    assert_eq!(data.len(), pficp_fpga::run_request::run_bytes(15));
+    assert_eq!(data.len(), pficp_fpga::protocol::run_request::run_bytes(15));
     ok(&mut b, req(RUN, 8, data.clone()));
     assert_eq!(b.run_outcome(), Some(&direct_run(&b, &r)));
     rejects(&mut b, req(RUN, 8, data[..data.len() - 27].to_vec()), BadLength);

@@ -3,7 +3,7 @@
 #![cfg(feature = "rtl")]
 
 use pficp_fpga::board::BoardConfig;
-use pficp_fpga::rtl::board_verilog;
+use pficp_fpga::common::verilog::board_verilog;
 
 /// `verilator --lint-only -Wall` (with hdl-gen's waivers) on `v`, written to
 /// `$CARGO_TARGET_TMPDIR/<name>/<name>.v`; fails the test on any warning.
@@ -31,5 +31,5 @@ fn board_verilog_has_the_pins_and_lints_clean() {
 
 #[test]
 fn sequencer_verilog_lints_clean() {
-    lints_clean("sequencer", &pficp_fpga::rtl::sequencer_verilog());
+    lints_clean("sequencer", &pficp_fpga::common::verilog::sequencer_verilog());
 }

@@ -1,9 +1,9 @@
-//! The grid search against the brute-force capped search it must equal (`fpga::grid`'s
+//! The grid search against the brute-force capped search it must equal (`fpga::search::grid`'s
 //! rule), on random models (surfaces, clumps on cell boundaries, the cube's corners) and
 //! queries anywhere in the coordinate range; and the work it saves on two surfaces.
 
-use pficp_fpga::format::{self, FxPoint};
-use pficp_fpga::grid::{nearest_capped, Grid, CAP_D2, CELL_LSBS, NONE};
+use pficp_fpga::common::format::{self, FxPoint};
+use pficp_fpga::search::grid::{nearest_capped, Grid, CAP_D2, CELL_LSBS, NONE};
 use proptest::prelude::*;
 
 /// A coordinate inside the grid's cube, drawn near cell boundaries a third of the time.

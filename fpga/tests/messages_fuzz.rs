@@ -10,9 +10,9 @@
 //! Frames through the byte-level board are `board_fuzz.rs`'s, through the Verilated board
 //! `sim/tests/board_faults.rs`'s.
 
-use pficp_fpga::format::FxPose;
-use pficp_fpga::messages::*;
-use pficp_fpga::pf::PfConfig;
+use pficp_fpga::common::format::FxPose;
+use pficp_fpga::filter::pf::PfConfig;
+use pficp_fpga::protocol::messages::*;
 use pficp_fpga::protocol::{Deframer, Frame};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
@@ -67,7 +67,7 @@ fn fuzz_decoders(cases: u32, seed: u64) {
         .run(&(status, result, nearest, evaluate), |(s, (r, p), n, e)| {
             let s = StatusReply { state: RunState::from_byte(s.0).unwrap(), iterations: s.1, best_cost: s.2 };
             prop_assert_eq!(StatusReply::decode(&s.encode()).unwrap(), s);
-            let polish = pficp_fpga::run_request::PolishOutcome { winner: p.0, cost: p.1, pose: p.2 };
+            let polish = pficp_fpga::protocol::run_request::PolishOutcome { winner: p.0, cost: p.1, pose: p.2 };
             let r = ResultReply { iterations: r.0, cost: r.1, max_d2: r.2, params: r.3, pose: r.4, polish };
             prop_assert_eq!(ResultReply::decode(&r.encode()).unwrap(), r);
             let reply = NearestReply { first: n.0, cost: n.1, results: n.2 };

@@ -1,12 +1,12 @@
-//! The neighbour pipeline's cycle model (`fpga::neighbour_pipeline`) against its functional
+//! The neighbour pipeline's cycle model (`fpga::search::neighbour_pipeline`) against its functional
 //! reference over the raw stores (`evaluate_stored`, any table) and, with the model's own
 //! table, against the capped search (`grid::evaluate_grid`, `Grid::nearest`): random
 //! models in the cube, scans under poses that put points outside it, gaps in the scan
 //! stream, particles back to back, model and table rewrites, tables of anything.
 
-use pficp_fpga::format::{pack_point, transform, FxPoint, FxPose, MAX_POINTS};
-use pficp_fpga::grid::{evaluate_grid, Grid, CAP_D2, CELLS, CELL_LSBS, NONE};
-use pficp_fpga::neighbour_pipeline::{
+use pficp_fpga::common::format::{pack_point, transform, FxPoint, FxPose, MAX_POINTS};
+use pficp_fpga::search::grid::{evaluate_grid, Grid, CAP_D2, CELLS, CELL_LSBS, NONE};
+use pficp_fpga::search::neighbour_pipeline::{
     chunks_of, clocks_bound, clocks_per_particle, evaluate_stored, lookups_of, run_particle, upload, GridInputs,
     NeighbourPipelineModel, BOUND_FILL, BOUND_POINT_EXTRA,
 };

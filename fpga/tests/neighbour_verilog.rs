@@ -3,7 +3,7 @@
 //! in lockstep with the cycle model under Verilator (sim/tests/neighbour_pipeline.rs).
 #![cfg(feature = "rtl")]
 
-use pficp_fpga::rtl::neighbour_pipeline_verilog;
+use pficp_fpga::common::verilog::neighbour_pipeline_verilog;
 
 #[test]
 fn neighbour_pipeline_verilog_lints_clean() {

@@ -3,7 +3,7 @@
 //! points written, in order, none lost or doubled; a reset drops what is queued.
 #![cfg(feature = "rtl")]
 
-use pficp_fpga::rtl::board::pass_queue::{PassQueue, PASS_QUEUE};
+use pficp_fpga::board::pass_queue_rtl::{PassQueue, PASS_QUEUE};
 use rust_hdl::prelude::*;
 use std::collections::VecDeque;
 use std::sync::{Arc, Mutex};

@@ -7,12 +7,12 @@
 //! order.
 #![cfg(feature = "rtl")]
 
-use pficp_fpga::format::{pack_point, transform, FxPoint, FxPose};
-use pficp_fpga::grid::{Grid, NONE};
+use pficp_fpga::common::format::{pack_point, transform, FxPoint, FxPose};
+use pficp_fpga::common::rtl::{pose_word as word, word_pose as unword};
+use pficp_fpga::polish::bench_rtl::PolishUnitBench;
 use pficp_fpga::polish::cases::{pose, surface, window_scan};
 use pficp_fpga::polish::{gate, pass, polish, polish_best, solve, update, within_drift};
-use pficp_fpga::rtl::polish::PolishUnitBench;
-use pficp_fpga::rtl::{pose_word as word, word_pose as unword};
+use pficp_fpga::search::grid::{Grid, NONE};
 use pficp_fpga::surface::{evaluate, signed_residual, FxNormal};
 use rust_hdl::prelude::*;
 use std::sync::{Arc, Mutex};

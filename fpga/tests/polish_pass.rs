@@ -6,10 +6,10 @@
 //! (the program run on `go`) every register and the failed flag equal the model's.
 #![cfg(feature = "rtl")]
 
-use pficp_fpga::format::{pack_point, pack_translation};
+use pficp_fpga::common::format::{pack_point, pack_translation};
+use pficp_fpga::polish::bench_rtl::PolishBench;
 use pficp_fpga::polish::cases::{pass_cases, PassCase};
 use pficp_fpga::polish::programs::{rom, run, solve_inputs, Entry, FOUND, INLIERS, SUM_R2};
-use pficp_fpga::rtl::polish::PolishBench;
 use rust_hdl::prelude::*;
 use std::sync::{Arc, Mutex};
 

@@ -8,11 +8,11 @@
 //! as the pass will.
 #![cfg(feature = "rtl")]
 
+use pficp_fpga::common::splitmix::SplitMix64;
 use pficp_fpga::polish::cases::{gram, program_cases, random_rows};
 use pficp_fpga::polish::program::{add_port, Op, Rom, REGISTERS};
+use pficp_fpga::polish::program_rtl::PolishProgram;
 use pficp_fpga::polish::programs::{inlier_adds, rom, solve_inputs, Entry};
-use pficp_fpga::rtl::polish::PolishProgram;
-use pficp_fpga::splitmix::SplitMix64;
 use rust_hdl::prelude::*;
 use std::sync::{Arc, Mutex};
 

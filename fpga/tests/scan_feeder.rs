@@ -4,7 +4,7 @@
 //! clock while the pipeline takes them, and `streaming` falls when the range is done.
 #![cfg(feature = "rtl")]
 
-use pficp_fpga::rtl::board::scan_feeder::ScanFeeder;
+use pficp_fpga::board::scan_feeder_rtl::ScanFeeder;
 use rust_hdl::prelude::*;
 use std::sync::{Arc, Mutex};
 

@@ -1,5 +1,5 @@
 //! The sequencer's blocks, each alone in rust_hdl's simulator against the
-//! [`pficp_fpga::pf`] function it implements: the pipelined multiplier against `i64`
+//! [`pficp_fpga::filter::pf`] function it implements: the pipelined multiplier against `i64`
 //! products (one at a time and one a clock), the divider against `pf::div_signed`, the PRNG step against
 //! `pf::Xorshift32`, the CORDIC against `pf::cordic`, the pose program against
 //! `pf::run_program`, the propagation against `pf::propagate`, the estimate and spread
@@ -9,11 +9,19 @@
 //! whole sequencer is checked clock by clock in the sim crate.
 #![cfg(feature = "rtl")]
 
-use pficp_fpga::format::exp_table;
-use pficp_fpga::pf::{self, CORDIC_STEPS, POSE_PROGRAM};
-use pficp_fpga::rtl::board::sequencer::{
-    Cordic, Estimate, ParamBank, PipeMul, PoseProgram, Propagate, Resample, SerialDiv, Translation, Weight, Xorshift32,
-};
+use pficp_fpga::common::format::exp_table;
+use pficp_fpga::common::pipe_mul_rtl::PipeMul;
+use pficp_fpga::filter::cordic_rtl::Cordic;
+use pficp_fpga::filter::estimate_rtl::Estimate;
+use pficp_fpga::filter::param_bank_rtl::ParamBank;
+use pficp_fpga::filter::pf::{self, CORDIC_STEPS, POSE_PROGRAM};
+use pficp_fpga::filter::pose_program_rtl::PoseProgram;
+use pficp_fpga::filter::propagate_rtl::Propagate;
+use pficp_fpga::filter::resample_rtl::Resample;
+use pficp_fpga::filter::serial_div_rtl::SerialDiv;
+use pficp_fpga::filter::translation_rtl::Translation;
+use pficp_fpga::filter::weight_rtl::Weight;
+use pficp_fpga::filter::xorshift_rtl::Xorshift32;
 use rust_hdl::prelude::*;
 use std::sync::{Arc, Mutex};
 

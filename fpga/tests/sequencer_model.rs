@@ -9,9 +9,9 @@
 //! nearest-neighbour result per clock and the cost a clock after the last; `nn_ready` is
 //! high whenever no evaluation is in flight (optionally after a random gap).
 
-use pficp_fpga::format::{FxPoint, FxPose};
-use pficp_fpga::pf::{self, example_cloud, example_config, PfConfig, PfOutcome, PARAMS, SCALE_FRAC};
-use pficp_fpga::sequencer::{
+use pficp_fpga::common::format::{FxPoint, FxPose};
+use pficp_fpga::filter::pf::{self, example_cloud, example_config, PfConfig, PfOutcome, PARAMS, SCALE_FRAC};
+use pficp_fpga::filter::sequencer::{
     clocks_per_iteration, config_writes, resample_clocks, run_clocks, sum_clocks, temper_pass_clocks, unpack_pose,
     weight_clocks, IterationShape, PipelineStandIn, SeqInputs, SeqOutputs, SeqState, SequencerModel, MAX_TEMPER_PASSES,
     POSE_CLOCKS, PROPAGATE_CLOCKS,
@@ -186,7 +186,7 @@ fn reference(cfg: &PfConfig, model: &[FxPoint], scan: &[FxPoint]) -> (PfOutcome,
     let outcome = pf::run(cfg, |pose| {
         poses.push(*pose);
         // The sequencer does not depend on the search: the brute-force one will do.
-        pf::Evaluated::of(&pficp_fpga::pipeline::evaluate(model, scan, pose))
+        pf::Evaluated::of(&pficp_fpga::search::pipeline::evaluate(model, scan, pose))
     });
     (outcome, poses)
 }

@@ -16,8 +16,8 @@
 //! after it ended).
 #![cfg(feature = "rtl")]
 
+use pficp_fpga::board::uart_rtl::{UartRx, UartTx};
 use pficp_fpga::board::BitPeriod;
-use pficp_fpga::rtl::board::uart::{UartRx, UartTx};
 use rust_hdl::prelude::*;
 use std::sync::{Arc, Mutex};
 

@@ -3,9 +3,9 @@
 //! output port compared after every edge.
 #![cfg(feature = "rtl")]
 
-use pficp_fpga::format::WeightScale;
-use pficp_fpga::rtl::weights::WeightStage;
-use pficp_fpga::weights::{WeightInputs, WeightModel, WeightOutputs};
+use pficp_fpga::common::format::WeightScale;
+use pficp_fpga::filter::weights::{WeightInputs, WeightModel, WeightOutputs};
+use pficp_fpga::filter::weights_rtl::WeightStage;
 use rust_hdl::prelude::*;
 
 fn lcg(seed: &mut u64) -> u64 {

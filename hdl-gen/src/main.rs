@@ -129,9 +129,10 @@ fn design_name(design: Design) -> String {
 
 /// The design's Verilog with `lanes` lanes, from the RTL crate, and where it came from.
 fn generated_verilog(design: Design, lanes: usize, board: &BoardConfig) -> Result<(String, String)> {
-    use pficp_fpga::rtl::{
+    use pficp_fpga::common::rtl::BOARD_LANES;
+    use pficp_fpga::common::verilog::{
         board_verilog, neighbour_pipeline_verilog, polish_bench_verilog, polish_program_verilog, polish_unit_verilog,
-        surface_residual_verilog, weight_stage_verilog, BOARD_LANES,
+        surface_residual_verilog, weight_stage_verilog,
     };
     Ok(match design {
         Design::Board | Design::NeighbourPipeline if !BOARD_LANES.contains(&lanes) => {
@@ -140,20 +141,25 @@ fn generated_verilog(design: Design, lanes: usize, board: &BoardConfig) -> Resul
         Design::Board => (
             board_verilog(board),
             format!(
-                "pficp_fpga::rtl::board_verilog(BoardConfig {{ lanes: {}, clock_hz: {}, baud: {} }})",
+                "pficp_fpga::common::verilog::board_verilog(BoardConfig {{ lanes: {}, clock_hz: {}, baud: {} }})",
                 board.lanes, board.clock_hz, board.baud
             ),
         ),
-        Design::NeighbourPipeline => {
-            (neighbour_pipeline_verilog(lanes), format!("pficp_fpga::rtl::neighbour_pipeline_verilog({lanes})"))
-        }
-        Design::Weights => (weight_stage_verilog(), "pficp_fpga::rtl::weight_stage_verilog()".to_string()),
+        Design::NeighbourPipeline => (
+            neighbour_pipeline_verilog(lanes),
+            format!("pficp_fpga::common::verilog::neighbour_pipeline_verilog({lanes})"),
+        ),
+        Design::Weights => (weight_stage_verilog(), "pficp_fpga::common::verilog::weight_stage_verilog()".to_string()),
         Design::SurfaceResidual => {
-            (surface_residual_verilog(), "pficp_fpga::rtl::surface_residual_verilog()".to_string())
+            (surface_residual_verilog(), "pficp_fpga::common::verilog::surface_residual_verilog()".to_string())
         }
-        Design::PolishProgram => (polish_program_verilog(), "pficp_fpga::rtl::polish_program_verilog()".to_string()),
-        Design::PolishBench => (polish_bench_verilog(), "pficp_fpga::rtl::polish_bench_verilog()".to_string()),
-        Design::PolishUnit => (polish_unit_verilog(), "pficp_fpga::rtl::polish_unit_verilog()".to_string()),
+        Design::PolishProgram => {
+            (polish_program_verilog(), "pficp_fpga::common::verilog::polish_program_verilog()".to_string())
+        }
+        Design::PolishBench => {
+            (polish_bench_verilog(), "pficp_fpga::common::verilog::polish_bench_verilog()".to_string())
+        }
+        Design::PolishUnit => (polish_unit_verilog(), "pficp_fpga::common::verilog::polish_unit_verilog()".to_string()),
     })
 }
 

@@ -36,7 +36,7 @@ fn read(p: &Path) -> String {
 
 /// The board top's ports, as the RTL writes them.
 fn board_ports() -> Vec<Port> {
-    top_ports(&pficp_fpga::rtl::board_verilog(&Default::default()), TOP).unwrap()
+    top_ports(&pficp_fpga::common::verilog::board_verilog(&Default::default()), TOP).unwrap()
 }
 
 /// The default pin map's text with `from` replaced by `to` (which must occur).

@@ -169,7 +169,7 @@ fn cli_board_as_shipped() {
     let dir = fresh_dir("hdl-gen-cli-board");
     let (okay, stdout, stderr) = hdl_gen(&["--out", dir.to_str().unwrap()]);
     assert!(okay, "{stdout}\n{stderr}");
-    assert!(stdout.contains("pficp_fpga::rtl::board_verilog(BoardConfig { lanes: 8,"), "{stdout}");
+    assert!(stdout.contains("pficp_fpga::common::verilog::board_verilog(BoardConfig { lanes: 8,"), "{stdout}");
     assert!(stdout.contains("lint: clean"), "{stdout}");
     assert!(stdout.contains("**within limits**"), "{stdout}");
     let json: serde_json::Value =
@@ -190,7 +190,8 @@ fn cli_board_as_shipped() {
     }
     // Every waiver is needed by the board: without them, -Wall reports exactly their codes.
     let raw = dir.join("raw_board.v");
-    std::fs::write(&raw, pficp_fpga::rtl::board_verilog(&pficp_fpga::board::BoardConfig::default())).unwrap();
+    std::fs::write(&raw, pficp_fpga::common::verilog::board_verilog(&pficp_fpga::board::BoardConfig::default()))
+        .unwrap();
     let r = ok(lint_file(&raw));
     let mut codes: Vec<&str> = r.messages.iter().filter_map(|m| m.code.as_deref()).collect();
     codes.sort();

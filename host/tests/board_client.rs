@@ -13,12 +13,12 @@ use pficp::nn::NearestNeighbours;
 use pficp::pf_icp::PfIcpSettings;
 use pficp::registration::methods::{PoseError, Tolerance};
 use pficp_fpga::board::BoardConfig;
-use pficp_fpga::format::WeightScale;
-use pficp_fpga::grid::CAP_D2;
-use pficp_fpga::messages::Identity;
+use pficp_fpga::common::format::WeightScale;
+use pficp_fpga::filter::weights::weights;
+use pficp_fpga::protocol::messages::Identity;
 use pficp_fpga::protocol::{Command, ErrorCode, Frame};
+use pficp_fpga::search::grid::CAP_D2;
 use pficp_fpga::surface::scored;
-use pficp_fpga::weights::weights;
 use std::time::{Duration, Instant};
 use support::{cloud, grid, loaded, normals, poses, reference_handler, uart_resample, upload, PtyBoard};
 
@@ -102,13 +102,13 @@ fn nearest_in_frames_equals_the_reference() {
     assert_eq!(near.len(), 320);
     let mut found = 0;
     for (k, (n, &(i, d))) in near.iter().zip(&e.nearest).enumerate() {
-        let q = pficp_fpga::format::transform(&pose, scan[10 + k]);
+        let q = pficp_fpga::common::format::transform(&pose, scan[10 + k]);
         match *n {
             None => assert_eq!(d, CAP_D2),
             Some((j, d2)) => {
                 found += 1;
                 assert_eq!((j, d2), (g.order[i as usize] as usize, d));
-                assert_eq!(pficp_fpga::format::dist2(q, model[j]), d);
+                assert_eq!(pficp_fpga::common::format::dist2(q, model[j]), d);
             }
         }
     }
@@ -382,7 +382,7 @@ fn a_model_too_big_for_the_board_is_subsampled_with_the_seed() {
 /// not NaN weights later.
 #[test]
 fn all_zero_weights_are_an_error() {
-    use pficp_fpga::messages::{EvaluateReply, FLAG_LAST};
+    use pficp_fpga::protocol::messages::{EvaluateReply, FLAG_LAST};
     let (model, scan) = (cloud(300, 71), cloud(100, 72));
     let mut board = PtyBoard::serve(support::intercepting_handler(|f, b| {
         if f.code != Command::Evaluate as u8 || f.data.first().is_none_or(|&x| x & FLAG_LAST == 0) {

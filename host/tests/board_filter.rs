@@ -12,10 +12,10 @@ use pficp::datasets::{make, ModelId, Sampling, ScanSpec};
 use pficp::nn::NearestNeighbours;
 use pficp::pf_icp::PfIcpSettings;
 use pficp::registration::methods::{PoseError, Tolerance};
-use pficp_fpga::messages::{Identity, ResultReply, RunState, StatusReply};
-use pficp_fpga::pf::{self, PfConfig};
+use pficp_fpga::filter::pf::{self, PfConfig};
+use pficp_fpga::protocol::messages::{Identity, ResultReply, RunState, StatusReply};
+use pficp_fpga::protocol::run_request::{PolishRequest, RunRequest};
 use pficp_fpga::protocol::{Command, ErrorCode, Frame};
-use pficp_fpga::run_request::{PolishRequest, RunRequest};
 use std::time::{Duration, Instant};
 use support::{cloud, grid, loaded, normals, run_reference, upload, PtyBoard};
 
@@ -37,7 +37,7 @@ fn run_config(particles: u16, iterations: u16, seed: u32) -> RunRequest {
         particles,
         iterations,
         temper_exp: 12,
-        centre: [0, 0, 0, 1 << pficp_fpga::pf::SCALE_FRAC, 0, 0, 0],
+        centre: [0, 0, 0, 1 << pficp_fpga::filter::pf::SCALE_FRAC, 0, 0, 0],
         sigma0: [20_000, 20_000, 20_000, 1 << 14, 1 << 15, 1 << 15, 1 << 15],
         floor: [50, 50, 50, 50, 50, 50, 50],
         seed,
@@ -73,16 +73,16 @@ fn run_status_and_result_equal_the_functional_reference() {
     // The modelled time: the sequencer's clocks with the data-dependent parts at their
     // largest, at the board's clock; above the clocks of the run the reference made.
     let clocks = client.run_clocks(&cfg);
-    let polish = pficp_fpga::run_request::polish_clocks_bound(&cfg.polish, 300, 8);
+    let polish = pficp_fpga::protocol::run_request::polish_clocks_bound(&cfg.polish, 300, 8);
     assert_eq!(clocks, pficp::board::run_clocks_bound(20, 8, 80, 300, 8) + polish);
     assert_eq!(client.modelled_run_time(&cfg), Duration::from_secs_f64(clocks as f64 / 50e6));
     let poses = 20 * want.iterations as u64 + want.iterations as u64 + 1;
-    let per_pose = pficp_fpga::neighbour_pipeline::clocks_bound(80, 300, 8);
-    assert!(per_pose >= pficp_fpga::pipeline::clocks_per_particle(80, 300, 8));
+    let per_pose = pficp_fpga::search::neighbour_pipeline::clocks_bound(80, 300, 8);
+    assert!(per_pose >= pficp_fpga::search::pipeline::clocks_per_particle(80, 300, 8));
     assert!(clocks - polish > poses * per_pose);
     assert!(clocks - polish < 2 * poses * per_pose);
     // The polish: 2 steps from one start are 4 passes of 30 points and their programs.
-    assert!(polish > 4 * 30 * pficp_fpga::run_request::PASS_POINT_CLOCKS);
+    assert!(polish > 4 * 30 * pficp_fpga::protocol::run_request::PASS_POINT_CLOCKS);
 }
 
 #[test]
@@ -377,7 +377,7 @@ fn an_iteration_count_that_goes_back_or_past_the_cap_is_an_error() {
 /// reference underneath searches through its table, so when the sizes are set it grids the
 /// model it was sent itself (a search over the same points, whatever their order).
 fn old_board(version: u16) -> PtyBoard {
-    use pficp_fpga::messages::{load_request, table_request, MAX_LOAD_ENTRIES, MAX_LOAD_POINTS};
+    use pficp_fpga::protocol::messages::{load_request, table_request, MAX_LOAD_ENTRIES, MAX_LOAD_POINTS};
     PtyBoard::serve(support::intercepting_handler(move |f, b| {
         if f.code == Command::Identify as u8 && f.data.is_empty() {
             let mut id = Identity::decode(&b.execute(f).data).unwrap();
@@ -392,7 +392,7 @@ fn old_board(version: u16) -> PtyBoard {
         if f.code == Command::SetSizes as u8 && f.data.len() == 4 {
             let m = u16::from_le_bytes([f.data[0], f.data[1]]) as usize;
             let model: Vec<_> =
-                b.model_store()[..m.min(4096)].iter().map(|&w| pficp_fpga::format::unpack_point(w)).collect();
+                b.model_store()[..m.min(4096)].iter().map(|&w| pficp_fpga::common::format::unpack_point(w)).collect();
             let g = grid(&model);
             let mut load = |code: Command, data| b.execute(&Frame { code: code as u8, seq: 1, data });
             for (k, c) in g.points.chunks(MAX_LOAD_POINTS).enumerate() {

@@ -20,9 +20,10 @@ use pficp::eval::realistic::{case, score, Family, Score, Split};
 use pficp::geometry::Pose;
 use pficp::nn::NearestNeighbours;
 use pficp::pf_icp::{self, PfIcpSettings};
-use pficp_fpga::format::FxPose;
-use pficp_fpga::messages::ResultReply;
-use pficp_fpga::polish::{polish_over, within_drift, GridSearch, Search};
+use pficp_fpga::common::format::FxPose;
+use pficp_fpga::polish::{polish_over, within_drift};
+use pficp_fpga::protocol::messages::ResultReply;
+use pficp_fpga::surface::{GridSearch, Search};
 use rayon::prelude::*;
 
 fn env_or(name: &str, default: u64) -> u64 {

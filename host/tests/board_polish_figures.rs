@@ -30,7 +30,7 @@ use pficp::nn::NearestNeighbours;
 use pficp::pf_icp::conclusion::candidates;
 use pficp::pf_icp::{self, PfIcpSettings};
 use pficp::registration::methods::Tolerance;
-use pficp_fpga::messages::ResultReply;
+use pficp_fpga::protocol::messages::ResultReply;
 use rayon::prelude::*;
 use std::time::Duration;
 
@@ -73,7 +73,7 @@ fn poses(
     let alone = on_board::params_pose(&out.params, &plan.model_norm, &plan.scan_norm);
     assert!(scan.len() <= pficp::board::MAX_POINTS, "the whole scan fits the board");
     let whole = plan.scan_norm.quantise(scan);
-    let polished = |points: &[pficp_fpga::format::FxPoint]| {
+    let polished = |points: &[pficp_fpga::common::format::FxPoint]| {
         restored(&plan, &pficp_fpga::polish::polish(&plan.grid, &plan.normals, points, &out.pose, steps()).pose)
     };
     let host = on_board::finish(&plan, nn, scan, settings, &ResultReply::of(&unpolished(&out)), Duration::ZERO)
@@ -81,7 +81,7 @@ fn poses(
         .pose;
     let at_truth = on_board::evaluate(&plan.grid, &plan.normals, &plan.scan, &on_board_pose(&plan, truth));
     // The starts the host's conclusion compares, the filter's pose exactly as the board has it.
-    let starts: Vec<pficp_fpga::format::FxPose> = candidates(&alone, &plan.prior.hypotheses)
+    let starts: Vec<pficp_fpga::common::format::FxPose> = candidates(&alone, &plan.prior.hypotheses)
         .iter()
         .take(max_starts())
         .enumerate()
@@ -98,18 +98,18 @@ fn poses(
 
 /// A filter's outcome with its pose as the polish's winner: the host's polish then starts
 /// from the filter's pose, as before the polish was on the board.
-fn unpolished(out: &pficp_fpga::pf::PfOutcome) -> pficp_fpga::run_request::RunOutcome {
-    let polish = pficp_fpga::run_request::PolishOutcome { winner: 0, pose: out.pose, cost: out.best.cost };
-    pficp_fpga::run_request::RunOutcome { filter: out.clone(), polish }
+fn unpolished(out: &pficp_fpga::filter::pf::PfOutcome) -> pficp_fpga::protocol::run_request::RunOutcome {
+    let polish = pficp_fpga::protocol::run_request::PolishOutcome { winner: 0, pose: out.pose, cost: out.best.cost };
+    pficp_fpga::protocol::run_request::RunOutcome { filter: out.clone(), polish }
 }
 
 /// A pose (original frame) as the board holds it.
-fn on_board_pose(plan: &OnBoardPlan, pose: &Pose) -> pficp_fpga::format::FxPose {
+fn on_board_pose(plan: &OnBoardPlan, pose: &Pose) -> pficp_fpga::common::format::FxPose {
     quantise_pose(&normalised_pose(pose, &plan.scan_norm, &plan.model_norm))
 }
 
 /// A board pose (a polish's result) in the original frame.
-fn restored(plan: &OnBoardPlan, pose: &pficp_fpga::format::FxPose) -> Pose {
+fn restored(plan: &OnBoardPlan, pose: &pficp_fpga::common::format::FxPose) -> Pose {
     original_pose(&restore_pose(pose).expect("the polish keeps a similarity"), &plan.scan_norm, &plan.model_norm)
 }
 

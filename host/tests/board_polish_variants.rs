@@ -28,8 +28,8 @@ use pficp::eval::realistic::{case, score, Family, Split};
 use pficp::geometry::Pose;
 use pficp::nn::NearestNeighbours;
 use pficp::pf_icp::{self, PfIcpSettings};
-use pficp_fpga::format::{FxPoint, FxPose};
-use pficp_fpga::messages::ResultReply;
+use pficp_fpga::common::format::{FxPoint, FxPose};
+use pficp_fpga::protocol::messages::ResultReply;
 use rayon::prelude::*;
 use std::time::Duration;
 
@@ -128,7 +128,7 @@ const VARIANTS: [Variant; 34] = [
 /// [`pficp_fpga::polish::polish_best_over`] (a first start beyond the drift bounds stays
 /// unpolished, another is dropped), as (cost, index, pose), lowest cost first.
 fn ranked(
-    search: &impl pficp_fpga::polish::Search,
+    search: &impl pficp_fpga::surface::Search,
     scan: &[FxPoint],
     starts: &[FxPose],
     steps: u32,
@@ -155,7 +155,7 @@ fn ranked(
 /// rules: a first start beyond the drift bounds stays unpolished, another is dropped; the
 /// lowest cost wins, the earlier on a tie).
 fn polish_best_uneven(
-    search: &impl pficp_fpga::polish::Search,
+    search: &impl pficp_fpga::surface::Search,
     scan: &[FxPoint],
     starts: &[FxPose],
     first_steps: u32,
@@ -229,7 +229,7 @@ fn the_polish_settings_on_the_dev_split() {
                 let plan = plan(&nn, &c.scan, &settings, on_board::DEFAULT_BOARD_POINTS, pficp::board::MAX_POINTS)
                     .expect("a plan");
                 let filter = plan.emulate_filter();
-                let search = pficp_fpga::polish::GridSearch { grid: &plan.grid, normals: &plan.normals };
+                let search = pficp_fpga::surface::GridSearch { grid: &plan.grid, normals: &plan.normals };
                 let hyps = &plan.prior.hypotheses;
                 let mut ok = vec![score(&soft, &c).success];
                 for (vi, var) in VARIANTS.iter().enumerate() {

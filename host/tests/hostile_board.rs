@@ -5,13 +5,13 @@
 mod support;
 
 use pficp::board::{BoardClient, BoardError, MAX_RETRIES};
-use pficp_fpga::format::{FxPose, WeightScale};
-use pficp_fpga::messages::{
+use pficp_fpga::common::format::{FxPose, WeightScale};
+use pficp_fpga::filter::pf::PfConfig;
+use pficp_fpga::protocol::messages::{
     EvaluateReply, NearestReply, NearestRequest, ResultReply, RunState, StatusReply, FLAG_LAST,
 };
-use pficp_fpga::pf::PfConfig;
+use pficp_fpga::protocol::run_request::{PolishRequest, RunRequest};
 use pficp_fpga::protocol::{Command, Frame};
-use pficp_fpga::run_request::{PolishRequest, RunRequest};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::time::{Duration, Instant};
@@ -187,7 +187,7 @@ fn run_config() -> RunRequest {
         particles: 8,
         iterations: 4,
         temper_exp: 12,
-        centre: [0, 0, 0, 1 << pficp_fpga::pf::SCALE_FRAC, 0, 0, 0],
+        centre: [0, 0, 0, 1 << pficp_fpga::filter::pf::SCALE_FRAC, 0, 0, 0],
         sigma0: [20_000, 20_000, 20_000, 1 << 14, 1 << 15, 1 << 15, 1 << 15],
         floor: [50; 7],
         seed: 7,

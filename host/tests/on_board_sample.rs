@@ -1,5 +1,5 @@
 //! How many scan points the on-board filter needs per particle weight: PF-ICP with the
-//! whole filter on the board (bit-exact: the grid search's `pficp_fpga::pf::run`, which the
+//! whole filter on the board (bit-exact: the grid search's `pficp_fpga::filter::pf::run`, which the
 //! byte-level reference board runs for Run), its pose alone and after the host's polish,
 //! for several board sample sizes, beside the software mode, on models 1 to 3 (Table 1
 //! truths, 2,000 model points, an independent 1,000-point scan, 50 particles, 50
@@ -24,10 +24,10 @@ use pficp::nn::NearestNeighbours;
 use pficp::pf_icp::{self, PfIcpSettings};
 use pficp::registration::methods::{PoseError, Tolerance};
 use pficp_fpga::board::BoardConfig;
-use pficp_fpga::format::FxPoint;
-use pficp_fpga::messages::ResultReply;
-use pficp_fpga::neighbour_pipeline::{clocks_bound, clocks_per_particle};
-use pficp_fpga::pf;
+use pficp_fpga::common::format::FxPoint;
+use pficp_fpga::filter::pf;
+use pficp_fpga::protocol::messages::ResultReply;
+use pficp_fpga::search::neighbour_pipeline::{clocks_bound, clocks_per_particle};
 use rayon::prelude::*;
 use std::time::Duration;
 
@@ -97,15 +97,18 @@ fn scan_points_per_weight_on_the_board() {
                     let plan = on_board::plan_with_prior(prior.clone(), &nn, &ds.scan, &settings, s, 4096).unwrap();
                     let out = if uncapped {
                         pf::run(&plan.config, |p| {
-                            pf::Evaluated::of(&pficp_fpga::pipeline::evaluate(&plan.model, &plan.scan, p))
+                            pf::Evaluated::of(&pficp_fpga::search::pipeline::evaluate(&plan.model, &plan.scan, p))
                         })
                     } else {
                         plan.emulate_filter()
                     };
                     // As measured before the on-board polish: the filter's pose, unpolished.
-                    let polish =
-                        pficp_fpga::run_request::PolishOutcome { winner: 0, pose: out.pose, cost: out.best.cost };
-                    let run = pficp_fpga::run_request::RunOutcome { filter: out.clone(), polish };
+                    let polish = pficp_fpga::protocol::run_request::PolishOutcome {
+                        winner: 0,
+                        pose: out.pose,
+                        cost: out.best.cost,
+                    };
+                    let run = pficp_fpga::protocol::run_request::RunOutcome { filter: out.clone(), polish };
                     let r = on_board::finish(&plan, &nn, &ds.scan, &settings, &ResultReply::of(&run), Duration::ZERO);
                     let clocks = pficp::board::run_clocks_bound(
                         plan.config.particles,
@@ -175,7 +178,7 @@ fn planned(
     id: ModelId,
     scan_points: usize,
     board_points: usize,
-) -> (on_board::OnBoardPlan, pficp_fpga::format::FxPose) {
+) -> (on_board::OnBoardPlan, pficp_fpga::common::format::FxPose) {
     let truth = id.table1_truth();
     let spec = ScanSpec { sampling: Sampling::Independent { points: scan_points }, noise: 0.0, seed: 3 };
     let ds = make(id, 2000, &truth, &spec);
@@ -205,7 +208,7 @@ fn the_clock_bound_holds_on_models_1_to_3() {
         let (plan, near) = planned(id, 1000, 300);
         let start = pf::pose_of(&plan.config.centre);
         let bound = clocks_bound(300, plan.grid.points.len(), lanes);
-        let brute = pficp_fpga::pipeline::clocks_per_particle(300, plan.grid.points.len(), lanes);
+        let brute = pficp_fpga::search::pipeline::clocks_per_particle(300, plan.grid.points.len(), lanes);
         assert!(bound <= brute + brute * 20 / 100, "{}: bound {bound}, brute force {brute}", id.name());
         let raw = unsorted(&plan, id, 1000);
         for pose in [start, near] {
@@ -234,8 +237,8 @@ fn morton_order_clocks() {
             let start = pf::pose_of(&plan.config.centre);
             let raw = unsorted(&plan, id, 1000);
             let mut at_start = raw.clone();
-            at_start.sort_by_key(|&p| pficp::board::morton_key(pficp_fpga::format::transform(&start, p)));
-            let brute = pficp_fpga::pipeline::clocks_per_particle(s, plan.grid.points.len(), lanes);
+            at_start.sort_by_key(|&p| pficp::board::morton_key(pficp_fpga::common::format::transform(&start, p)));
+            let brute = pficp_fpga::search::pipeline::clocks_per_particle(s, plan.grid.points.len(), lanes);
             let bound = clocks_bound(s, plan.grid.points.len(), lanes);
             for (name, pose) in [("start", start), ("truth", near)] {
                 let a = clocks_per_particle(&plan.grid, &raw, &pose, lanes).clocks;

@@ -15,8 +15,9 @@ use pficp::eval::realistic::{case, Family, Split};
 use pficp::geometry::Pose;
 use pficp::nn::NearestNeighbours;
 use pficp::pf_icp::PfIcpSettings;
-use pficp_fpga::format::FxPose;
-use pficp_fpga::polish::{gate, pass_over, solve, update, GridSearch};
+use pficp_fpga::common::format::FxPose;
+use pficp_fpga::polish::{gate, pass_over, solve, update};
+use pficp_fpga::surface::GridSearch;
 use rayon::prelude::*;
 
 fn on_board_pose(plan: &OnBoardPlan, pose: &Pose) -> FxPose {

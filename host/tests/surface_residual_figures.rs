@@ -2,7 +2,7 @@
 //! board's pose alone (no host polish) with the protocol 3 board's cost (point-to-point,
 //! capped) and with the residual along the nearest stored point's normal, on the realistic benchmark's
 //! quick set (8 cases a family, seed 1), the board sample of `on_board::DEFAULT_BOARD_POINTS`
-//! scan points. Both columns run `pficp_fpga::pf::run`, the board's bit-exact filter, on the
+//! scan points. Both columns run `pficp_fpga::filter::pf::run`, the board's bit-exact filter, on the
 //! same plan; only the cost differs.
 //!
 //! Slow (a minute or two): ignored by default. Run it with
@@ -71,20 +71,23 @@ fn the_board_alone_with_the_surface_residual() {
 
 /// The protocol 3 board's filter: the cost the capped squared distances of the grid search
 /// (`Grid::nearest`), the largest of them beside it.
-fn point_to_point_filter(plan: &on_board::OnBoardPlan) -> pficp_fpga::pf::PfOutcome {
-    pficp_fpga::pf::run(&plan.config, |pose| {
+fn point_to_point_filter(plan: &on_board::OnBoardPlan) -> pficp_fpga::filter::pf::PfOutcome {
+    pficp_fpga::filter::pf::run(&plan.config, |pose| {
         let d2: Vec<u64> =
-            plan.scan.iter().map(|&p| plan.grid.nearest(pficp_fpga::format::transform(pose, p)).d2).collect();
-        let cost = d2.iter().fold(0u64, |c, &x| (c + x) & pficp_fpga::format::COST_MASK);
-        pficp_fpga::pf::Evaluated { cost, max_d2: d2.iter().copied().max().unwrap_or(0) }
+            plan.scan.iter().map(|&p| plan.grid.nearest(pficp_fpga::common::format::transform(pose, p)).d2).collect();
+        let cost = d2.iter().fold(0u64, |c, &x| (c + x) & pficp_fpga::common::format::COST_MASK);
+        pficp_fpga::filter::pf::Evaluated { cost, max_d2: d2.iter().copied().max().unwrap_or(0) }
     })
 }
 
 /// The filter with the software's surface distance (`pf_icp::surface`: the residual plus the
 /// tangential excess beyond the model's spacing, `(|d_t| - h)^2`) in f64 on the same stores:
 /// what a board rule with the excess term would approach (it needs a square root; not built).
-fn excess_filter(plan: &on_board::OnBoardPlan, normals: &[pficp_fpga::surface::FxNormal]) -> pficp_fpga::pf::PfOutcome {
-    use pficp_fpga::grid::{CAP_D2, NONE};
+fn excess_filter(
+    plan: &on_board::OnBoardPlan,
+    normals: &[pficp_fpga::surface::FxNormal],
+) -> pficp_fpga::filter::pf::PfOutcome {
+    use pficp_fpga::search::grid::{CAP_D2, NONE};
     let g = &plan.grid;
     let mut gaps: Vec<f64> = g
         .points
@@ -96,7 +99,7 @@ fn excess_filter(plan: &on_board::OnBoardPlan, normals: &[pficp_fpga::surface::F
                 .into_iter()
                 .flatten()
                 .filter(|&j| j != i && g.points[j] != p)
-                .map(|j| pficp_fpga::format::dist2(p, g.points[j]))
+                .map(|j| pficp_fpga::common::format::dist2(p, g.points[j]))
                 .min()
                 .unwrap_or(CAP_D2);
             (near as f64).sqrt()
@@ -104,11 +107,11 @@ fn excess_filter(plan: &on_board::OnBoardPlan, normals: &[pficp_fpga::surface::F
         .collect();
     gaps.sort_by(f64::total_cmp);
     let h = gaps[gaps.len() / 2];
-    pficp_fpga::pf::run(&plan.config, |pose| {
+    pficp_fpga::filter::pf::run(&plan.config, |pose| {
         let mut cost = 0u64;
         let mut max_d2 = 0u64;
         for &p in &plan.scan {
-            let q = pficp_fpga::format::transform(pose, p);
+            let q = pficp_fpga::common::format::transform(pose, p);
             let nr = g.nearest(q);
             let r = if nr.index == NONE {
                 CAP_D2
@@ -123,6 +126,6 @@ fn excess_filter(plan: &on_board::OnBoardPlan, normals: &[pficp_fpga::surface::F
             cost += r;
             max_d2 = max_d2.max(r);
         }
-        pficp_fpga::pf::Evaluated { cost, max_d2 }
+        pficp_fpga::filter::pf::Evaluated { cost, max_d2 }
     })
 }

@@ -12,12 +12,12 @@
 //! [`FrameFuzzer::resize`]); random-data frames carry at most 64 bytes (a Run request has
 //! 150, so random data never starts a run).
 
-use pficp_fpga::format::{FxPoint, FxPose, WeightScale};
-use pficp_fpga::messages::{self, EvaluateRequest, NearestRequest};
-use pficp_fpga::pf::{PfConfig, PARAMS, SCALE_FRAC};
+use pficp_fpga::common::format::{FxPoint, FxPose, WeightScale};
+use pficp_fpga::common::splitmix::SplitMix64;
+use pficp_fpga::filter::pf::{PfConfig, PARAMS, SCALE_FRAC};
+use pficp_fpga::protocol::messages::{self, EvaluateRequest, NearestRequest};
+use pficp_fpga::protocol::run_request::{PolishRequest, RunRequest};
 use pficp_fpga::protocol::{Command, Frame, MAX_FRAME};
-use pficp_fpga::run_request::{PolishRequest, RunRequest};
-use pficp_fpga::splitmix::SplitMix64;
 
 /// Most particles a fuzzed Run asks for.
 pub const MAX_RUN_PARTICLES: u16 = 6;

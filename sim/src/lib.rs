@@ -2,10 +2,10 @@
 //!
 //! | RTL (`build.rs` verilates it) | wrapper | reference | lockstep |
 //! |---|---|---|---|
-//! | `neighbour_pipeline_verilog(P)` (docs/pipeline.md, the neighbour pipeline), P in [`verilated_lanes`] | [`VerilatedNeighbourPipeline`] | [`NeighbourPipelineModel`](pficp_fpga::neighbour_pipeline::NeighbourPipelineModel) | [`NeighbourLockstep`] |
-//! | `weight_stage_verilog()` (docs/weights.md) | [`VerilatedWeightStage`] | [`WeightModel`](pficp_fpga::weights::WeightModel) | [`WeightLockstep`] |
-//! | `surface_residual_verilog()` (docs/pipeline.md, the surface residual) | [`VerilatedSurfaceResidual`] | [`SurfaceResidualModel`](pficp_fpga::surface_residual::SurfaceResidualModel) | [`SurfaceLockstep`] |
-//! | the sequencer `PfSequencer` alone (docs/sequencer.md) | [`VerilatedSequencer`] | [`SequencerModel`](pficp_fpga::sequencer::SequencerModel) | [`SeqLockstep`] |
+//! | `neighbour_pipeline_verilog(P)` (docs/pipeline.md, the neighbour pipeline), P in [`verilated_lanes`] | [`VerilatedNeighbourPipeline`] | [`NeighbourPipelineModel`](pficp_fpga::search::neighbour_pipeline::NeighbourPipelineModel) | [`NeighbourLockstep`] |
+//! | `weight_stage_verilog()` (docs/weights.md) | [`VerilatedWeightStage`] | [`WeightModel`](pficp_fpga::filter::weights::WeightModel) | [`WeightLockstep`] |
+//! | `surface_residual_verilog()` (docs/pipeline.md, the surface residual) | [`VerilatedSurfaceResidual`] | [`SurfaceResidualModel`](pficp_fpga::surface::surface_residual::SurfaceResidualModel) | [`SurfaceLockstep`] |
+//! | the sequencer `PfSequencer` alone (docs/sequencer.md) | [`VerilatedSequencer`] | [`SequencerModel`](pficp_fpga::filter::sequencer::SequencerModel) | [`SeqLockstep`] |
 //! | `polish_program_verilog()` (the polish's datapath with the polish's programs) | [`VerilatedPolishProgram`] | `pficp_fpga::polish::program::run` (registers after each run; no cycle model) | none: `sim/tests/polish_program.rs` |
 //! | `polish_bench_verilog()` (the pass, a multiplier and the polish's datapath) | [`VerilatedPolishBench`] | `PassSums::add_point` and the programs (registers after each pass and solve; no cycle model) | none: `sim/tests/polish_pass.rs` |
 //! | `polish_unit_verilog()` (the whole polish: control, datapath, pass; the multiplier outside) | [`VerilatedPolishUnit`] | `polish_best` (the winner, its pose and cost, after each polish; no cycle model) | none: `sim/tests/polish_unit.rs` |

@@ -2,8 +2,8 @@
 //! harness that runs both clock for clock and compares every output port.
 
 use crate::wrappers::*;
-use pficp_fpga::format::WeightScale;
-use pficp_fpga::weights::{WeightInputs, WeightOutputs, MAX_PARTICLES};
+use pficp_fpga::common::format::WeightScale;
+use pficp_fpga::filter::weights::{WeightInputs, WeightOutputs, MAX_PARTICLES};
 use std::fmt;
 use std::path::{Path, PathBuf};
 
@@ -141,13 +141,13 @@ pub struct LockstepOf<R: Rtl> {
 /// Mismatches a [`LockstepOf::collect_all`] run records (later ones are only counted).
 pub const MAX_RECORDED_MISMATCHES: usize = 1_000;
 
-/// The weight stage in lockstep with [`WeightModel`](pficp_fpga::weights::WeightModel).
+/// The weight stage in lockstep with [`WeightModel`](pficp_fpga::filter::weights::WeightModel).
 pub type WeightLockstep = LockstepOf<VerilatedWeightStage>;
 /// The surface residual stage in lockstep with
-/// [`SurfaceResidualModel`](pficp_fpga::surface_residual::SurfaceResidualModel).
+/// [`SurfaceResidualModel`](pficp_fpga::surface::surface_residual::SurfaceResidualModel).
 pub type SurfaceLockstep = LockstepOf<VerilatedSurfaceResidual>;
 /// The particle-filter sequencer in lockstep with
-/// [`SequencerModel`](pficp_fpga::sequencer::SequencerModel).
+/// [`SequencerModel`](pficp_fpga::filter::sequencer::SequencerModel).
 pub type SeqLockstep = LockstepOf<VerilatedSequencer>;
 
 impl<R: Rtl> LockstepOf<R> {

@@ -3,10 +3,10 @@
 
 use crate::lockstep::{LockstepOf, Mismatch};
 use crate::wrappers::VerilatedNeighbourPipeline;
-use pficp_fpga::format::{FxPoint, FxPose};
-use pficp_fpga::grid::Grid;
-use pficp_fpga::neighbour_pipeline::{upload, GridInputs};
-use pficp_fpga::pipeline::Evaluation;
+use pficp_fpga::common::format::{FxPoint, FxPose};
+use pficp_fpga::search::grid::Grid;
+use pficp_fpga::search::neighbour_pipeline::{upload, GridInputs};
+use pficp_fpga::search::pipeline::Evaluation;
 
 /// The Verilated neighbour pipeline and `NeighbourPipelineModel` in lockstep.
 pub type NeighbourLockstep = LockstepOf<VerilatedNeighbourPipeline>;

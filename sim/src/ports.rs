@@ -2,7 +2,7 @@
 //! against them and writes the shim's port copies from them; the wrappers take the names
 //! of the outputs they compare from them ([`outputs`], [`output_words`]). Each list is the
 //! order of the packed input and output arrays the shim exchanges with Rust; the RTL
-//! structs in `fpga/src/rtl` are where the ports are declared.
+//! structs in `fpga/src` are where the ports are declared.
 
 /// A port: (name, is_input, width). `clock` is driven by `tick`.
 pub type PortSpec = (&'static str, bool, usize);
@@ -76,11 +76,11 @@ pub const SURFACE_RESIDUAL_PORTS: &[PortSpec] = &[
     ("cost", false, 48),
 ];
 
-/// The pins of the board top (`fpga/src/rtl/board/top.rs`).
+/// The pins of the board top (`fpga/src/board/top_rtl.rs`).
 pub const BOARD_PORTS: &[PortSpec] =
     &[("clock", true, 1), ("reset_n", true, 1), ("uart_rx", true, 1), ("uart_tx", false, 1), ("leds", false, 4)];
 
-/// The ports of the particle-filter sequencer (`fpga/src/rtl/board/sequencer/`).
+/// The ports of the particle-filter sequencer (`fpga/src/filter/sequencer_rtl.rs`).
 pub const SEQUENCER_PORTS: &[PortSpec] = &[
     ("clock", true, 1),
     ("reset", true, 1),
@@ -110,7 +110,7 @@ pub const SEQUENCER_PORTS: &[PortSpec] = &[
     ("mul_product", false, 44),
 ];
 
-/// The ports of the polish's datapath (`fpga/src/rtl/polish/program.rs`).
+/// The ports of the polish's datapath (`fpga/src/polish/program_rtl.rs`).
 pub const POLISH_PROGRAM_PORTS: &[PortSpec] = &[
     ("clock", true, 1),
     ("reset", true, 1),
@@ -128,7 +128,7 @@ pub const POLISH_PROGRAM_PORTS: &[PortSpec] = &[
     ("failed", false, 1),
 ];
 
-/// The ports of the polish's blocks with their multiplier (`fpga/src/rtl/polish/bench.rs`).
+/// The ports of the polish's blocks with their multiplier (`fpga/src/polish/bench_rtl.rs`).
 pub const POLISH_BENCH_PORTS: &[PortSpec] = &[
     ("clock", true, 1),
     ("reset", true, 1),
@@ -153,7 +153,7 @@ pub const POLISH_BENCH_PORTS: &[PortSpec] = &[
     ("failed", false, 1),
 ];
 
-/// The ports of the whole polish (`fpga/src/rtl/polish/unit.rs`).
+/// The ports of the whole polish (`fpga/src/polish/unit_rtl.rs`).
 pub const POLISH_UNIT_PORTS: &[PortSpec] = &[
     ("clock", true, 1),
     ("reset", true, 1),

@@ -25,7 +25,7 @@
 //! and [`SerialBoard::expected_pending`] the reference's bytes the board has not sent.
 use crate::{BoardInputs, BoardPins, VerilatedBoard};
 use pficp_fpga::board::{BitPeriod, BoardConfig, BoardModel};
-use pficp_fpga::messages::{RunState, StatusReply};
+use pficp_fpga::protocol::messages::{RunState, StatusReply};
 use pficp_fpga::protocol::{Command, Frame};
 use std::collections::VecDeque;
 use std::path::Path;

@@ -5,15 +5,15 @@ use crate::core::*;
 use crate::lockstep::Rtl;
 use crate::ports;
 use pficp_fpga::board::BoardConfig;
-use pficp_fpga::format::{pack_point, unpack_point};
-use pficp_fpga::neighbour_pipeline::{GridInputs, NeighbourPipelineModel};
-use pficp_fpga::pipeline::Outputs;
-use pficp_fpga::sequencer::SequencerModel;
-use pficp_fpga::sequencer::{SeqInputs, SeqOutputs};
-use pficp_fpga::surface_residual::SurfaceResidualModel;
-use pficp_fpga::surface_residual::{SurfaceInputs, SurfaceOutputs};
-use pficp_fpga::weights::WeightModel;
-use pficp_fpga::weights::{WeightInputs, WeightOutputs};
+use pficp_fpga::common::format::{pack_point, unpack_point};
+use pficp_fpga::filter::sequencer::SequencerModel;
+use pficp_fpga::filter::sequencer::{SeqInputs, SeqOutputs};
+use pficp_fpga::filter::weights::WeightModel;
+use pficp_fpga::filter::weights::{WeightInputs, WeightOutputs};
+use pficp_fpga::search::neighbour_pipeline::{GridInputs, NeighbourPipelineModel};
+use pficp_fpga::search::pipeline::Outputs;
+use pficp_fpga::surface::surface_residual::SurfaceResidualModel;
+use pficp_fpga::surface::surface_residual::{SurfaceInputs, SurfaceOutputs};
 use std::fmt;
 use std::path::Path;
 
@@ -84,7 +84,7 @@ impl VerilatedNeighbourPipeline {
     }
 }
 
-/// The Verilated board top (`BoardTop`, `fpga/src/rtl/board/top.rs`): pins only.
+/// The Verilated board top (`BoardTop`, `fpga/src/board/top_rtl.rs`): pins only.
 pub struct VerilatedBoard {
     pub(crate) core: Core,
 }
@@ -300,10 +300,10 @@ impl VerilatedPolishBench {
             i.reset as u64,
             i.gated as u64,
             i.tau2 as u64,
-            pficp_fpga::format::pack_translation(i.t),
+            pficp_fpga::common::format::pack_translation(i.t),
             i.in_valid as u64,
-            pficp_fpga::format::pack_point(i.in_q),
-            pficp_fpga::format::pack_point(i.in_n),
+            pficp_fpga::common::format::pack_point(i.in_q),
+            pficp_fpga::common::format::pack_point(i.in_n),
             i.in_s as u64,
             i.flush as u64,
             i.load as u64,
@@ -348,7 +348,7 @@ pub struct UnitInputs {
     pub steps: u8,
     /// The winner's further steps (0: none).
     pub winner_steps: u8,
-    /// The pose of start `start_index` ([`pficp_fpga::format::FxPose::pack`]).
+    /// The pose of start `start_index` ([`pficp_fpga::common::format::FxPose::pack`]).
     pub start_pose: [u64; 4],
     /// The pass is over.
     pub pass_done: bool,
@@ -373,7 +373,7 @@ pub struct UnitOutputs {
     pub start_index: u8,
     /// Ask for a pass.
     pub pass_go: bool,
-    /// The pass's pose ([`pficp_fpga::format::FxPose::pack`]).
+    /// The pass's pose ([`pficp_fpga::common::format::FxPose::pack`]).
     pub pose: [u64; 4],
     /// The pass takes a point.
     pub ready: bool,
@@ -425,8 +425,8 @@ impl VerilatedPolishUnit {
             i.pass_done as u64,
             i.pass_cost,
             i.in_valid as u64,
-            pficp_fpga::format::pack_point(i.in_q),
-            pficp_fpga::format::pack_point(i.in_n),
+            pficp_fpga::common::format::pack_point(i.in_q),
+            pficp_fpga::common::format::pack_point(i.in_n),
             i.in_s as u64,
             i.mul_product,
         ])

@@ -2,8 +2,8 @@
 //! the UART's bit timing: every byte the board sends must equal the reference's.
 
 use pficp_fpga::board::BoardConfig;
-use pficp_fpga::format::{FxPoint, FxPose, WeightScale};
-use pficp_fpga::messages::{self, EvaluateRequest, NearestRequest};
+use pficp_fpga::common::format::{FxPoint, FxPose, WeightScale};
+use pficp_fpga::protocol::messages::{self, EvaluateRequest, NearestRequest};
 use pficp_fpga::protocol::{Command, Frame};
 use pficp_sim::serial::SerialBoard;
 
@@ -50,7 +50,7 @@ fn every_command_matches_the_reference_byte_for_byte() {
     let mut seq = 2u8;
     // The model sorted by cell, its normals as the host computes them, its table (LoadModel,
     // LoadTable), then the scan.
-    let grid = pficp_fpga::grid::Grid::build(&model).unwrap();
+    let grid = pficp_fpga::search::grid::Grid::build(&model).unwrap();
     let normals = pficp::board::on_board::stored_normals(&grid);
     let scan_loads = scan.chunks(messages::MAX_LOAD_POINTS).enumerate();
     let loads = messages::grid_upload(&grid, &normals).into_iter().chain(
@@ -80,7 +80,7 @@ fn every_command_matches_the_reference_byte_for_byte() {
     let results = messages::NearestReply::decode(&r.data, &near).unwrap().results;
     assert_eq!(results.len(), 40);
     // The search ran: some points found a model point within the cap, some did not.
-    let capped = results.iter().filter(|r| r.1 == pficp_fpga::grid::CAP_D2).count();
+    let capped = results.iter().filter(|r| r.1 == pficp_fpga::search::grid::CAP_D2).count();
     assert!((1..40).contains(&capped), "{capped} of 40 capped");
     eprintln!("{} bytes compared in {} clocks", b.comparison().0, b.clocks());
 }

@@ -5,8 +5,8 @@
 //! bound after every frame) and its stores are intact afterwards.
 
 use pficp_fpga::board::{BoardConfig, BoardModel};
-use pficp_fpga::format::{FxPoint, FxPose, WeightScale};
-use pficp_fpga::messages::{self, EvaluateRequest, NearestRequest};
+use pficp_fpga::common::format::{FxPoint, FxPose, WeightScale};
+use pficp_fpga::protocol::messages::{self, EvaluateRequest, NearestRequest};
 use pficp_fpga::protocol::{Command, ErrorCode, Frame, MAX_FRAME};
 use pficp_sim::serial::SerialBoard;
 

@@ -4,13 +4,13 @@
 //! bytes are `pf::run`'s and the polish's those of `polish::polish_best`).
 
 use pficp_fpga::board::BoardConfig;
-use pficp_fpga::format::FxPoint;
-use pficp_fpga::grid::Grid;
-use pficp_fpga::messages::{self, ResultReply, RunState, StatusReply};
-use pficp_fpga::pf::example_surface;
-use pficp_fpga::polish::GridSearch;
+use pficp_fpga::common::format::FxPoint;
+use pficp_fpga::filter::pf::example_surface;
+use pficp_fpga::protocol::messages::{self, ResultReply, RunState, StatusReply};
+use pficp_fpga::protocol::run_request::{example_request, execute, polish_clocks_bound, RunOutcome, RunRequest};
 use pficp_fpga::protocol::{Command, Frame};
-use pficp_fpga::run_request::{example_request, execute, polish_clocks_bound, RunOutcome, RunRequest};
+use pficp_fpga::search::grid::Grid;
+use pficp_fpga::surface::GridSearch;
 use pficp_fpga::surface::{self, FxNormal};
 use pficp_sim::serial::SerialBoard;
 

@@ -11,9 +11,9 @@
 //! `PFICP_NBR_CASES` (default 40). And the B lanes' table squares at their limits
 //! (magnitudes around 2^9 and 2^10), directed.
 
-use pficp_fpga::format::{pack_point, transform, FxPoint, FxPose, MAX_POINTS};
-use pficp_fpga::grid::{evaluate_grid, Grid, CELLS, CELL_LSBS};
-use pficp_fpga::neighbour_pipeline::{evaluate_stored, GridInputs};
+use pficp_fpga::common::format::{pack_point, transform, FxPoint, FxPose, MAX_POINTS};
+use pficp_fpga::search::grid::{evaluate_grid, Grid, CELLS, CELL_LSBS};
+use pficp_fpga::search::neighbour_pipeline::{evaluate_stored, GridInputs};
 use pficp_sim::{verilated_lanes, NeighbourLockstep};
 
 mod support;
@@ -206,7 +206,7 @@ fn b_lane_squares_at_their_limits() {
             let want = evaluate_grid(&grid, &scan, &id);
             assert_eq!(got, want, "{m:?}, P = {lanes}");
             assert_eq!(points, transformed(&scan, &id), "{m:?}, P = {lanes}: nn_point");
-            assert!(want.nearest.iter().filter(|n| n.1 < pficp_fpga::grid::CAP_D2).count() == 783);
+            assert!(want.nearest.iter().filter(|n| n.1 < pficp_fpga::search::grid::CAP_D2).count() == 783);
         }
     }
 }

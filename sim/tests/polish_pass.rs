@@ -1,5 +1,5 @@
 //! The Verilated polish blocks (`PolishBench`: the pass, a `PipeMul` and the program's
-//! datapath, the Verilog that `pficp_fpga::rtl::polish_bench_verilog` generates) against
+//! datapath, the Verilog that `pficp_fpga::common::verilog::polish_bench_verilog` generates) against
 //! the model: the passes of `polish::cases::pass_cases` (seed `PFICP_COSIM_SEED`, default
 //! 1; `PFICP_POLISH_POINTS` points a pass, default 200), fed back to back and with gaps;
 //! after each pass and its flush the 38 registers it adds to equal `PassSums::add_point`'s sums, and

@@ -1,5 +1,5 @@
 //! The Verilated polish datapath (`PolishProgram` with the polish's programs in ROM, the
-//! Verilog that `pficp_fpga::rtl::polish_program_verilog` generates) against
+//! Verilog that `pficp_fpga::common::verilog::polish_program_verilog` generates) against
 //! `pficp_fpga::polish::program::run`: after each program, every one of the 64 registers
 //! and the failed flag equal the model's. The files are `polish::cases::program_cases`
 //! (seed `PFICP_COSIM_SEED`, default 1; `PFICP_POLISH_CASES` random cases a program,
@@ -10,10 +10,10 @@
 //! test checks the Verilog that synthesis and the board get. A second test accumulates the
 //! sums of up to 4,096 rows through the `add` port, as the pass will, and solves them.
 
+use pficp_fpga::common::splitmix::SplitMix64;
 use pficp_fpga::polish::cases::{gram, program_cases, random_rows};
 use pficp_fpga::polish::program::{program_clocks_bound, REGISTERS};
 use pficp_fpga::polish::programs::{inlier_adds, rom, run, solve_inputs, Entry};
-use pficp_fpga::splitmix::SplitMix64;
 use pficp_sim::{ProgramInputs, VerilatedPolishProgram};
 
 fn env_or(name: &str, default: u64) -> u64 {

@@ -8,12 +8,13 @@
 //! filter's (start 0) at once. The winner, its polished pose and cost (after the winner's
 //! further steps), and every pass's pose must equal the model's.
 
-use pficp_fpga::format::{FxPoint, FxPose};
-use pficp_fpga::grid::Grid;
+use pficp_fpga::common::format::{FxPoint, FxPose};
+use pficp_fpga::filter::sequencer::unpack_pose;
 use pficp_fpga::polish::cases::{pose, surface, window_scan};
-use pficp_fpga::polish::{polish_best, GridSearch, Search};
-use pficp_fpga::sequencer::unpack_pose;
+use pficp_fpga::polish::polish_best;
+use pficp_fpga::search::grid::Grid;
 use pficp_fpga::surface::{evaluate, signed_residual, FxNormal};
+use pficp_fpga::surface::{GridSearch, Search};
 use pficp_sim::{UnitInputs, VerilatedPolishUnit};
 use std::collections::VecDeque;
 

@@ -3,9 +3,9 @@
 //! particle set after every iteration (reconstructed from the particle RAM's write port),
 //! the same result. The pipeline is emulated by the functional reference with a latency.
 
-use pficp_fpga::format::{FxPoint, FxPose};
-use pficp_fpga::pf::{self, example_cloud, example_config, PfConfig, PARAMS, SCALE_FRAC};
-use pficp_fpga::sequencer::{config_writes, unpack_pose, PipelineStandIn, SeqInputs, SeqOutputs};
+use pficp_fpga::common::format::{FxPoint, FxPose};
+use pficp_fpga::filter::pf::{self, example_cloud, example_config, PfConfig, PARAMS, SCALE_FRAC};
+use pficp_fpga::filter::sequencer::{config_writes, unpack_pose, PipelineStandIn, SeqInputs, SeqOutputs};
 use pficp_sim::VerilatedSequencer;
 
 /// What one run of the Verilated sequencer did.
@@ -64,7 +64,7 @@ fn check(cfg: &PfConfig, model: &[FxPoint], scan: &[FxPoint], latency: u64) -> u
     let outcome = pf::run(cfg, |pose| {
         ref_poses.push(*pose);
         // The sequencer alone: any search will do, the brute-force one here.
-        pf::Evaluated::of(&pficp_fpga::pipeline::evaluate(model, scan, pose))
+        pf::Evaluated::of(&pficp_fpga::search::pipeline::evaluate(model, scan, pose))
     });
     let mut rtl = VerilatedSequencer::new();
     let r = run_rtl(&mut rtl, cfg, model, scan, latency);

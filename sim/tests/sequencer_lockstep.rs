@@ -4,9 +4,9 @@
 //! Realistic runs with an emulated pipeline (random latencies, resets mid-run), and random
 //! inputs on every port.
 
-use pficp_fpga::format::FxPoint;
-use pficp_fpga::pf::{self, example_cloud, example_config, PfConfig, SCALE_FRAC};
-use pficp_fpga::sequencer::{config_writes, unpack_pose, PipelineStandIn, SeqInputs, SeqState, SequencerModel};
+use pficp_fpga::common::format::FxPoint;
+use pficp_fpga::filter::pf::{self, example_cloud, example_config, PfConfig, SCALE_FRAC};
+use pficp_fpga::filter::sequencer::{config_writes, unpack_pose, PipelineStandIn, SeqInputs, SeqState, SequencerModel};
 use pficp_sim::{SeqLockstep, VerilatedSequencer};
 
 /// The RTL and the model through the common lockstep harness (every port after reset and

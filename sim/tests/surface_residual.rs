@@ -12,13 +12,13 @@
 //! (default 300).
 //!
 //! Mutation check (by hand): with the rounding constant `2^13 - 1` instead of `2^13` in
-//! `fpga/src/rtl/surface_residual.rs`, seed 1 fails at cycle 91 (`nn_resid` 3,600 for 3,481);
+//! `fpga/src/surface/surface_residual_rtl.rs`, seed 1 fails at cycle 91 (`nn_resid` 3,600 for 3,481);
 //! without the multiples of 2^12 among the normals it passed.
 
-use pficp_fpga::format::{dist2, pack_point, FxPoint, COST_MASK};
-use pficp_fpga::grid::CAP_D2;
+use pficp_fpga::common::format::{dist2, pack_point, FxPoint, COST_MASK};
+use pficp_fpga::search::grid::CAP_D2;
+use pficp_fpga::surface::surface_residual::{SurfaceInputs, SURFACE_LATENCY};
 use pficp_fpga::surface::{residual, FxNormal, NORMAL_FRAC};
-use pficp_fpga::surface_residual::{SurfaceInputs, SURFACE_LATENCY};
 use pficp_sim::SurfaceLockstep;
 use std::collections::VecDeque;
 
@@ -126,7 +126,7 @@ fn random_particles_in_lockstep() {
     let mut expect: VecDeque<(u16, u64, u32)> = VecDeque::new();
     let mut expect_costs: VecDeque<u64> = VecDeque::new();
     let (mut results, mut costs, mut same_edge, mut rw_same, mut capped_res) = (0u64, 0u64, 0u64, 0u64, 0u64);
-    let check = |o: pficp_fpga::surface_residual::SurfaceOutputs,
+    let check = |o: pficp_fpga::surface::surface_residual::SurfaceOutputs,
                  expect: &mut VecDeque<(u16, u64, u32)>,
                  expect_costs: &mut VecDeque<u64>| {
         if o.nn_valid {

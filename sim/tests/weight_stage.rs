@@ -1,8 +1,8 @@
 //! The Verilated weight stage (`weight_stage_verilog()`) in lockstep with its reference, and
 //! proof that the checker fails when the two differ; which designs are verilated.
 
-use pficp_fpga::format::WeightScale;
-use pficp_fpga::weights::{weights, WeightInputs, WeightModel, WeightOutputs, COST_MAX, MAX_PARTICLES};
+use pficp_fpga::common::format::WeightScale;
+use pficp_fpga::filter::weights::{weights, WeightInputs, WeightModel, WeightOutputs, COST_MAX, MAX_PARTICLES};
 use pficp_sim::{
     verilated_models, LockstepOf, Rtl, TraceMode, VerilatedNeighbourPipeline, VerilatedWeightStage, WeightLockstep,
     WEIGHT_OUTPUT_PORTS,

@@ -7,8 +7,8 @@ use pficp::board::fixed::{cost_error_bound, normalised_pose, quantise_pose, Norm
 use pficp::datasets::{make, ModelId, Sampling, ScanSpec};
 use pficp::geometry::Pose;
 use pficp::nn::NearestNeighbours;
-use pficp_fpga::format::{dist_to_f64, exp_table, WeightScale, DIST_FRAC};
-use pficp_fpga::pipeline::evaluate;
+use pficp_fpga::common::format::{dist_to_f64, exp_table, WeightScale, DIST_FRAC};
+use pficp_fpga::search::pipeline::evaluate;
 
 /// Poses around the truth, as a particle filter would propose them.
 fn particles(truth: &Pose, count: usize) -> Vec<Pose> {

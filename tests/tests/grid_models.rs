@@ -1,4 +1,4 @@
-//! The board's grid search (`pficp_fpga::grid`) on the paper's models 1 to 3 as the host
+//! The board's grid search (`pficp_fpga::search::grid`) on the paper's models 1 to 3 as the host
 //! quantises them (`pficp::board::fixed`): every normalised model fits the grid, the search
 //! equals the capped brute force on their scans at the truth and at poses off it, and the
 //! work it does (candidates a scan point, points capped) is printed for the design
@@ -7,8 +7,8 @@
 use pficp::board::fixed::{normalised_pose, quantise_pose, Normalisation};
 use pficp::datasets::{make, ModelId, Sampling, ScanSpec};
 use pficp::geometry::Pose;
-use pficp_fpga::format::transform;
-use pficp_fpga::grid::{nearest_capped, Grid, NONE};
+use pficp_fpga::common::format::transform;
+use pficp_fpga::search::grid::{nearest_capped, Grid, NONE};
 
 #[test]
 fn the_models_fit_the_grid_and_the_search_is_the_capped_brute_force() {

@@ -8,10 +8,10 @@
 use pficp::board::fixed::{normalised_pose, quantise_pose, Normalisation};
 use pficp::datasets::{make, ModelId, Sampling, ScanSpec};
 use pficp::geometry::Pose;
-use pficp_fpga::format::{transform, FxPoint, FxPose};
-use pficp_fpga::grid::{cell_of, evaluate_grid, Grid};
-use pficp_fpga::neighbour_pipeline::{chunks_of, clocks_bound, clocks_per_particle, lookups_of};
-use pficp_fpga::pipeline;
+use pficp_fpga::common::format::{transform, FxPoint, FxPose};
+use pficp_fpga::search::grid::{cell_of, evaluate_grid, Grid};
+use pficp_fpga::search::neighbour_pipeline::{chunks_of, clocks_bound, clocks_per_particle, lookups_of};
+use pficp_fpga::search::pipeline;
 use pficp_sim::NeighbourLockstep;
 
 const LANES: usize = 16;

@@ -8,9 +8,9 @@
 use super::program::REGISTERS;
 use super::programs::{load_pose, solve_inputs, Entry, F0, FOUND, SUM_B, SUM_R2};
 use super::{upper, PassSums, STEP_LIMIT, UNKNOWNS};
-use crate::format::{coord_to_f64, point, FxPoint, FxPose, COORD_FRAC, MATRIX_FRAC};
-use crate::grid::Grid;
-use crate::splitmix::SplitMix64;
+use crate::common::format::{coord_to_f64, point, FxPoint, FxPose, COORD_FRAC, MATRIX_FRAC};
+use crate::common::splitmix::SplitMix64;
+use crate::search::grid::Grid;
 use crate::surface::{FxNormal, NORMAL_FRAC};
 
 /// The normal equations of `rows` (a Jacobian row and its residual each), each row counted

@@ -5,9 +5,9 @@
 //! (`host/tests/board_polish_figures.rs`) measure it. The arithmetic between passes (the
 //! gate, the solve, the update, the drift check) runs as programs ([`programs`], in the
 //! instruction set of [`program`]) on a datapath that is built
-//! (`crate::rtl::polish::PolishProgram`), and a pass's point ([`PassSums::add_point`],
-//! [`jacobian`]) has its RTL (`crate::rtl::polish::PolishPass`), and so has the sequence of
-//! [`polish_best`] (`crate::rtl::polish::PolishControl`); the board's engine runs them after
+//! (`crate::polish::program_rtl::PolishProgram`), and a pass's point ([`PassSums::add_point`],
+//! [`jacobian`]) has its RTL (`crate::polish::pass_rtl::PolishPass`), and so has the sequence of
+//! [`polish_best`] (`crate::polish::control_rtl::PolishControl`); the board's engine runs them after
 //! the filter.
 //!
 //! **Why.** The filter minimises its cost over 50 particles x 50 iterations; among those
@@ -23,8 +23,8 @@
 //! inside a sum, each term is rounded before the sum.
 //!
 //! **A pass** ([`pass`]) over the scan points under the pose `(M, T)`, for each point:
-//! - `q = transform(M, T, point)` ([`crate::format::transform`]), its nearest stored point
-//!   `p` and `p`'s normal `n` ([`crate::grid::Grid::nearest`]); a capped point is skipped;
+//! - `q = transform(M, T, point)` ([`crate::common::format::transform`]), its nearest stored point
+//!   `p` and `p`'s normal `n` ([`crate::search::grid::Grid::nearest`]); a capped point is skipped;
 //! - `s = rnd_14(n . (q - p))`, the residual stage's signed residual in coordinate LSBs
 //!   ([`crate::surface::residual`] squares it): `|s| < 2^10` for unit normals, `< 2^12`
 //!   for any normal the format holds; the point adds `s^2` to `sum_r2` and 1 to `found`
@@ -60,14 +60,24 @@
 //! a pass gated by the previous one, and if at least 7 points passed and the solve gives a
 //! step, the update. [`polish_best`] chooses among starts and polishes the winner further.
 
+#[cfg(feature = "rtl")]
+pub mod bench_rtl;
 pub mod cases;
+#[cfg(feature = "rtl")]
+pub mod control_rtl;
+#[cfg(feature = "rtl")]
+pub mod pass_rtl;
 pub mod program;
+#[cfg(feature = "rtl")]
+pub mod program_rtl;
 pub mod programs;
+#[cfg(feature = "rtl")]
+pub mod unit_rtl;
 
-use crate::format::{transform, FxPoint, FxPose};
-use crate::grid::{Grid, NONE};
-use crate::pf::sat18;
-use crate::surface::{signed_residual, FxNormal, NORMAL_FRAC};
+use crate::common::format::{FxPoint, FxPose};
+use crate::filter::pf::sat18;
+use crate::search::grid::Grid;
+use crate::surface::{signed_residual, FxNormal, GridSearch, Search, NORMAL_FRAC};
 use programs::Entry;
 
 /// Unknowns of a step: a small rotation (3), a translation (3), a relative scale.
@@ -143,44 +153,10 @@ pub fn jacobian(q: FxPoint, t: [i32; 3], n: FxNormal) -> [i64; UNKNOWNS] {
     let n = n.map(|v| v as i64);
     let x: [i64; 3] = std::array::from_fn(|k| q[k] as i64 - t[k] as i64);
     let cross = [x[1] * n[2] - x[2] * n[1], x[2] * n[0] - x[0] * n[2], x[0] * n[1] - x[1] * n[0]];
-    let shift = NORMAL_FRAC + crate::format::COORD_FRAC - JACOBIAN_FRAC;
+    let shift = NORMAL_FRAC + crate::common::format::COORD_FRAC - JACOBIAN_FRAC;
     let dot: i64 = (0..3).map(|k| x[k] * n[k]).sum();
     let jac = |v: i64| sat18(round_shift(v as i128, shift) as i64) as i64;
     [jac(cross[0]), jac(cross[1]), jac(cross[2]), n[0], n[1], n[2], jac(dot)]
-}
-
-/// What a pass needs of the board's search: under a pose, each scan point's image `q` with
-/// its nearest stored point and that point's normal, capped points left out; and the pose's
-/// evaluation (the residual stage's cost, wrapping at 48 bits, and largest residual).
-pub trait Search {
-    /// `(q, p, n)` of every found scan point, in scan order.
-    fn found(&self, scan: &[FxPoint], pose: &FxPose) -> Vec<(FxPoint, FxPoint, FxNormal)>;
-    /// The evaluation of `scan` under `pose`.
-    fn evaluate(&self, scan: &[FxPoint], pose: &FxPose) -> crate::pf::Evaluated;
-}
-
-/// The search over a [`Grid`] and its normals ([`Grid::nearest`], [`crate::surface::evaluate`]).
-#[derive(Clone, Copy, Debug)]
-pub struct GridSearch<'a> {
-    /// The model by cell.
-    pub grid: &'a Grid,
-    /// One normal per stored point.
-    pub normals: &'a [FxNormal],
-}
-
-impl Search for GridSearch<'_> {
-    fn found(&self, scan: &[FxPoint], pose: &FxPose) -> Vec<(FxPoint, FxPoint, FxNormal)> {
-        scan.iter()
-            .filter_map(|&p| {
-                let q = transform(pose, p);
-                let nr = self.grid.nearest(q);
-                (nr.index != NONE).then(|| (q, self.grid.points[nr.index as usize], self.normals[nr.index as usize]))
-            })
-            .collect()
-    }
-    fn evaluate(&self, scan: &[FxPoint], pose: &FxPose) -> crate::pf::Evaluated {
-        crate::surface::evaluate(self.grid, self.normals, scan, pose)
-    }
 }
 
 /// One pass over `scan` under `pose` (module doc): the normal equations of the points whose
@@ -349,6 +325,7 @@ pub fn polish_best_over(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::common::format::transform;
 
     /// The solve as the module doc writes it, in `i128` (the test profile checks overflow):
     /// the oracle of the program.
@@ -411,7 +388,7 @@ mod tests {
         let t: [i32; 3] = std::array::from_fn(|k| {
             sat18(
                 pose.t[k] as i64
-                    + round_shift(step[3 + k] as i128, STEP_FRAC - crate::format::POSE_TRANSLATION_FRAC) as i64,
+                    + round_shift(step[3 + k] as i128, STEP_FRAC - crate::common::format::POSE_TRANSLATION_FRAC) as i64,
             )
         });
         FxPose { m, t }
@@ -445,7 +422,7 @@ mod tests {
         assert_eq!(solve(sums), solve_direct(sums), "{sums:?}");
     }
 
-    use crate::format::MATRIX_FRAC;
+    use crate::common::format::MATRIX_FRAC;
     use cases::{pose, surface, window_scan as scan};
 
     fn error(p: &FxPose) -> (f64, f64) {
@@ -461,7 +438,7 @@ mod tests {
     /// either is the same; a store whose table names no cell finds nothing.
     #[test]
     fn the_stored_search_is_the_grid_search() {
-        use crate::format::{pack_point, MAX_POINTS};
+        use crate::common::format::{pack_point, MAX_POINTS};
         use crate::surface::StoredSearch;
         let (grid, normals) = surface();
         let scan = scan(&grid);
@@ -602,7 +579,7 @@ mod tests {
         assert_eq!((out.m[0], out.m[4], out.t[0], out.t[1]), ((1 << 17) - 1, -(1 << 17), (1 << 17) - 1, -(1 << 17)));
         assert_eq!(update(&p, &[0; UNKNOWNS]), p);
         // A translation of exactly half an LSB rounds up; minus half rounds to zero.
-        let half = 1i64 << (STEP_FRAC - crate::format::POSE_TRANSLATION_FRAC - 1);
+        let half = 1i64 << (STEP_FRAC - crate::common::format::POSE_TRANSLATION_FRAC - 1);
         let up = update(&p, &[0, 0, 0, half, -half, half - 1, 0]);
         assert_eq!(up.t, [p.t[0] + 1, p.t[1], p.t[2]]);
         assert_eq!(up.m, p.m);

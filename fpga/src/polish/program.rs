@@ -1,7 +1,7 @@
 //! The polish's instruction set: nine instructions over a register file of 64 128-bit
 //! integers, their ROM encoding and [`Rom`], several programs laid out in one ROM, each
 //! run from its first word to its flagged last. [`run`] is the bit-exact reference of the
-//! RTL that runs them (`crate::rtl::polish::program::PolishProgram`, a serial multiplier and
+//! RTL that runs them (`crate::polish::program_rtl::PolishProgram`, a serial multiplier and
 //! divider behind the register file): both compute modulo 2^128, where the polish's
 //! programs never reach (the module doc of [`super`] bounds them by 2^96), so the
 //! programs' results are the specification's. The programs themselves are in
@@ -10,7 +10,7 @@
 //! One instruction set for the polish's arithmetic (the solve, the gate, the update, the
 //! drift check): a step is a few hundred serial operations, and programs in ROM keep the
 //! sequence in one place for model and RTL alike, as the filter's pose program does
-//! ([`crate::pf::POSE_PROGRAM`]).
+//! ([`crate::filter::pf::POSE_PROGRAM`]).
 
 /// Registers of the file.
 pub const REGISTERS: usize = 64;
@@ -192,7 +192,7 @@ impl Op {
 const ADD_CLOCKS: u64 = 1 + 4;
 
 impl Op {
-    /// The most clocks the RTL (`crate::rtl::polish::program::PolishProgram`) takes for
+    /// The most clocks the RTL (`crate::polish::program_rtl::PolishProgram`) takes for
     /// this instruction, from its `fetch` to its `write` (or its stop test), whatever the
     /// operands: `fetch`, `operand` and `exec`, then
     /// - an add, a subtract, a stop test: one add and `write` (or the test);

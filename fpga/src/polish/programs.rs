@@ -1,6 +1,6 @@
 //! The polish's programs (in [`super::program`]'s instruction set) and the ROM that holds
 //! them ([`rom`]): the arithmetic of [`super::polish`] between its passes, as the board
-//! runs it. The board's control (`crate::rtl::polish::PolishControl`) loads a start's pose
+//! runs it. The board's control (`crate::polish::control_rtl::PolishControl`) loads a start's pose
 //! at [`POSE`], runs [`Entry::Start`] and [`Entry::Clear`], lets a pass add its sums and
 //! statistics, then per step runs [`Entry::Gate`] (and [`Entry::Clear`]), a gated pass,
 //! [`Entry::Solve`] and [`Entry::Update`]; at the end [`Entry::Drift`]. A failed program
@@ -14,7 +14,7 @@
 
 use super::program::{Op, Rom, REGISTERS};
 use super::{upper, PassSums, GATE_MSR, LAMBDA_FLOOR, SCALE_DRIFT, STEP_FRAC, STEP_LIMIT, UNKNOWNS};
-use crate::format::{FxPose, POSE_TRANSLATION_FRAC};
+use crate::common::format::{FxPose, POSE_TRANSLATION_FRAC};
 use std::sync::OnceLock;
 
 /// The programs of the polish's ROM, in ROM order (`Entry as usize` is the index for
@@ -355,9 +355,9 @@ pub fn read_pose(r: &[i128; REGISTERS]) -> FxPose {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::common::splitmix::SplitMix64;
     use crate::polish::cases::{gram, program_cases};
     use crate::polish::program::{FIELD_A, FIELD_B, FIELD_D, FIELD_LAST, PROGRAM_WORDS, WORD_BITS};
-    use crate::splitmix::SplitMix64;
 
     #[test]
     fn the_rom_fits_and_its_fields_hold_the_registers() {

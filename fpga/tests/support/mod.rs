@@ -3,15 +3,16 @@
 #![allow(dead_code, unused_imports)]
 
 pub use pficp_fpga::board::*;
-pub use pficp_fpga::format::{pack_point, FxPose};
-pub use pficp_fpga::format::{unpack_point, FxPoint, WeightScale};
-pub use pficp_fpga::messages::{point_bytes, pose_bytes, IDENTITY_BYTES};
-pub use pficp_fpga::messages::{Identity, ResultReply, StatusReply, FLAG_FIRST, FLAG_LAST, MAX_LOAD_POINTS};
-pub use pficp_fpga::pf::{PfConfig, PfOutcome};
+pub use pficp_fpga::common::format::{pack_point, FxPose};
+pub use pficp_fpga::common::format::{unpack_point, FxPoint, WeightScale};
+pub use pficp_fpga::filter::pf::{PfConfig, PfOutcome};
+pub use pficp_fpga::filter::weights::{WeightInputs, WeightModel};
+pub use pficp_fpga::protocol::layout::{point_bytes, pose_bytes};
+pub use pficp_fpga::protocol::messages::IDENTITY_BYTES;
+pub use pficp_fpga::protocol::messages::{Identity, ResultReply, StatusReply, FLAG_FIRST, FLAG_LAST, MAX_LOAD_POINTS};
+pub use pficp_fpga::protocol::run_request::{PolishRequest, RunOutcome, RunRequest};
 pub use pficp_fpga::protocol::{cobs_encode, crc16, FrameError, MAX_FRAME};
 pub use pficp_fpga::protocol::{ErrorCode, Frame};
-pub use pficp_fpga::run_request::{PolishRequest, RunOutcome, RunRequest};
-pub use pficp_fpga::weights::{WeightInputs, WeightModel};
 
 pub const IDENTIFY: u8 = 0x01;
 pub const LOAD_MODEL: u8 = 0x02;
@@ -106,7 +107,7 @@ pub fn grid() -> Vec<FxPoint> {
 
 /// LoadTable requests that write the whole cell `table` (4,097 entries).
 pub fn table_requests(table: &[u16]) -> Vec<Frame> {
-    use pficp_fpga::messages::{table_request, MAX_LOAD_ENTRIES};
+    use pficp_fpga::protocol::messages::{table_request, MAX_LOAD_ENTRIES};
     table
         .chunks(MAX_LOAD_ENTRIES)
         .enumerate()
@@ -130,15 +131,15 @@ pub fn test_normals(n: usize) -> Vec<pficp_fpga::surface::FxNormal> {
 /// Load `model` sorted by cell, its normals ([`test_normals`]) and its table, as the host
 /// does (`messages::grid_upload`); the grid (its `order` maps stored indices back to
 /// `model`'s).
-pub fn load_grid(b: &mut BoardModel, model: &[FxPoint]) -> pficp_fpga::grid::Grid {
-    let g = pficp_fpga::grid::Grid::build(model).expect("the test model fits the grid");
+pub fn load_grid(b: &mut BoardModel, model: &[FxPoint]) -> pficp_fpga::search::grid::Grid {
+    let g = pficp_fpga::search::grid::Grid::build(model).expect("the test model fits the grid");
     for (k, chunk) in g.points.chunks(MAX_LOAD_POINTS).enumerate() {
         let off = (k * MAX_LOAD_POINTS) as u16;
         ok(b, req(LOAD_MODEL, 1, load_data(off, chunk.len() as u16, chunk)));
     }
     let normals = test_normals(g.points.len());
     for (k, chunk) in normals.chunks(MAX_LOAD_POINTS).enumerate() {
-        let off = (pficp_fpga::messages::NORMALS_OFFSET + k * MAX_LOAD_POINTS) as u16;
+        let off = (pficp_fpga::protocol::messages::NORMALS_OFFSET + k * MAX_LOAD_POINTS) as u16;
         ok(b, req(LOAD_MODEL, 1, load_data(off, chunk.len() as u16, chunk)));
     }
     for f in table_requests(&g.first) {
@@ -168,14 +169,14 @@ pub fn t_of(k: usize) -> [i32; 3] {
 /// within a cell on every axis, so the search finds it unless the cap applies).
 pub fn hand_dist(i: usize, t: [i32; 3]) -> u64 {
     let d: u64 = (0..3).map(|a| ((offset(i)[a] + t[a]) as i64).pow(2) as u64).sum();
-    d.min(pficp_fpga::grid::CAP_D2)
+    d.min(pficp_fpga::search::grid::CAP_D2)
 }
 /// Its surface residual: the normal of the test grid's point `home(i)` is an axis
 /// ([`test_normal`]), so it is that axis's offset squared, or the cap.
 pub fn hand_resid(i: usize, t: [i32; 3]) -> u64 {
     let k = home(i) % 3;
-    if hand_dist(i, t) >= pficp_fpga::grid::CAP_D2 {
-        pficp_fpga::grid::CAP_D2
+    if hand_dist(i, t) >= pficp_fpga::search::grid::CAP_D2 {
+        pficp_fpga::search::grid::CAP_D2
     } else {
         ((offset(i)[k] + t[k]) as i64).pow(2) as u64
     }

@@ -13,7 +13,7 @@
 //! - **Every read is bounded**: each reply must arrive within the timeout (default 2 s, at
 //!   most [`MAX_TIMEOUT`]) plus the time the board needs for it, modelled from the bytes at
 //!   the baud rate ([`MIN_BAUD`] to [`MAX_BAUD`]) and, for Evaluate and Nearest, the
-//!   board's evaluation clocks bounded ([`pficp_fpga::surface_residual::evaluation_clocks_bound`]:
+//!   board's evaluation clocks bounded ([`pficp_fpga::surface::surface_residual::evaluation_clocks_bound`]:
 //!   any pose, any model of that size; within 20% of the brute-force pipeline's) on the board's
 //!   lanes at its clock, never taken as slower than [`MIN_CLOCK_HZ`] whatever Identify says.
 //!   A silent board is a [`BoardError::Timeout`] (saying how many bytes came that were no
@@ -24,10 +24,10 @@
 //!   [`BoardError::Echo`] at once.
 //! - **Replies are checked**, not trusted: lengths and fields on decoding; acknowledged
 //!   offsets, counts and sizes; Nearest's indices within the model and its cost the sum of
-//!   its distances; the weights equal to [`pficp_fpga::weights::weights`] of the board's own
+//!   its distances; the weights equal to [`pficp_fpga::filter::weights::weights`] of the board's own
 //!   costs (so weights that are all 0 or do not sum to `w_sum` are caught); a Status count
 //!   that only rises and stays within the Run's; a Result whose pose is
-//!   [`pficp_fpga::pf::pose_of`] its parameters. A failed check is a [`BoardError::Reply`]
+//!   [`pficp_fpga::filter::pf::pose_of`] its parameters. A failed check is a [`BoardError::Reply`]
 //!   or [`BoardError::Filter`] naming the field.
 //! - **Resends**: an error reply `BadCrc` or `Busy` for this request, a frame error (sequence
 //!   0) or a reply frame that does not decode (bad CRC, bad COBS) sends the same request
@@ -50,17 +50,19 @@
 //!   deterministic, so a repeated run gives the same result).
 
 use super::BoardError;
-use pficp_fpga::format::{FxPoint, FxPose, WeightScale};
-use pficp_fpga::grid::{Grid, CAP_D2};
-use pficp_fpga::messages::{
+use pficp_fpga::common::format::{FxPoint, FxPose, WeightScale};
+use pficp_fpga::protocol::layout::POINT_BYTES;
+use pficp_fpga::protocol::messages::{
     load_request, parse_two_u16, table_request, two_u16, EvaluateReply, EvaluateRequest, Identity, MessageError,
     NearestReply, NearestRequest, WeightSummary, IDENTITY_BYTES, MAX_LOAD_ENTRIES, MAX_LOAD_POINTS, MAX_NEAREST,
-    MAX_POSES, NORMALS_OFFSET, POINT_BYTES, TABLE_ENTRIES, TABLE_ENTRY_BYTES, TABLE_ENTRY_MASK,
+    MAX_POSES, NORMALS_OFFSET, TABLE_ENTRIES, TABLE_ENTRY_BYTES, TABLE_ENTRY_MASK,
 };
-use pficp_fpga::pipeline::COST_MASK;
+use pficp_fpga::protocol::versions::capabilities;
 use pficp_fpga::protocol::{Command, Deframer, VERSION};
+use pficp_fpga::search::grid::{Grid, CAP_D2};
+use pficp_fpga::search::pipeline::COST_MASK;
+use pficp_fpga::surface::surface_residual::evaluation_clocks_bound;
 use pficp_fpga::surface::FxNormal;
-use pficp_fpga::surface_residual::evaluation_clocks_bound;
 use serialport::SerialPort;
 use std::time::Duration;
 
@@ -85,9 +87,9 @@ pub const MIN_CLOCK_HZ: u32 = 10_000_000;
 /// Resends of one request after a corrupted exchange (so at most 3 attempts).
 pub const MAX_RETRIES: usize = 2;
 /// Largest model and scan the protocol addresses (12-bit indices).
-pub const MAX_POINTS: usize = pficp_fpga::format::MAX_POINTS;
+pub const MAX_POINTS: usize = pficp_fpga::common::format::MAX_POINTS;
 /// Most particles the board stores.
-pub const MAX_PARTICLES: usize = pficp_fpga::weights::MAX_PARTICLES;
+pub const MAX_PARTICLES: usize = pficp_fpga::filter::weights::MAX_PARTICLES;
 /// The modelled board time of a run is multiplied by this for the run's time limit.
 pub const RUN_SAFETY: u32 = 4;
 /// Time between two Status requests while a filter runs: the registration's latency waits
@@ -373,9 +375,9 @@ impl BoardClient {
         progress: impl FnMut(usize, usize),
     ) -> Result<bool, BoardError> {
         let id = self.identify()?;
-        if id.version >= 4
+        if capabilities(id.version).grid_with_normals
             && normals.len() == grid.points.len()
-            && id.model_digest == pficp_fpga::messages::grid_digest(grid, normals)
+            && id.model_digest == pficp_fpga::protocol::messages::grid_digest(grid, normals)
         {
             self.grid_order = Some(grid.order.clone());
             self.stats.resident += 1;
@@ -600,7 +602,7 @@ impl BoardClient {
                 problem: MessageError::Field { field: "min_cost", got: summary.min_cost, expected: min },
             });
         }
-        if summary.weights != pficp_fpga::weights::weights(&costs, &scale) {
+        if summary.weights != pficp_fpga::filter::weights::weights(&costs, &scale) {
             return Err(BoardError::Filter(format!(
                 "the board on {} returned weights that are not the exp table's for its own costs",
                 self.name
@@ -642,7 +644,7 @@ impl BoardClient {
             // Before protocol 4 the cost is the distances' sum. Since, it is the residuals'
             // sum, which the reply does not carry: each residual is at most CAP_D2 and a
             // capped point's is CAP_D2, so the cost lies between those bounds.
-            if self.identity.is_some_and(|i| i.version < 4) {
+            if self.identity.is_some_and(|i| !capabilities(i.version).grid_with_normals) {
                 let sum = r.results.iter().fold(0u64, |c, n| (c + n.1) & COST_MASK);
                 if r.cost != sum {
                     return Err(bad(MessageError::Field { field: "cost", got: r.cost, expected: sum }));

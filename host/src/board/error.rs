@@ -1,7 +1,7 @@
 //! What can go wrong talking to the board: one typed error a case, each message one line
 //! naming the port and the request.
 
-use pficp_fpga::messages::{MessageError, RunState};
+use pficp_fpga::protocol::messages::{MessageError, RunState};
 use pficp_fpga::protocol::{Command, ErrorCode};
 use std::time::Duration;
 

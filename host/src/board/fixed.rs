@@ -1,5 +1,5 @@
 //! The bridge between the host's f64 clouds and the board's fixed-point formats
-//! (`pficp_fpga::format`, docs/fixed-point.md).
+//! (`pficp_fpga::common::format`, docs/fixed-point.md).
 //!
 //! Each cloud is normalised by its own similarity: `x_n = (x - c) / r`, with `c` the
 //! centroid and `r` the largest distance from it, so every normalised point lies in the
@@ -9,7 +9,7 @@
 
 use crate::geometry::Pose;
 use nalgebra::{Point3, Vector3};
-use pficp_fpga::format::{self, FxPoint, FxPose};
+use pficp_fpga::common::format::{self, FxPoint, FxPose};
 
 /// The similarity that normalises one cloud: `x_n = (x - centre) / radius`.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -37,10 +37,11 @@ use crate::nn::NearestNeighbours;
 use crate::pf_icp::particle_filter::{tempered_q, WeighError, Weighed};
 use crate::pf_icp::{register_with, ParticleWeights, PfIcpResult, PfIcpSettings};
 use nalgebra::Point3;
-use pficp_fpga::format::{FxPoint, FxPose, WeightScale, DIST_FRAC};
-use pficp_fpga::grid::Grid;
-use pficp_fpga::messages::{Identity, POINT_BYTES};
-use pficp_fpga::protocol::VERSION;
+use pficp_fpga::common::format::{FxPoint, FxPose, WeightScale, DIST_FRAC};
+use pficp_fpga::protocol::layout::POINT_BYTES;
+use pficp_fpga::protocol::messages::Identity;
+use pficp_fpga::protocol::versions::{capabilities, refusal, Mode};
+use pficp_fpga::search::grid::Grid;
 use pficp_fpga::surface::FxNormal;
 use std::sync::Mutex;
 
@@ -175,12 +176,8 @@ pub fn register_reporting(
     // version 3 searches the model through a cell table, which the host uploads with it;
     // version 4 adds the normals the surface residual needs (a version 3 board's costs are
     // point-to-point, which this host no longer models).
-    if !(1..=VERSION).contains(&identity.version) || identity.version == 3 {
-        return Err(BoardError::Limit(format!(
-            "the board speaks protocol version {}, this host {VERSION} (1, 2 or 4 to {VERSION} for the host-driven mode; \
-             regenerate a version 3 board)",
-            identity.version
-        )));
+    if let Some(why) = refusal(identity.version, Mode::HostDriven) {
+        return Err(BoardError::Limit(why));
     }
     let max_particles = (identity.max_particles as usize).min(MAX_PARTICLES);
     let most = settings.adaptive.map_or(settings.particles, |a| a.max.max(settings.particles));
@@ -202,7 +199,7 @@ pub fn register_reporting(
     let model_norm = Normalisation::of(model);
     let scan_norm = Normalisation::of(scan);
     let model_q = model_norm.quantise(&board_points);
-    let grid = if identity.version >= 4 {
+    let grid = if capabilities(identity.version).grid_with_normals {
         let grid = board_grid(&model_q)?;
         let normals = super::on_board::stored_normals(&grid);
         Some((grid, normals))

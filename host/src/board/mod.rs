@@ -22,8 +22,8 @@ pub use client::*;
 pub use error::BoardError;
 
 use nalgebra::Point3;
-use pficp_fpga::format::FxPoint;
-use pficp_fpga::grid::{cell_of, Grid, CELLS_PER_AXIS, GRID_BITS};
+use pficp_fpga::common::format::FxPoint;
+use pficp_fpga::search::grid::{cell_of, Grid, CELLS_PER_AXIS, GRID_BITS};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
@@ -60,7 +60,7 @@ pub fn board_model(model: &[Point3<f64>], max: usize, seed: u64) -> Vec<Point3<f
 }
 
 /// The board's gridded model (protocol 3: the model store sorted by cell and the cell
-/// table, `pficp_fpga::grid`) of the normalised, quantised model points. A model the grid
+/// table, `pficp_fpga::search::grid`) of the normalised, quantised model points. A model the grid
 /// refuses (a point outside the cube `[-1, 1]^3`, more points than the board stores) is a
 /// one-line [`BoardError::Limit`]; the host's normalisation puts every model point in the
 /// unit ball, so it does not happen to a model planned by the host.

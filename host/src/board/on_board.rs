@@ -1,14 +1,14 @@
 //! PF-ICP with the particle filter on the board (`pficp register --board`, the default):
 //! the host computes the start and the covariance (PF-ICP stages 1 and 2,
 //! [`crate::pf_icp::prior`]), uploads the model gridded (sorted by cell, with its normals
-//! and its cell table, [`pficp_fpga::grid::Grid`]; docs/board-modes.md) and a sample of
+//! and its cell table, [`pficp_fpga::search::grid::Grid`]; docs/board-modes.md) and a sample of
 //! `board_points` scan points in Morton order ([`super::morton_sorted`]) followed by the
 //! rest of the scan, sends the prior as a Run request ([`pf_config`]) with the polish's
 //! starts ([`polish_request`]), polls Status, reads Result and polishes the board's pose
 //! with ICP on the whole scan. The filter itself (steps 6 to 8 of Algorithm 6) runs on the
-//! board, bit-exact with `pficp_fpga::pf::run`, and so does the polish after it (protocol
+//! board, bit-exact with `pficp_fpga::filter::pf::run`, and so does the polish after it (protocol
 //! 6: [`POLISH_STARTS`] starts, the winner polished further;
-//! `pficp_fpga::run_request::execute`): the board's pose alone is the polished one.
+//! `pficp_fpga::protocol::run_request::execute`): the board's pose alone is the polished one.
 
 use super::fixed::{normalised_pose, original_pose, quantise_pose, Normalisation};
 use super::{
@@ -19,14 +19,15 @@ use crate::nn::NearestNeighbours;
 use crate::pf_icp::{prior, weight_sample, PfIcpResult, PfIcpSettings, Prior, StageTimes};
 use crate::registration::icp::Registration;
 use nalgebra::Point3;
-use pficp_fpga::format::{coord_to_f64, FxPoint, DIST_FRAC};
-use pficp_fpga::grid::Grid;
-use pficp_fpga::messages::{Identity, ResultReply, RunState, MAX_D2_MASK, NO_COST};
-use pficp_fpga::pf::{
+use pficp_fpga::common::format::{coord_to_f64, FxPoint, DIST_FRAC};
+use pficp_fpga::filter::pf::{
     wrap24, Particle, PfConfig, PARAMS, PARAM_BITS, PARAM_TRANSLATION_FRAC, SCALE, SCALE_FRAC, SIGMA_BITS,
 };
-use pficp_fpga::protocol::{Command, ErrorCode, VERSION};
-use pficp_fpga::run_request::{PolishRequest, RunOutcome, RunRequest, MAX_STARTS};
+use pficp_fpga::protocol::messages::{Identity, ResultReply, RunState, MAX_D2_MASK, NO_COST};
+use pficp_fpga::protocol::run_request::{PolishRequest, RunOutcome, RunRequest, MAX_STARTS};
+use pficp_fpga::protocol::versions::{refusal, Mode};
+use pficp_fpga::protocol::{Command, ErrorCode};
+use pficp_fpga::search::grid::Grid;
 use pficp_fpga::surface::FxNormal;
 use std::time::{Duration, Instant};
 
@@ -318,14 +319,14 @@ impl OnBoardPlan {
     }
 
     /// What the board computes for this plan's Run, by the bit-exact reference
-    /// (`pficp_fpga::run_request::execute`: the filter over the grid search of
+    /// (`pficp_fpga::protocol::run_request::execute`: the filter over the grid search of
     /// [`Self::grid`] and [`Self::scan`] with the surface residual of [`Self::normals`],
     /// then the polish over [`Self::stored_scan`]): the software mode's board emulation,
     /// equal to the board's Result to the bit.
     pub fn emulate(&self) -> RunOutcome {
-        let search = pficp_fpga::polish::GridSearch { grid: &self.grid, normals: &self.normals };
+        let search = pficp_fpga::surface::GridSearch { grid: &self.grid, normals: &self.normals };
         let stored = self.stored_scan();
-        pficp_fpga::run_request::execute(
+        pficp_fpga::protocol::run_request::execute(
             &self.run_request(),
             |p| evaluate(&self.grid, &self.normals, &self.scan, p),
             &search,
@@ -334,8 +335,8 @@ impl OnBoardPlan {
     }
 
     /// The filter's part of [`Self::emulate`] alone.
-    pub fn emulate_filter(&self) -> pficp_fpga::pf::PfOutcome {
-        pficp_fpga::pf::run(&self.config, |p| evaluate(&self.grid, &self.normals, &self.scan, p))
+    pub fn emulate_filter(&self) -> pficp_fpga::filter::pf::PfOutcome {
+        pficp_fpga::filter::pf::run(&self.config, |p| evaluate(&self.grid, &self.normals, &self.scan, p))
     }
 
     /// The board's pose alone (the polish's winner) in the original frame; the filter's
@@ -372,8 +373,8 @@ pub fn evaluate(
     grid: &Grid,
     normals: &[FxNormal],
     scan: &[FxPoint],
-    pose: &pficp_fpga::format::FxPose,
-) -> pficp_fpga::pf::Evaluated {
+    pose: &pficp_fpga::common::format::FxPose,
+) -> pficp_fpga::filter::pf::Evaluated {
     pficp_fpga::surface::evaluate(grid, normals, scan, pose)
 }
 
@@ -505,12 +506,8 @@ pub fn register_on_board(
     progress: &mut (dyn FnMut(OnBoardStep, usize, usize) + Send),
 ) -> Result<OnBoardResult, BoardError> {
     let identity = client.identify()?;
-    if identity.version != VERSION {
-        return Err(BoardError::Limit(format!(
-            "the board speaks protocol version {}, this host {VERSION} (the on-board filter and its polish \
-             need {VERSION}; --host-driven works with versions 1, 2 and 4 to {VERSION})",
-            identity.version
-        )));
+    if let Some(why) = refusal(identity.version, Mode::OnBoard) {
+        return Err(BoardError::Limit(why));
     }
     let max_particles = (identity.max_particles as usize).min(MAX_PARTICLES);
     if settings.particles == 0 || settings.particles > max_particles {
@@ -600,7 +597,7 @@ mod tests {
         for i in -12..12 {
             for j in -12..12 {
                 let (x, y) = (i as f64 * 0.03, j as f64 * 0.027);
-                model.push(pficp_fpga::format::point([x, y, 0.5 * x]));
+                model.push(pficp_fpga::common::format::point([x, y, 0.5 * x]));
             }
         }
         let grid = Grid::build(&model).unwrap();

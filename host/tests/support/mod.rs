@@ -161,7 +161,7 @@ pub fn intercepting_handler(
 // ---- Clouds, poses and an uploaded board, for the client's tests.
 
 use pficp::board::BoardClient;
-use pficp_fpga::format::{point, FxPoint, FxPose};
+use pficp_fpga::common::format::{point, FxPoint, FxPose};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -188,8 +188,8 @@ pub fn normals(model: &[FxPoint]) -> Vec<pficp_fpga::surface::FxNormal> {
     pficp::board::on_board::stored_normals(&grid(model))
 }
 
-pub fn grid(model: &[FxPoint]) -> pficp_fpga::grid::Grid {
-    pficp_fpga::grid::Grid::build(model).expect("a model in the cube")
+pub fn grid(model: &[FxPoint]) -> pficp_fpga::search::grid::Grid {
+    pficp_fpga::search::grid::Grid::build(model).expect("a model in the cube")
 }
 
 /// What the board computes for `run` after [`upload`] of `model` and `scan`: the filter
@@ -197,12 +197,17 @@ pub fn grid(model: &[FxPoint]) -> pficp_fpga::grid::Grid {
 pub fn run_reference(
     model: &[FxPoint],
     scan: &[FxPoint],
-    run: &pficp_fpga::run_request::RunRequest,
-) -> pficp_fpga::run_request::RunOutcome {
+    run: &pficp_fpga::protocol::run_request::RunRequest,
+) -> pficp_fpga::protocol::run_request::RunOutcome {
     let (g, n) = (grid(model), normals(model));
-    let search = pficp_fpga::polish::GridSearch { grid: &g, normals: &n };
+    let search = pficp_fpga::surface::GridSearch { grid: &g, normals: &n };
     let polish_scan = &scan[..run.polish.points as usize];
-    pficp_fpga::run_request::execute(run, |p| pficp_fpga::surface::evaluate(&g, &n, scan, p), &search, polish_scan)
+    pficp_fpga::protocol::run_request::execute(
+        run,
+        |p| pficp_fpga::surface::evaluate(&g, &n, scan, p),
+        &search,
+        polish_scan,
+    )
 }
 
 /// A client on the reference with the model and scan loaded and sized.

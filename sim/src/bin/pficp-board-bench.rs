@@ -28,7 +28,7 @@ use pficp::nn::NearestNeighbours;
 use pficp::pf_icp::{self, PfIcpSettings};
 use pficp::registration::methods::PoseError;
 use pficp_fpga::board::BoardConfig;
-use pficp_fpga::pipeline::clocks_per_particle;
+use pficp_fpga::search::pipeline::clocks_per_particle;
 use std::time::{Duration, Instant};
 
 /// The command engine's clocks per evaluated pose besides the pipeline's.

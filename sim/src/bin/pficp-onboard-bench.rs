@@ -38,7 +38,7 @@ use pficp::nn::NearestNeighbours;
 use pficp::pf_icp::{self, PfIcpSettings};
 use pficp::registration::methods::PoseError;
 use pficp_fpga::board::{BitPeriod, BoardConfig};
-use pficp_fpga::messages::{self, ResultReply, RunState, StatusReply};
+use pficp_fpga::protocol::messages::{self, ResultReply, RunState, StatusReply};
 use pficp_fpga::protocol::{Command, Frame};
 use pficp_sim::serial::SerialBoard;
 use std::time::{Duration, Instant};
@@ -202,14 +202,14 @@ fn main() -> Result<()> {
         (plan.config.thr_cost, plan.config.thr_max) = (0, 0);
     }
     if let Some(steps) = a.polish_steps {
-        if steps > pficp_fpga::run_request::MAX_STEPS {
-            bail!("--polish-steps must be at most {}", pficp_fpga::run_request::MAX_STEPS);
+        if steps > pficp_fpga::protocol::run_request::MAX_STEPS {
+            bail!("--polish-steps must be at most {}", pficp_fpga::protocol::run_request::MAX_STEPS);
         }
         plan.polish.steps = steps;
     }
     if let Some(steps) = a.winner_steps {
-        if steps > pficp_fpga::run_request::MAX_STEPS {
-            bail!("--winner-steps must be at most {}", pficp_fpga::run_request::MAX_STEPS);
+        if steps > pficp_fpga::protocol::run_request::MAX_STEPS {
+            bail!("--winner-steps must be at most {}", pficp_fpga::protocol::run_request::MAX_STEPS);
         }
         plan.polish.winner_steps = steps;
     }

@@ -2,7 +2,7 @@
 //! a mismatch's VCD.
 #![allow(dead_code)]
 
-use pficp_fpga::splitmix::SplitMix64;
+use pficp_fpga::common::splitmix::SplitMix64;
 use pficp_sim::Mismatch;
 use std::path::PathBuf;
 

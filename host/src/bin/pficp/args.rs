@@ -8,7 +8,7 @@ use pficp::geometry::ScaleBounds;
 use pficp::pf_icp::init::InitMode;
 use pficp::pf_icp::PfIcpSettings;
 use pficp::registration::methods::Method;
-use pficp_fpga::messages::Identity;
+use pficp_fpga::protocol::messages::Identity;
 use std::path::PathBuf;
 use std::time::Duration;
 

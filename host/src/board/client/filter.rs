@@ -3,12 +3,12 @@
 //! clock count and the polish's bound, the allowance, the wait.
 
 use super::{BoardClient, BoardError, MAX_RETRIES, MIN_CLOCK_HZ, RUN_SAFETY};
-use pficp_fpga::messages::{
+use pficp_fpga::protocol::messages::{
     parse_two_u16, MessageError, ResultReply, RunState, StatusReply, RESULT_BYTES, RUN_REPLY_BYTES, STATUS_BYTES,
 };
+use pficp_fpga::protocol::run_request::{polish_clocks_bound, RunRequest};
 use pficp_fpga::protocol::Command;
-use pficp_fpga::run_request::{polish_clocks_bound, RunRequest};
-use pficp_fpga::surface_residual::evaluation_clocks_bound;
+use pficp_fpga::surface::surface_residual::evaluation_clocks_bound;
 use std::time::{Duration, Instant};
 
 impl BoardClient {
@@ -105,7 +105,7 @@ impl BoardClient {
     ///
     /// The reply is checked: at least 1 iteration and no more than the last Run asked for,
     /// the largest point distance within the cost, the pose the one
-    /// [`pficp_fpga::pf::pose_of`] builds from the parameters, the winning start one of the
+    /// [`pficp_fpga::filter::pf::pose_of`] builds from the parameters, the winning start one of the
     /// last Run's.
     pub fn result(&mut self) -> Result<ResultReply, BoardError> {
         let reply = self.transact(Command::Result, Vec::new(), RESULT_BYTES, 0, true)?;
@@ -122,7 +122,7 @@ impl BoardClient {
         if r.max_d2 > r.cost {
             return Err(bad(MessageError::Field { field: "max_d2 (above the cost)", got: r.max_d2, expected: r.cost }));
         }
-        let starts = self.run_starts.unwrap_or(pficp_fpga::run_request::MAX_STARTS);
+        let starts = self.run_starts.unwrap_or(pficp_fpga::protocol::run_request::MAX_STARTS);
         if r.polish.winner as usize >= starts {
             return Err(bad(MessageError::Field {
                 field: "winning start",
@@ -130,7 +130,7 @@ impl BoardClient {
                 expected: starts as u64 - 1,
             }));
         }
-        if r.pose != pficp_fpga::pf::pose_of(&r.params) {
+        if r.pose != pficp_fpga::filter::pf::pose_of(&r.params) {
             return Err(BoardError::Filter(format!(
                 "the board on {} returned a pose that is not the one its parameters {:?} give",
                 self.name, r.params
@@ -220,14 +220,14 @@ impl BoardClient {
 
 /// An upper bound on the on-board filter's clocks for `particles` and all `iterations` over
 /// `scan_points` and `model_points` on `lanes` lanes: the sequencer's exact count
-/// ([`pficp_fpga::sequencer::run_clocks`]) with every data-dependent part at its largest
+/// ([`pficp_fpga::filter::sequencer::run_clocks`]) with every data-dependent part at its largest
 /// (the temperature's most passes, a new best every iteration, the resampling pointer advancing
 /// through every particle) and each evaluation taking the neighbour pipeline's bound
 /// [`evaluation_clocks_bound`] (any pose, any model of that size; the neighbour pipeline and
 /// the residual stage) plus one clock:
 /// `particles x iterations + iterations + 1` poses.
 pub fn run_clocks_bound(particles: u16, iterations: u16, scan_points: usize, model_points: usize, lanes: usize) -> u64 {
-    use pficp_fpga::sequencer::{run_clocks, IterationShape, MAX_TEMPER_PASSES};
+    use pficp_fpga::filter::sequencer::{run_clocks, IterationShape, MAX_TEMPER_PASSES};
     let n = particles as u64;
     let eval = 1 + evaluation_clocks_bound(scan_points, model_points, lanes.max(1));
     let shape = |last: bool| IterationShape {

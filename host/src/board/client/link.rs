@@ -3,7 +3,7 @@
 //! client's module documentation).
 
 use super::{BoardClient, BoardError, MAX_RETRIES, MIN_BAUD};
-use pficp_fpga::messages::MessageError;
+use pficp_fpga::protocol::messages::MessageError;
 use pficp_fpga::protocol::{Command, Deframer, ErrorCode, Frame, FrameError, DELIMITER};
 use std::io::{ErrorKind, Read, Write};
 use std::time::{Duration, Instant};

@@ -69,7 +69,7 @@ pub struct RealisticOptions {
     /// PF-ICP's settings (the seed is replaced by each case's).
     pub pf: PfIcpSettings,
     /// Also run PF-ICP with the filter on the board (column `pf-icp-board`): the host's
-    /// prior and conclusion around `fpga::pf::run`, the bit-exact reference of the board's
+    /// prior and conclusion around `fpga::filter::pf::run`, the bit-exact reference of the board's
     /// filter (what the board computes, byte for byte: the grid search over the gridded
     /// model), with `board_points` scan points and at most [`crate::board::MAX_POINTS`]
     /// model points; and the board's pose alone, without the host's polish (column
