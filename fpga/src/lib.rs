@@ -27,11 +27,14 @@
 //! - [`messages`]: each command's data layout, encoded and decoded.
 //! - [`board`]: the board's configuration and the byte-level reference board (`BoardModel`).
 //! - [`splitmix`]: the seeded generator of the tests' and fuzzers' stimulus.
+//! - [`designs`]: the one list of generated designs (name, Verilog generator, parameters,
+//!   ports with their widths from the formats) that `hdl-gen` and the co-simulation read.
 //! - `rtl` (feature `rtl`): the rust_hdl RTL of the board top and its blocks (the neighbour
 //!   pipeline, the residual and weight stages, the sequencer, the polish), and their Verilog.
 #![warn(missing_docs)]
 
 pub mod board;
+pub mod designs;
 pub mod format;
 pub mod grid;
 pub mod messages;
