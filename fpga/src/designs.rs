@@ -430,7 +430,7 @@ pub const BOARD_FAST: Design = Design {
 };
 
 /// Every generated design: `hdl-gen`'s (in its `--design` order) and the co-simulation's.
-pub const DESIGNS: [Design; 9] = [
+pub static DESIGNS: [Design; 9] = [
     BOARD,
     NEIGHBOUR_PIPELINE,
     WEIGHT_STAGE,
