@@ -182,9 +182,9 @@ impl PfArgs {
         if self.clusters == 0 {
             bail!("--clusters must be at least 1");
         }
-        use pficp::pf_icp::{MAX_CLUSTERS, MAX_ITERATIONS, MAX_PARTICLES};
+        use pficp::pf_icp::{MAX_CLUSTERS, MAX_FILTER_PARTICLES, MAX_ITERATIONS};
         for (flag, value, limit) in [
-            ("--particles", self.particles, MAX_PARTICLES),
+            ("--particles", self.particles, MAX_FILTER_PARTICLES),
             ("--iterations", self.iterations, MAX_ITERATIONS),
             ("--clusters", self.clusters, MAX_CLUSTERS),
         ] {
@@ -634,7 +634,7 @@ fn gen(a: &GenArgs) -> Result<()> {
     if a.points < 3 || a.scan_points < 3 {
         bail!("--points and --scan-points must be at least 3");
     }
-    let limit = pficp::cloud::MAX_POINTS;
+    let limit = pficp::cloud::MAX_CLOUD_POINTS;
     if a.points > limit || a.scan_points > limit {
         bail!("--points and --scan-points must be at most {limit} (got {} and {})", a.points, a.scan_points);
     }
@@ -702,8 +702,8 @@ fn eval(a: &EvalArgs) -> Result<()> {
 /// `--board-points`, checked.
 fn board_points(a: &EvalArgs) -> Result<usize> {
     let n = a.board_points.unwrap_or(pficp::board::on_board::DEFAULT_BOARD_POINTS);
-    if n == 0 || n > pficp::board::MAX_POINTS {
-        bail!("--board-points must be 1 to {} (got {n})", pficp::board::MAX_POINTS);
+    if n == 0 || n > pficp::board::BOARD_MAX_STORE_POINTS {
+        bail!("--board-points must be 1 to {} (got {n})", pficp::board::BOARD_MAX_STORE_POINTS);
     }
     Ok(n)
 }
