@@ -429,15 +429,16 @@ pub const BOARD_FAST: Design = Design {
     spec: "fpga/src/rtl/board/top.rs",
 };
 
-/// Every generated design: `hdl-gen`'s (in its `--design` order) and the co-simulation's.
+/// Every generated design, in the co-simulation's order (`verilated_models`); `hdl-gen`
+/// lists its default, the board, first.
 pub static DESIGNS: [Design; 9] = [
-    BOARD,
     NEIGHBOUR_PIPELINE,
     WEIGHT_STAGE,
     SURFACE_RESIDUAL,
     POLISH_PROGRAM,
     POLISH_BENCH,
     POLISH_UNIT,
+    BOARD,
     SEQUENCER,
     BOARD_FAST,
 ];

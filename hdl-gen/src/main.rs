@@ -103,8 +103,11 @@ fn step<T>(cli: &Cli, label: &str, work: impl FnOnce() -> Result<T>) -> Result<T
 /// The `--design` values: the registry's designs that `hdl-gen` writes
 /// (`pficp_fpga::designs::DESIGNS`, those with a `cli` name), with their descriptions.
 fn design_values() -> clap::builder::PossibleValuesParser {
+    // The default, the board, first.
+    let (board, blocks): (Vec<&Design>, Vec<&Design>) =
+        DESIGNS.iter().partition(|d| matches!(d.params, Params::Board(_)));
     clap::builder::PossibleValuesParser::new(
-        DESIGNS.iter().filter_map(|d| Some(clap::builder::PossibleValue::new(d.cli?).help(d.about))),
+        board.into_iter().chain(blocks).filter_map(|d| Some(clap::builder::PossibleValue::new(d.cli?).help(d.about))),
     )
 }
 
