@@ -1,21 +1,8 @@
-//! Builds the Verilator models of the generated designs ([`DESIGNS`]):
-//!
-//! - `neighbour_pipeline`: `NeighbourPipeline<P>` from
-//!   `pficp_fpga::common::verilog::neighbour_pipeline_verilog(P)` (prefix `VnbrP`);
-//! - `weight_stage`: `WeightStage` from `pficp_fpga::common::verilog::weight_stage_verilog()` (prefix
-//!   `Vweights`);
-//! - `surface_residual`: `SurfaceResidual` from `pficp_fpga::common::verilog::surface_residual_verilog()`
-//!   (prefix `Vsurf`);
-//! - `polish_program`: `PolishProgram` with the polish's programs, from
-//!   `pficp_fpga::common::verilog::polish_program_verilog()` (prefix `Vpolish`);
-//! - `polish_bench`: `PolishBench`, the pass, a multiplier and the program's datapath, from
-//!   `pficp_fpga::common::verilog::polish_bench_verilog()` (prefix `Vpbench`);
-//! - `polish_unit`: `PolishUnit`, the whole polish as the board instantiates it (the
-//!   multiplier's ports outside), from `pficp_fpga::common::verilog::polish_unit_verilog()` (prefix
-//!   `Vpunit`);
-//! - `sequencer`: `PfSequencer` alone, from `pficp_fpga::common::verilog::sequencer_verilog()`;
-//! - `board` and `board_fast`: the whole board top, `pficp_fpga::common::verilog::board_verilog` of the
-//!   default and of the fast-UART configuration;
+//! Builds the Verilator models of the generated designs: every entry of the registry
+//! `pficp_fpga::designs::DESIGNS` (name, Verilator prefix, Verilog generator, parameters,
+//! ports), the neighbour pipeline, the weight stage, the surface residual, the polish's
+//! datapath, bench and unit, the sequencer, and the board top in its default and fast-UART
+//! configurations;
 //!
 //! the lane-parametrised ones for every `P` in [`DEFAULT_LANES`] (or `PFICP_SIM_LANES=4,16`).
 //! Per model, on a pool of `NUM_JOBS` threads, largest first:
@@ -25,7 +12,7 @@
 //! 3. the shim: the checked-in template `cpp/shim.h` (create, free, tick, VCD open, flush
 //!    and close, templated on the Verilated class) instantiated for `<prefix>` by
 //!    `PFICP_SHIM`, and the port copies generated from the `VL_IN*/VL_OUT*` port lines of
-//!    `<prefix>.h` after checking them against the design's ports (`src/ports.rs`, the one
+//!    `<prefix>.h` after checking them against the design's ports (the registry's, the one
 //!    list the wrappers also take their compared outputs from): `set_inputs`
 //!    (a packed `u64` array, masked to the port widths) and `get_outputs`;
 //! 4. one unity file compiled with the `cc` compiler and flags at `-O2`, but with the
@@ -43,113 +30,14 @@ use std::process::Command;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
+use pficp_fpga::board::BoardConfig;
+
 /// Lane counts verilated unless `PFICP_SIM_LANES` says otherwise: 4 for fast tests, 16 (the
 /// design point).
 const DEFAULT_LANES: [usize; 2] = [4, 16];
 
-// Every design's ports, in one place (also the wrappers' compared outputs).
-#[path = "src/ports.rs"]
-#[allow(dead_code)]
-mod ports;
-use ports::*;
-
-/// One generated design.
-struct Design {
-    /// `Model::design` in `models.rs` (and the Verilog file's stem).
-    name: &'static str,
-    /// Verilator prefix; the lane count is appended for lane-parametrised designs.
-    prefix: &'static str,
-    /// Lane-parametrised: built for every lane count.
-    per_lane: bool,
-    /// The Verilog (top module `top`) for a lane count (ignored unless `per_lane`).
-    verilog: fn(usize) -> String,
-    /// The ports, concatenated in this order.
-    ports: &'static [&'static [PortSpec]],
-    /// Where the ports are specified (for the error message).
-    spec: &'static str,
-}
-
-/// Every design that is verilated.
-const DESIGNS: [Design; 9] = [
-    Design {
-        name: "neighbour_pipeline",
-        prefix: "Vnbr",
-        per_lane: true,
-        verilog: pficp_fpga::common::verilog::neighbour_pipeline_verilog,
-        ports: &[NEIGHBOUR_PIPELINE_PORTS],
-        spec: "docs/pipeline.md, the neighbour pipeline (sim/src/ports.rs NEIGHBOUR_PIPELINE_PORTS)",
-    },
-    Design {
-        name: "weight_stage",
-        prefix: "Vweights",
-        per_lane: false,
-        verilog: |_| pficp_fpga::common::verilog::weight_stage_verilog(),
-        ports: &[WEIGHT_STAGE_PORTS],
-        spec: "docs/weights.md (sim/src/ports.rs WEIGHT_STAGE_PORTS)",
-    },
-    Design {
-        name: "surface_residual",
-        prefix: "Vsurf",
-        per_lane: false,
-        verilog: |_| pficp_fpga::common::verilog::surface_residual_verilog(),
-        ports: &[SURFACE_RESIDUAL_PORTS],
-        spec: "docs/pipeline.md, the surface residual (sim/src/ports.rs SURFACE_RESIDUAL_PORTS)",
-    },
-    Design {
-        name: "polish_program",
-        prefix: "Vpolish",
-        per_lane: false,
-        verilog: |_| pficp_fpga::common::verilog::polish_program_verilog(),
-        ports: &[POLISH_PROGRAM_PORTS],
-        spec: "fpga/src/polish/program_rtl.rs (sim/src/ports.rs POLISH_PROGRAM_PORTS)",
-    },
-    Design {
-        name: "polish_bench",
-        prefix: "Vpbench",
-        per_lane: false,
-        verilog: |_| pficp_fpga::common::verilog::polish_bench_verilog(),
-        ports: &[POLISH_BENCH_PORTS],
-        spec: "fpga/src/polish/bench_rtl.rs (sim/src/ports.rs POLISH_BENCH_PORTS)",
-    },
-    Design {
-        name: "polish_unit",
-        prefix: "Vpunit",
-        per_lane: false,
-        verilog: |_| pficp_fpga::common::verilog::polish_unit_verilog(),
-        ports: &[POLISH_UNIT_PORTS],
-        spec: "fpga/src/polish/unit_rtl.rs (sim/src/ports.rs POLISH_UNIT_PORTS)",
-    },
-    Design {
-        name: "board",
-        prefix: "Vboard",
-        per_lane: false,
-        verilog: |_| pficp_fpga::common::verilog::board_verilog(&pficp_fpga::board::BoardConfig::default()),
-        ports: &[BOARD_PORTS],
-        spec: "fpga/src/board/top_rtl.rs (sim/src/ports.rs BOARD_PORTS)",
-    },
-    Design {
-        name: "sequencer",
-        prefix: "Vseq",
-        per_lane: false,
-        verilog: |_| pficp_fpga::common::verilog::sequencer_verilog(),
-        ports: &[SEQUENCER_PORTS],
-        spec: "fpga/src/filter/sequencer_rtl.rs (sim/src/ports.rs SEQUENCER_PORTS)",
-    },
-    Design {
-        name: "board_fast",
-        prefix: "Vboardfast",
-        per_lane: false,
-        verilog: |_| pficp_fpga::common::verilog::board_verilog(&pficp_fpga::board::BoardConfig::FAST_SIM),
-        ports: &[BOARD_PORTS],
-        spec: "fpga/src/board/top_rtl.rs (sim/src/ports.rs BOARD_PORTS)",
-    },
-];
-
-impl Design {
-    fn port_specs(&self) -> impl Iterator<Item = &'static PortSpec> {
-        self.ports.iter().flat_map(|g| g.iter())
-    }
-}
+// Every design, its generator and its ports: the registry `pficp_fpga::designs`.
+use pficp_fpga::designs::{Design, Params, Port, DESIGNS};
 
 /// Optimisation of a model's per-clock code (Verilator's `VM_*_FAST` files) and the shim.
 const OPT_MODEL: &str = "-O2";
@@ -216,8 +104,9 @@ fn target_dir(out: &Path) -> Option<PathBuf> {
     t.join("CACHEDIR.TAG").exists().then(|| t.to_path_buf())
 }
 
+/// A port as the Verilated header declares it.
 #[derive(Debug)]
-struct Port {
+struct HeaderPort {
     input: bool,
     name: String,
     width: usize,
@@ -226,7 +115,7 @@ struct Port {
 }
 
 /// Parse `VL_IN8(&clock,0,0);`, `VL_OUT64(&cost,47,0);`, `VL_INW(&pose,215,0,7);` lines.
-fn parse_ports(hdr: &str) -> Vec<Port> {
+fn parse_ports(hdr: &str) -> Vec<HeaderPort> {
     let mut ports = vec![];
     for line in hdr.lines() {
         let l = line.trim();
@@ -242,15 +131,15 @@ fn parse_ports(hdr: &str) -> Vec<Port> {
         let num = |s: &str| -> usize { s.trim().parse().unwrap_or_else(|_| panic!("cannot parse port line {l:?}")) };
         let (msb, lsb) = (num(args[1]), num(args[2]));
         let words = if args.len() > 3 { num(args[3]) } else { 0 };
-        ports.push(Port { input, name: args[0].trim().to_string(), width: msb - lsb + 1, words });
+        ports.push(HeaderPort { input, name: args[0].trim().to_string(), width: msb - lsb + 1, words });
     }
     ports
 }
 
 /// The header's ports must be exactly `design`'s; returns them in the design's order.
-fn check_ports(parsed: Vec<Port>, design: &Design, header: &Path) -> Vec<Port> {
+fn check_ports(parsed: Vec<HeaderPort>, design: &Design, header: &Path) -> Vec<HeaderPort> {
     let mut problems = vec![];
-    for &(name, input, width) in design.port_specs() {
+    for &Port { name, input, width } in design.ports {
         match parsed.iter().find(|p| p.name == name) {
             None => problems.push(format!("missing port {name}")),
             Some(p) if p.input != input || p.width != width => problems.push(format!(
@@ -267,7 +156,7 @@ fn check_ports(parsed: Vec<Port>, design: &Design, header: &Path) -> Vec<Port> {
         }
     }
     for p in &parsed {
-        if !design.port_specs().any(|q| q.0 == p.name) {
+        if !design.ports.iter().any(|q| q.name == p.name) {
             problems.push(format!("unexpected port {}", p.name));
         }
     }
@@ -276,9 +165,10 @@ fn check_ports(parsed: Vec<Port>, design: &Design, header: &Path) -> Vec<Port> {
     }
     let mut parsed = parsed;
     design
-        .port_specs()
-        .map(|(n, ..)| {
-            let k = parsed.iter().position(|p| p.name == *n).unwrap();
+        .ports
+        .iter()
+        .map(|q| {
+            let k = parsed.iter().position(|p| p.name == q.name).unwrap();
             parsed.swap_remove(k)
         })
         .collect()
@@ -294,7 +184,7 @@ fn mask(bits: usize) -> u64 {
 
 /// The C++ shim of one model: the checked-in template (sim/cpp/shim.h) instantiated for
 /// the model's class, and its port copies; returns (input u64 words, output u64 words).
-fn gen_shim(prefix: &str, ports: &[Port], cpp: &Path) -> (usize, usize) {
+fn gen_shim(prefix: &str, ports: &[HeaderPort], cpp: &Path) -> (usize, usize) {
     let f = prefix.to_lowercase();
     let mut c = format!(
         "// Generated by sim/build.rs from {prefix}.h: do not edit (the shim is sim/cpp/shim.h).\n\
@@ -401,6 +291,11 @@ fn lanes_to_build() -> Vec<usize> {
     lanes
 }
 
+/// Built for every lane count.
+fn per_lane(design: &Design) -> bool {
+    matches!(design.params, Params::Lanes)
+}
+
 /// One model to build: a design at a lane count (0 for a design without lanes).
 struct Job {
     design: &'static Design,
@@ -472,12 +367,16 @@ fn build_model(job: &Job, out: &Path, compiler: &cc::Tool) -> Built {
 
     // 1. Verilog.
     let t = Instant::now();
-    let vfile = out.join(if job.design.per_lane {
+    let vfile = out.join(if per_lane(job.design) {
         format!("{}_p{}.v", job.design.name, job.lanes)
     } else {
         format!("{}.v", job.design.name)
     });
-    std::fs::write(&vfile, (job.design.verilog)(job.lanes)).unwrap();
+    let config = match job.design.params {
+        Params::Board(config) => config(),
+        Params::Lanes | Params::None => BoardConfig { lanes: job.lanes, ..BoardConfig::default() },
+    };
+    std::fs::write(&vfile, (job.design.verilog)(&config)).unwrap();
     let t_gen = t.elapsed();
 
     // 2. Verilate (C++ only: compiled in 4.).
@@ -600,7 +499,6 @@ fn build_all(jobs: &[Job], threads: usize, out: &Path, compiler: &cc::Tool) -> V
 fn main() {
     println!("cargo:rerun-if-changed=build.rs");
     println!("cargo:rerun-if-changed=cpp/shim.h");
-    println!("cargo:rerun-if-changed=src/ports.rs");
     let t_all = Instant::now();
     let out = PathBuf::from(std::env::var("OUT_DIR").unwrap());
     let version = verilator_version();
@@ -630,11 +528,11 @@ fn main() {
     let jobs: Vec<Job> = DESIGNS
         .iter()
         .flat_map(|d| {
-            let ls = if d.per_lane { lanes.clone() } else { vec![0] };
+            let ls = if per_lane(d) { lanes.clone() } else { vec![0] };
             ls.into_iter().map(move |p| Job {
                 design: d,
                 lanes: p,
-                prefix: if d.per_lane { format!("{}{p}", d.prefix) } else { d.prefix.to_string() },
+                prefix: if per_lane(d) { format!("{}{p}", d.prefix) } else { d.prefix.to_string() },
             })
         })
         .collect();

@@ -20,12 +20,15 @@
 //!   and the residual stage after the search (model and RTL);
 //! - [`polish`]: the on-board polish after the filter (point-to-plane Gauss-Newton with
 //!   scale; its programs, its datapath, pass and control beside their models);
+//! - [`designs`]: the one list of generated designs (name, Verilog generator, ports from
+//!   the formats) that hdl-gen, the simulation's build script and the co-simulation read;
 //! - [`common`]: the fixed-point formats, the stimulus generator, and the RTL's shared
 //!   helpers and Verilog emission.
 #![warn(missing_docs)]
 
 pub mod board;
 pub mod common;
+pub mod designs;
 pub mod filter;
 pub mod polish;
 pub mod protocol;

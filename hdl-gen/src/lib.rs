@@ -6,6 +6,7 @@
 //! - [`report`]: [`Resources`] against the device, the Markdown/JSON report, limits;
 //! - [`device`]: the XC6SLX45's capacity;
 //! - [`ucf`]: the board pin map (`constraints/pinmap.toml`) and the UCF written from it;
+//! - [`top_ports`]: the ports of the Verilog top, which the UCF pins;
 //! - [`ise`]: the ISE 14.7 `xtclsh` build script (Vivado does not support Spartan-6).
 //!
 //! The tools are required: a missing `verilator`/`yosys` is an error that says
@@ -18,6 +19,7 @@ pub mod lint;
 pub mod report;
 pub mod synth;
 pub mod tools;
+pub mod top_ports;
 pub mod ucf;
 
 pub use lint::{lint, lint_file, prepare_verilog, write_verilog, LintMessage, LintReport, TOP, VERILOG_FILE};

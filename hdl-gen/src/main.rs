@@ -6,6 +6,7 @@ use clap::Parser;
 use hdl_gen::ucf::{top_ports, write_ucf, DEFAULT_PINMAP_PATH};
 use hdl_gen::{ise, lint, synthesise, write_verilog, Limits, PinMap, SynthOptions, TOP, VERILOG_FILE};
 use pficp_fpga::board::BoardConfig;
+use pficp_fpga::designs::{Design, Params, DESIGNS};
 use std::path::PathBuf;
 
 /// Writes DIR/pficp_pipeline.v; for the board also DIR/pficp_board.ucf (from the pin map) and
@@ -29,8 +30,8 @@ struct Cli {
     /// one of the board's blocks alone: the neighbour pipeline, the weight stage, the surface
     /// residual stage, the polish's datapath, the polish's blocks with a multiplier, or the
     /// whole polish. Only the board has pins, so only the board gets a UCF and an ISE script.
-    #[arg(long, value_enum, default_value_t = Design::Board, conflicts_with = "verilog")]
-    design: Design,
+    #[arg(long, value_parser = design_values(), default_value = "board", conflicts_with = "verilog")]
+    design: String,
     /// Use the Verilog in FILE (top module `top`) instead of generating a design; with
     /// --pinmap, also write its UCF and ISE script.
     #[arg(long, value_name = "FILE")]
@@ -99,68 +100,35 @@ fn step<T>(cli: &Cli, label: &str, work: impl FnOnce() -> Result<T>) -> Result<T
     result
 }
 
-/// The generated designs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-enum Design {
-    /// `BoardTop`: the board top `top` (clock, reset_n, uart_rx, uart_tx, leds[3:0]).
-    Board,
-    /// `NeighbourPipeline`: lanes over one scan point's candidates in its 27 cells (the
-    /// board's search).
-    NeighbourPipeline,
-    /// `WeightStage` alone.
-    Weights,
-    /// `SurfaceResidual`: the residual stage alone (no DSP48A1).
-    SurfaceResidual,
-    /// `PolishProgram`: the polish's datapath with its programs in ROM (no DSP48A1).
-    PolishProgram,
-    /// `PolishBench`: the polish's pass, a multiplier and the datapath (on the board the
-    /// multiplier is the sequencer's).
-    PolishBench,
-    /// `PolishUnit`: the whole polish (control, datapath, pass) as the board instantiates
-    /// it, the multiplier's ports at the top.
-    PolishUnit,
+/// The `--design` values: the registry's designs that `hdl-gen` writes
+/// (`pficp_fpga::designs::DESIGNS`, those with a `cli` name), with their descriptions.
+fn design_values() -> clap::builder::PossibleValuesParser {
+    // The default, the board, first.
+    let (board, blocks): (Vec<&Design>, Vec<&Design>) =
+        DESIGNS.iter().partition(|d| matches!(d.params, Params::Board(_)));
+    clap::builder::PossibleValuesParser::new(
+        board.into_iter().chain(blocks).filter_map(|d| Some(clap::builder::PossibleValue::new(d.cli?).help(d.about))),
+    )
 }
 
-/// The design's name on the command line.
-fn design_name(design: Design) -> String {
-    use clap::ValueEnum;
-    design.to_possible_value().map(|v| v.get_name().to_string()).unwrap_or_default()
+/// The registry's entry for a `--design` value (one of [`design_values`]).
+fn design(cli: &str) -> &'static Design {
+    Design::by_cli(cli).expect("clap accepts only the registry's --design values")
 }
 
 /// The design's Verilog with `lanes` lanes, from the RTL crate, and where it came from.
-fn generated_verilog(design: Design, lanes: usize, board: &BoardConfig) -> Result<(String, String)> {
+fn generated_verilog(design: &Design, lanes: usize, board: &BoardConfig) -> Result<(String, String)> {
     use pficp_fpga::common::rtl::BOARD_LANES;
-    use pficp_fpga::common::verilog::{
-        board_verilog, neighbour_pipeline_verilog, polish_bench_verilog, polish_program_verilog, polish_unit_verilog,
-        surface_residual_verilog, weight_stage_verilog,
+    let config = match design.params {
+        Params::Board(_) => *board,
+        Params::Lanes | Params::None => BoardConfig { lanes, ..*board },
     };
-    Ok(match design {
-        Design::Board | Design::NeighbourPipeline if !BOARD_LANES.contains(&lanes) => {
-            bail!("--lanes {lanes} is not supported: the neighbour pipeline (and so the board) takes one of {BOARD_LANES:?}")
-        }
-        Design::Board => (
-            board_verilog(board),
-            format!(
-                "pficp_fpga::common::verilog::board_verilog(BoardConfig {{ lanes: {}, clock_hz: {}, baud: {} }})",
-                board.lanes, board.clock_hz, board.baud
-            ),
-        ),
-        Design::NeighbourPipeline => (
-            neighbour_pipeline_verilog(lanes),
-            format!("pficp_fpga::common::verilog::neighbour_pipeline_verilog({lanes})"),
-        ),
-        Design::Weights => (weight_stage_verilog(), "pficp_fpga::common::verilog::weight_stage_verilog()".to_string()),
-        Design::SurfaceResidual => {
-            (surface_residual_verilog(), "pficp_fpga::common::verilog::surface_residual_verilog()".to_string())
-        }
-        Design::PolishProgram => {
-            (polish_program_verilog(), "pficp_fpga::common::verilog::polish_program_verilog()".to_string())
-        }
-        Design::PolishBench => {
-            (polish_bench_verilog(), "pficp_fpga::common::verilog::polish_bench_verilog()".to_string())
-        }
-        Design::PolishUnit => (polish_unit_verilog(), "pficp_fpga::common::verilog::polish_unit_verilog()".to_string()),
-    })
+    if !matches!(design.params, Params::None) && !BOARD_LANES.contains(&config.lanes) {
+        bail!(
+            "--lanes {lanes} is not supported: the neighbour pipeline (and so the board) takes one of {BOARD_LANES:?}"
+        )
+    }
+    Ok(((design.verilog)(&config), design.source(&config)))
 }
 
 /// The board's generation parameters from the options and the pin map, checked.
@@ -179,13 +147,13 @@ fn board_config(cli: &Cli, map: &PinMap) -> Result<BoardConfig> {
 }
 
 fn run(cli: &Cli) -> Result<()> {
-    let board = cli.verilog.is_none() && cli.design == Design::Board;
+    let board = cli.verilog.is_none() && matches!(design(&cli.design).params, Params::Board(_));
     let pins = board || (cli.verilog.is_some() && cli.pinmap.is_some());
     if !pins {
         if cli.pinmap.is_some() {
             bail!(
                 "--pinmap applies to the board (--design board) or to --verilog FILE; the {} design has no pins",
-                design_name(cli.design)
+                cli.design
             );
         }
         if cli.clock_hz.is_some() || cli.baud.is_some() {
@@ -206,7 +174,7 @@ fn run(cli: &Cli) -> Result<()> {
             let v = std::fs::read_to_string(f).with_context(|| format!("could not read --verilog {}", f.display()))?;
             (v, format!("{} (top `{TOP}`)", f.display()))
         }
-        None => step(cli, "generating the Verilog", || generated_verilog(cli.design, cli.lanes, &config))?,
+        None => step(cli, "generating the Verilog", || generated_verilog(design(&cli.design), cli.lanes, &config))?,
     };
     let path = write_verilog(&verilog, &cli.out)?;
     println!("wrote {} ({source})", path.display());
@@ -240,7 +208,7 @@ fn run(cli: &Cli) -> Result<()> {
             if cli.verilog.is_some() {
                 "--verilog without --pinmap".to_string()
             } else {
-                format!("the {} design", design_name(cli.design))
+                format!("the {} design", cli.design)
             }
         ),
     }

@@ -70,7 +70,7 @@ pub struct Cloud {
 }
 
 /// Largest cloud the tool accepts (memory and run-time guard).
-pub const MAX_POINTS: usize = 10_000_000;
+pub const MAX_CLOUD_POINTS: usize = 10_000_000;
 /// Largest coordinate magnitude accepted (squared distances of such clouds stay far from
 /// overflow).
 pub const MAX_COORDINATE: f64 = 1e12;
@@ -79,15 +79,15 @@ pub const MAX_COORDINATE: f64 = 1e12;
 pub const MAX_SPREAD_RATIO: f64 = 1e6;
 
 impl Cloud {
-    /// Validate `points` (named `name` in errors): non-empty, at most [`MAX_POINTS`], finite,
+    /// Validate `points` (named `name` in errors): non-empty, at most [`MAX_CLOUD_POINTS`], finite,
     /// within [`MAX_COORDINATE`], no point beyond [`MAX_SPREAD_RATIO`] times the median
     /// distance from the median point, not all coincident.
     pub fn new(name: &str, points: Vec<Point3<f64>>) -> Result<Self, CloudError> {
         if points.is_empty() {
             return Err(CloudError::Empty(name.to_string()));
         }
-        if points.len() > MAX_POINTS {
-            return Err(CloudError::TooLarge { name: name.into(), count: points.len(), limit: MAX_POINTS });
+        if points.len() > MAX_CLOUD_POINTS {
+            return Err(CloudError::TooLarge { name: name.into(), count: points.len(), limit: MAX_CLOUD_POINTS });
         }
         for (index, p) in points.iter().enumerate() {
             for &value in p.coords.iter() {

@@ -366,12 +366,12 @@ fn pf_icp_with_the_board_weights_registers_a_reduced_model_1() {
 #[test]
 fn a_model_too_big_for_the_board_is_subsampled_with_the_seed() {
     let model: Vec<_> = (0..5000).map(|i| nalgebra::Point3::new(i as f64, (i * i % 7) as f64, 0.5)).collect();
-    let a = pficp::board::board_model(&model, 4096, 1);
+    let a = pficp::board::quantise::board_model(&model, 4096, 1);
     assert_eq!(a.len(), 4096);
-    assert_eq!(a, pficp::board::board_model(&model, 4096, 1), "same seed, same points");
-    assert_ne!(a, pficp::board::board_model(&model, 4096, 2));
+    assert_eq!(a, pficp::board::quantise::board_model(&model, 4096, 1), "same seed, same points");
+    assert_ne!(a, pficp::board::quantise::board_model(&model, 4096, 2));
     assert!(a.windows(2).all(|w| w[0].x < w[1].x), "original order kept");
-    assert_eq!(pficp::board::board_model(&model[..100], 4096, 1), model[..100].to_vec());
+    assert_eq!(pficp::board::quantise::board_model(&model[..100], 4096, 1), model[..100].to_vec());
 }
 
 // ---------------------------------------------------------------------------------------

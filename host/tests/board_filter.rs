@@ -469,13 +469,13 @@ fn the_on_board_filter_needs_protocol_6_and_the_host_driven_mode_takes_1_2_and_4
 fn a_model_the_grid_refuses_is_a_one_line_error() {
     // The host's normalisation puts every model point in the unit ball; a point outside the
     // grid's cube (here one quantised by hand) or too many points is refused in one line.
-    let e = pficp::board::board_grid(&[[0, 0, 0], [0, 9000, 0]]).unwrap_err();
+    let e = pficp::board::quantise::board_grid(&[[0, 0, 0], [0, 9000, 0]]).unwrap_err();
     let m = e.to_string();
     assert!(
         matches!(e, BoardError::Limit(_)) && m.contains("point 1") && m.contains("outside") && !m.contains('\n'),
         "{m}"
     );
-    let e = pficp::board::board_grid(&vec![[0; 3]; 4097]).unwrap_err();
+    let e = pficp::board::quantise::board_grid(&vec![[0; 3]; 4097]).unwrap_err();
     assert!(e.to_string().contains("4097"), "{e}");
     // Every planned model fits, its sample in Morton order.
     let (ds, _) = reduced_model_1();
@@ -483,7 +483,10 @@ fn a_model_the_grid_refuses_is_a_one_line_error() {
     let settings = PfIcpSettings { clusters: 25, particles: 20, iterations: 4, seed: 5, ..Default::default() };
     let plan = on_board::plan(&nn, &ds.scan, &settings, 200, 4096).unwrap();
     assert_eq!(plan.grid, grid(&plan.model));
-    assert!(plan.scan.windows(2).all(|w| pficp::board::morton_key(w[0]) <= pficp::board::morton_key(w[1])));
+    assert!(plan
+        .scan
+        .windows(2)
+        .all(|w| pficp::board::quantise::morton_key(w[0]) <= pficp::board::quantise::morton_key(w[1])));
 }
 
 #[test]

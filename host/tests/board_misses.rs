@@ -14,8 +14,8 @@
 //! Slow (minutes): ignored by default. `PFICP_CASES=100 PFICP_SEED=4 cargo test --release
 //! -p pficp-host --test board_misses -- --ignored --nocapture` (dev split only).
 
-use pficp::board::fixed::{normalised_pose, original_pose, quantise_pose, restore_pose};
 use pficp::board::on_board::{self, plan, OnBoardPlan, POLISH_STEPS};
+use pficp::board::quantise::{normalised_pose, original_pose, quantise_pose, restore_pose};
 use pficp::eval::realistic::{case, score, Family, Score, Split};
 use pficp::geometry::Pose;
 use pficp::nn::NearestNeighbours;
@@ -73,8 +73,9 @@ fn the_board_alone_misses_by_kind() {
                 let nn = NearestNeighbours::new(&c.model);
                 let settings = PfIcpSettings { seed: c.seed, ..Default::default() };
                 let soft = score(&pf_icp::register(&nn, &c.scan, &settings).registration.pose, &c);
-                let plan = plan(&nn, &c.scan, &settings, on_board::DEFAULT_BOARD_POINTS, pficp::board::MAX_POINTS)
-                    .expect("a plan");
+                let plan =
+                    plan(&nn, &c.scan, &settings, on_board::DEFAULT_BOARD_POINTS, pficp::board::BOARD_MAX_STORE_POINTS)
+                        .expect("a plan");
                 let reply = ResultReply::of(&plan.emulate());
                 let fin = on_board::finish(&plan, &nn, &c.scan, &settings, &reply, std::time::Duration::ZERO);
                 let board = score(&fin.filter_pose, &c);

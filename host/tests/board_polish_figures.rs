@@ -20,8 +20,8 @@
 //! 8). The tables are in
 //! docs/on-board-polish.md.
 
-use pficp::board::fixed::{normalised_pose, original_pose, quantise_pose, restore_pose};
 use pficp::board::on_board::{self, plan, OnBoardPlan};
+use pficp::board::quantise::{normalised_pose, original_pose, quantise_pose, restore_pose};
 use pficp::cloud::bbox_diagonal;
 use pficp::datasets::{make, ModelId, Sampling, ScanSpec};
 use pficp::eval::realistic::{case, score, Family, Split};
@@ -68,10 +68,11 @@ fn poses(
     truth: &Pose,
 ) -> ([Pose; 6], bool, usize) {
     let software = pf_icp::register(nn, scan, settings).registration.pose;
-    let plan = plan(nn, scan, settings, on_board::DEFAULT_BOARD_POINTS, pficp::board::MAX_POINTS).expect("plan");
+    let plan =
+        plan(nn, scan, settings, on_board::DEFAULT_BOARD_POINTS, pficp::board::BOARD_MAX_STORE_POINTS).expect("plan");
     let out = plan.emulate_filter();
     let alone = on_board::params_pose(&out.params, &plan.model_norm, &plan.scan_norm);
-    assert!(scan.len() <= pficp::board::MAX_POINTS, "the whole scan fits the board");
+    assert!(scan.len() <= pficp::board::BOARD_MAX_STORE_POINTS, "the whole scan fits the board");
     let whole = plan.scan_norm.quantise(scan);
     let polished = |points: &[pficp_fpga::common::format::FxPoint]| {
         restored(&plan, &pficp_fpga::polish::polish(&plan.grid, &plan.normals, points, &out.pose, steps()).pose)

@@ -22,8 +22,8 @@
 //! variants and the shipped one; always the dev split: this is for choosing, not for
 //! reporting).
 
-use pficp::board::fixed::{normalised_pose, original_pose, quantise_pose, restore_pose};
 use pficp::board::on_board::{self, plan, OnBoardPlan};
+use pficp::board::quantise::{normalised_pose, original_pose, quantise_pose, restore_pose};
 use pficp::eval::realistic::{case, score, Family, Split};
 use pficp::geometry::Pose;
 use pficp::nn::NearestNeighbours;
@@ -226,8 +226,9 @@ fn the_polish_settings_on_the_dev_split() {
                 let nn = NearestNeighbours::new(&c.model);
                 let settings = PfIcpSettings { seed: c.seed, ..Default::default() };
                 let soft = pf_icp::register(&nn, &c.scan, &settings).registration.pose;
-                let plan = plan(&nn, &c.scan, &settings, on_board::DEFAULT_BOARD_POINTS, pficp::board::MAX_POINTS)
-                    .expect("a plan");
+                let plan =
+                    plan(&nn, &c.scan, &settings, on_board::DEFAULT_BOARD_POINTS, pficp::board::BOARD_MAX_STORE_POINTS)
+                        .expect("a plan");
                 let filter = plan.emulate_filter();
                 let search = pficp_fpga::surface::GridSearch { grid: &plan.grid, normals: &plan.normals };
                 let hyps = &plan.prior.hypotheses;

@@ -16,8 +16,8 @@
 //! the surface residual (protocol 4, `pficp_fpga::surface`). The tables they print are in
 //! docs/board-modes.md.
 
-use pficp::board::fixed::{normalised_pose, quantise_pose};
 use pficp::board::on_board;
+use pficp::board::quantise::{normalised_pose, quantise_pose};
 use pficp::cloud::bbox_diagonal;
 use pficp::datasets::{make, ModelId, Sampling, ScanSpec};
 use pficp::nn::NearestNeighbours;
@@ -237,7 +237,8 @@ fn morton_order_clocks() {
             let start = pf::pose_of(&plan.config.centre);
             let raw = unsorted(&plan, id, 1000);
             let mut at_start = raw.clone();
-            at_start.sort_by_key(|&p| pficp::board::morton_key(pficp_fpga::common::format::transform(&start, p)));
+            at_start
+                .sort_by_key(|&p| pficp::board::quantise::morton_key(pficp_fpga::common::format::transform(&start, p)));
             let brute = pficp_fpga::search::pipeline::clocks_per_particle(s, plan.grid.points.len(), lanes);
             let bound = clocks_bound(s, plan.grid.points.len(), lanes);
             for (name, pose) in [("start", start), ("truth", near)] {

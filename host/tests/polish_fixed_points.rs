@@ -9,8 +9,8 @@
 //! Slow (about a minute for 25 cases a family): ignored by default. `PFICP_CASES=25 cargo
 //! test --release -p pficp-host --test polish_fixed_points -- --ignored --nocapture`.
 
-use pficp::board::fixed::{normalised_pose, quantise_pose};
 use pficp::board::on_board::{self, plan, OnBoardPlan};
+use pficp::board::quantise::{normalised_pose, quantise_pose};
 use pficp::eval::realistic::{case, Family, Split};
 use pficp::geometry::Pose;
 use pficp::nn::NearestNeighbours;
@@ -39,8 +39,9 @@ fn the_steps_before_an_exact_fixed_point() {
                 let c = case(family, i, Split::Dev, 1);
                 let nn = NearestNeighbours::new(&c.model);
                 let settings = PfIcpSettings { seed: c.seed, ..Default::default() };
-                let plan = plan(&nn, &c.scan, &settings, on_board::DEFAULT_BOARD_POINTS, pficp::board::MAX_POINTS)
-                    .expect("a plan");
+                let plan =
+                    plan(&nn, &c.scan, &settings, on_board::DEFAULT_BOARD_POINTS, pficp::board::BOARD_MAX_STORE_POINTS)
+                        .expect("a plan");
                 let filter = plan.emulate_filter();
                 let search = GridSearch { grid: &plan.grid, normals: &plan.normals };
                 let stored = plan.stored_scan();

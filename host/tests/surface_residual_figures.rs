@@ -33,7 +33,7 @@ fn the_board_alone_with_the_surface_residual() {
                 let c = case(family, i, split, 1);
                 let nn = NearestNeighbours::new(&c.model);
                 let settings = PfIcpSettings { seed: c.seed, ..Default::default() };
-                let plan = plan(&nn, &c.scan, &settings, points, pficp::board::MAX_POINTS).expect("plan");
+                let plan = plan(&nn, &c.scan, &settings, points, pficp::board::BOARD_MAX_STORE_POINTS).expect("plan");
                 let outs = [point_to_point_filter(&plan), plan.emulate_filter(), excess_filter(&plan, &plan.normals)];
                 let scores =
                     outs.map(|o| score(&on_board::params_pose(&o.params, &plan.model_norm, &plan.scan_norm), &c));

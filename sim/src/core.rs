@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 /// One Verilated model in the archive (a table of its shim's entry points).
 pub(crate) struct Model {
-    /// `neighbour_pipeline`, `weight_stage`, `board`, ... (`build.rs`'s `DESIGNS`).
+    /// `neighbour_pipeline`, `weight_stage`, `board`, ... (`pficp_fpga::designs::DESIGNS`).
     pub(crate) design: &'static str,
     /// Lanes (0 for a design without lanes).
     pub(crate) lanes: usize,
@@ -36,20 +36,10 @@ pub(crate) mod ffi {
 }
 pub use ffi::BUILD_REPORT;
 
-pub(crate) const NEIGHBOUR_PIPELINE: &str = "neighbour_pipeline";
-pub(crate) const WEIGHT_STAGE: &str = "weight_stage";
-pub(crate) const SURFACE_RESIDUAL: &str = "surface_residual";
-pub(crate) const BOARD: &str = "board";
-pub(crate) const BOARD_FAST: &str = "board_fast";
-pub(crate) const SEQUENCER: &str = "sequencer";
-pub(crate) const POLISH_PROGRAM: &str = "polish_program";
-pub(crate) const POLISH_BENCH: &str = "polish_bench";
-pub(crate) const POLISH_UNIT: &str = "polish_unit";
-
 /// Lane counts with a Verilated neighbour pipeline: the build verilates 4 and 16 unless
 /// `PFICP_SIM_LANES` says otherwise.
 pub fn verilated_lanes() -> Vec<usize> {
-    ffi::MODELS.iter().filter(|m| m.design == NEIGHBOUR_PIPELINE).map(|m| m.lanes).collect()
+    ffi::MODELS.iter().filter(|m| m.design == pficp_fpga::designs::NEIGHBOUR_PIPELINE.name).map(|m| m.lanes).collect()
 }
 
 /// Every Verilated model: (design, lanes, Verilator prefix), e.g. `("neighbour_pipeline", 16,

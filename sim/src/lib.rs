@@ -1,6 +1,6 @@
 //! Verilator co-simulation of the generated designs against their bit-exact references:
 //!
-//! | RTL (`build.rs` verilates it) | wrapper | reference | lockstep |
+//! | RTL (an entry of `pficp_fpga::designs::DESIGNS`; `build.rs` verilates each) | wrapper (`wrappers/<design>.rs`) | reference | lockstep |
 //! |---|---|---|---|
 //! | `neighbour_pipeline_verilog(P)` (docs/pipeline.md, the neighbour pipeline), P in [`verilated_lanes`] | [`VerilatedNeighbourPipeline`] | [`NeighbourPipelineModel`](pficp_fpga::search::neighbour_pipeline::NeighbourPipelineModel) | [`NeighbourLockstep`] |
 //! | `weight_stage_verilog()` (docs/weights.md) | [`VerilatedWeightStage`] | [`WeightModel`](pficp_fpga::filter::weights::WeightModel) | [`WeightLockstep`] |
@@ -32,11 +32,13 @@ mod core;
 pub mod fuzz;
 mod lockstep;
 mod neighbour_lockstep;
-pub mod ports;
+#[macro_use]
+mod rtl;
 pub mod serial;
 mod wrappers;
 
 pub use crate::core::{verilated_lanes, verilated_models, BUILD_REPORT};
 pub use lockstep::*;
 pub use neighbour_lockstep::NeighbourLockstep;
+pub use rtl::Rtl;
 pub use wrappers::*;

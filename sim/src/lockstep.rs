@@ -1,51 +1,12 @@
-//! [`Rtl`], what a Verilated design and its reference share, and [`LockstepOf`], the one
-//! harness that runs both clock for clock and compares every output port.
+//! [`LockstepOf`], the one harness that runs a Verilated design and its reference clock for
+//! clock and compares every output port (the designs plug in through [`Rtl`]).
 
+use crate::rtl::Rtl;
 use crate::wrappers::*;
 use pficp_fpga::common::format::WeightScale;
 use pficp_fpga::filter::weights::{WeightInputs, WeightOutputs, MAX_PARTICLES};
 use std::fmt;
 use std::path::{Path, PathBuf};
-
-/// A Verilated design and its reference, as [`LockstepOf`] runs them (implemented by
-/// [`VerilatedNeighbourPipeline`], [`VerilatedWeightStage`], [`VerilatedSurfaceResidual`]
-/// and [`VerilatedSequencer`]).
-pub trait Rtl: Sized {
-    /// The input ports.
-    type Inputs: Copy + PartialEq + fmt::Debug;
-    /// The output ports.
-    type Outputs: Copy + PartialEq + fmt::Debug;
-    /// The cycle-accurate reference.
-    type Reference: Clone;
-    /// Output port names, in the order they are compared.
-    const OUTPUT_PORTS: &'static [&'static str];
-    /// The output port values in [`OUTPUT_PORTS`](Self::OUTPUT_PORTS) order.
-    fn port_values(o: &Self::Outputs) -> Vec<u64>;
-    /// The reference after reset for this RTL.
-    fn new_reference(&self) -> Self::Reference;
-    /// The reference's outputs now.
-    fn reference_outputs(r: &Self::Reference) -> Self::Outputs;
-    /// One rising edge of the reference.
-    fn reference_step(r: &mut Self::Reference, i: &Self::Inputs);
-    /// A fresh instance of the same model, after reset.
-    fn fresh(&self) -> Self;
-    /// Drive the input ports.
-    fn set_inputs(&mut self, i: &Self::Inputs);
-    /// The output ports now.
-    fn outputs(&self) -> Self::Outputs;
-    /// One clock.
-    fn tick(&mut self);
-    /// Rising edges so far.
-    fn cycle(&self) -> u64;
-    /// Lanes (0 for a design without lanes).
-    fn lanes(&self) -> usize;
-    /// The Verilator prefix.
-    fn prefix(&self) -> &'static str;
-    /// Trace to a VCD from now on.
-    fn trace_to(&mut self, path: &Path) -> std::io::Result<()>;
-    /// Flush the VCD.
-    fn flush_trace(&mut self);
-}
 
 /// The first difference between the RTL and the reference.
 #[derive(Clone, Debug, PartialEq, Eq)]

@@ -51,7 +51,7 @@ fn every_command_matches_the_reference_byte_for_byte() {
     // The model sorted by cell, its normals as the host computes them, its table (LoadModel,
     // LoadTable), then the scan.
     let grid = pficp_fpga::search::grid::Grid::build(&model).unwrap();
-    let normals = pficp::board::on_board::stored_normals(&grid);
+    let normals = pficp::board::quantise::stored_normals(&grid);
     let scan_loads = scan.chunks(messages::MAX_LOAD_POINTS).enumerate();
     let loads = messages::grid_upload(&grid, &normals).into_iter().chain(
         scan_loads.map(|(k, c)| (Command::LoadScan, messages::load_request((k * messages::MAX_LOAD_POINTS) as u16, c))),

@@ -53,10 +53,10 @@ fn req(cmd: Command, seq: u8, data: Vec<u8>) -> Frame {
 }
 
 /// Upload `model` sorted by cell with the normals the host computes for it
-/// (`on_board::stored_normals`) and its cell table; the grid and the normals.
+/// (`quantise::stored_normals`) and its cell table; the grid and the normals.
 fn load_grid(b: &mut SerialBoard, model: &[FxPoint]) -> (Grid, Vec<FxNormal>) {
     let g = Grid::build(model).expect("the test model fits the grid");
-    let normals = pficp::board::on_board::stored_normals(&g);
+    let normals = pficp::board::quantise::stored_normals(&g);
     for (cmd, data) in messages::grid_upload(&g, &normals) {
         let r = exchange(b, &req(cmd, 1, data));
         assert_eq!(r.code, cmd as u8 | 0x80);

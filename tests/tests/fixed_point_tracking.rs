@@ -3,7 +3,7 @@
 //! distances) and particle weights.
 
 use nalgebra::Point3;
-use pficp::board::fixed::{cost_error_bound, normalised_pose, quantise_pose, Normalisation};
+use pficp::board::quantise::{cost_error_bound, normalised_pose, quantise_pose, Normalisation};
 use pficp::datasets::{make, ModelId, Sampling, ScanSpec};
 use pficp::geometry::Pose;
 use pficp::nn::NearestNeighbours;

@@ -1,10 +1,10 @@
 //! The board's grid search (`pficp_fpga::search::grid`) on the paper's models 1 to 3 as the host
-//! quantises them (`pficp::board::fixed`): every normalised model fits the grid, the search
+//! quantises them (`pficp::board::quantise`): every normalised model fits the grid, the search
 //! equals the capped brute force on their scans at the truth and at poses off it, and the
 //! work it does (candidates a scan point, points capped) is printed for the design
 //! (docs/search.md, "The grid and the cap").
 
-use pficp::board::fixed::{normalised_pose, quantise_pose, Normalisation};
+use pficp::board::quantise::{normalised_pose, quantise_pose, Normalisation};
 use pficp::datasets::{make, ModelId, Sampling, ScanSpec};
 use pficp::geometry::Pose;
 use pficp_fpga::common::format::transform;

@@ -5,7 +5,7 @@
 //! brute-force pipeline's count, with the scan in random order and Morton-sorted.
 //! `cargo test --release -p pficp-tests --test neighbour_pipeline_models -- --nocapture`
 
-use pficp::board::fixed::{normalised_pose, quantise_pose, Normalisation};
+use pficp::board::quantise::{normalised_pose, quantise_pose, Normalisation};
 use pficp::datasets::{make, ModelId, Sampling, ScanSpec};
 use pficp::geometry::Pose;
 use pficp_fpga::common::format::{transform, FxPoint, FxPose};

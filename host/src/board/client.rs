@@ -50,12 +50,9 @@
 //!   deterministic, so a repeated run gives the same result).
 
 use super::BoardError;
-use pficp_fpga::common::format::{FxPoint, FxPose, WeightScale};
-use pficp_fpga::protocol::layout::POINT_BYTES;
+use pficp_fpga::common::format::FxPose;
 use pficp_fpga::protocol::messages::{
-    load_request, parse_two_u16, table_request, two_u16, EvaluateReply, EvaluateRequest, Identity, MessageError,
-    NearestReply, NearestRequest, WeightSummary, IDENTITY_BYTES, MAX_LOAD_ENTRIES, MAX_LOAD_POINTS, MAX_NEAREST,
-    MAX_POSES, NORMALS_OFFSET, TABLE_ENTRIES, TABLE_ENTRY_BYTES, TABLE_ENTRY_MASK,
+    Identity, MessageError, NearestReply, NearestRequest, IDENTITY_BYTES, MAX_NEAREST,
 };
 use pficp_fpga::protocol::versions::capabilities;
 use pficp_fpga::protocol::{Command, Deframer, VERSION};
@@ -87,9 +84,9 @@ pub const MIN_CLOCK_HZ: u32 = 10_000_000;
 /// Resends of one request after a corrupted exchange (so at most 3 attempts).
 pub const MAX_RETRIES: usize = 2;
 /// Largest model and scan the protocol addresses (12-bit indices).
-pub const MAX_POINTS: usize = pficp_fpga::common::format::MAX_POINTS;
+pub const BOARD_MAX_STORE_POINTS: usize = pficp_fpga::common::format::MAX_POINTS;
 /// Most particles the board stores.
-pub const MAX_PARTICLES: usize = pficp_fpga::filter::weights::MAX_PARTICLES;
+pub const BOARD_MAX_PARTICLES: usize = pficp_fpga::filter::weights::MAX_PARTICLES;
 /// The modelled board time of a run is multiplied by this for the run's time limit.
 pub const RUN_SAFETY: u32 = 4;
 /// Time between two Status requests while a filter runs: the registration's latency waits
@@ -116,8 +113,10 @@ pub struct ClientStats {
     pub resident: usize,
 }
 
+mod evaluate;
 mod filter;
 mod link;
+mod load;
 
 pub use filter::run_clocks_bound;
 
@@ -290,81 +289,6 @@ impl BoardClient {
         Ok(id)
     }
 
-    /// Write the model store from point 0, in frames of [`MAX_LOAD_POINTS`], each
-    /// acknowledged; `progress(done, total)` after each. Sizes are not changed. A protocol
-    /// 3 board searches the model through its cell table: use [`Self::load_grid`].
-    pub fn load_model(&mut self, points: &[FxPoint], progress: impl FnMut(usize, usize)) -> Result<(), BoardError> {
-        self.grid_order = None;
-        self.load(Command::LoadModel, points, progress)
-    }
-
-    /// Write the cell table (protocol 3, LoadTable) from entry 0, in frames of
-    /// [`MAX_LOAD_ENTRIES`], each acknowledged; `progress(done, total)` after each. At most
-    /// [`TABLE_ENTRIES`] entries of 13 bits.
-    pub fn load_table(&mut self, entries: &[u16], mut progress: impl FnMut(usize, usize)) -> Result<(), BoardError> {
-        if entries.is_empty() || entries.len() > TABLE_ENTRIES {
-            return Err(BoardError::Limit(format!(
-                "a cell table of {} entries; the board holds 1 to {TABLE_ENTRIES}",
-                entries.len()
-            )));
-        }
-        if let Some(i) = entries.iter().position(|&e| e > TABLE_ENTRY_MASK) {
-            return Err(BoardError::Limit(format!(
-                "cell table entry {i} is {}; entries have 13 bits (at most {TABLE_ENTRY_MASK})",
-                entries[i]
-            )));
-        }
-        self.grid_order = None;
-        let command = Command::LoadTable;
-        progress(0, entries.len());
-        let mut offset = 0;
-        for chunk in entries.chunks(MAX_LOAD_ENTRIES) {
-            let reply = self.transact(command, table_request(offset as u16, chunk), 4, 0, true)?;
-            self.check_ack(command, &reply.data, offset, chunk.len())?;
-            offset += chunk.len();
-            progress(offset, entries.len());
-        }
-        Ok(())
-    }
-
-    /// Upload a gridded model (protocol 4): the points sorted by cell ([`Grid::points`],
-    /// LoadModel), their normals (`normals[i]` the normal of stored point `i`, LoadModel from
-    /// word [`NORMALS_OFFSET`]) then the cell table ([`Grid::first`], LoadTable): the
-    /// requests of `messages::grid_upload`. `progress(done, total)` counts the data bytes of
-    /// all three (6 a point or normal, 2 a table entry), so it rises once from 0 to the
-    /// total. Afterwards the board's (stored) model indices map to the host's through
-    /// [`Grid::order`] ([`Self::nearest_model`]). Sizes are not changed: the model size in
-    /// use is `grid.points.len()`.
-    pub fn load_grid(
-        &mut self,
-        grid: &Grid,
-        normals: &[FxNormal],
-        mut progress: impl FnMut(usize, usize),
-    ) -> Result<(), BoardError> {
-        if normals.len() != grid.points.len() {
-            return Err(BoardError::Limit(format!(
-                "{} normals for {} model points; the board takes one a point",
-                normals.len(),
-                grid.points.len()
-            )));
-        }
-        let point_bytes = grid.points.len() * POINT_BYTES;
-        let total = 2 * point_bytes + grid.first.len() * TABLE_ENTRY_BYTES;
-        self.load_model(&grid.points, |done, _| progress(done * POINT_BYTES, total))?;
-        self.load_at(Command::LoadModel, NORMALS_OFFSET, normals, |done, _| {
-            if done > 0 {
-                progress(point_bytes + done * POINT_BYTES, total)
-            }
-        })?;
-        self.load_table(&grid.first, |done, _| {
-            if done > 0 {
-                progress(2 * point_bytes + done * TABLE_ENTRY_BYTES, total)
-            }
-        })?;
-        self.grid_order = Some(grid.order.clone());
-        Ok(())
-    }
-
     /// [`Self::load_grid`] unless the board already holds `grid` and `normals`: a fresh
     /// Identify whose model digest is the one this upload would leave
     /// (`messages::grid_digest`; docs/protocol.md, "Resident model"). True when it uploaded.
@@ -387,230 +311,6 @@ impl BoardClient {
         Ok(true)
     }
 
-    fn check_ack(&self, command: Command, data: &[u8], offset: usize, count: usize) -> Result<(), BoardError> {
-        let ack = parse_two_u16(data).map_err(|problem| BoardError::Reply { command, problem })?;
-        if ack != (offset as u16, count as u16) {
-            return Err(BoardError::Reply {
-                command,
-                problem: MessageError::Field {
-                    field: "offset, count",
-                    got: ((ack.0 as u64) << 16) | ack.1 as u64,
-                    expected: ((offset as u64) << 16) | count as u64,
-                },
-            });
-        }
-        Ok(())
-    }
-
-    /// Write the scan store from point 0, as [`Self::load_model`].
-    pub fn load_scan(&mut self, points: &[FxPoint], progress: impl FnMut(usize, usize)) -> Result<(), BoardError> {
-        self.load(Command::LoadScan, points, progress)
-    }
-
-    fn load(
-        &mut self,
-        command: Command,
-        points: &[FxPoint],
-        progress: impl FnMut(usize, usize),
-    ) -> Result<(), BoardError> {
-        self.load_at(command, 0, points, progress)
-    }
-
-    /// Write `points` from word `start` (0 for points, [`NORMALS_OFFSET`] for normals).
-    fn load_at(
-        &mut self,
-        command: Command,
-        start: usize,
-        points: &[FxPoint],
-        mut progress: impl FnMut(usize, usize),
-    ) -> Result<(), BoardError> {
-        let what = match (command, start) {
-            (Command::LoadModel, 0) => "model",
-            (Command::LoadModel, _) => "model's normals",
-            _ => "scan",
-        };
-        let max = self.max_points(command);
-        if points.is_empty() || points.len() > max {
-            return Err(BoardError::Limit(format!(
-                "the {what} has {} points; the board holds 1 to {max}",
-                points.len()
-            )));
-        }
-        progress(0, points.len());
-        let mut done = 0;
-        for chunk in points.chunks(MAX_LOAD_POINTS) {
-            let offset = start + done;
-            let reply = self.transact(command, load_request(offset as u16, chunk), 4, 0, true)?;
-            self.check_ack(command, &reply.data, offset, chunk.len())?;
-            done += chunk.len();
-            progress(done, points.len());
-        }
-        Ok(())
-    }
-
-    fn max_points(&self, command: Command) -> usize {
-        let id = self.identity;
-        match command {
-            Command::LoadModel => id.map_or(MAX_POINTS, |i| i.max_model as usize),
-            _ => id.map_or(MAX_POINTS, |i| i.max_scan as usize),
-        }
-        .min(MAX_POINTS)
-    }
-
-    /// Set the numbers of model and scan points in use (1 to 4,096 each).
-    pub fn set_sizes(&mut self, model: usize, scan: usize) -> Result<(), BoardError> {
-        for (what, n, command) in [("model", model, Command::LoadModel), ("scan", scan, Command::LoadScan)] {
-            if n == 0 || n > self.max_points(command) {
-                return Err(BoardError::Limit(format!(
-                    "{what} size {n}: the board holds 1 to {}",
-                    self.max_points(command)
-                )));
-            }
-        }
-        let data = two_u16(model as u16, scan as u16);
-        let reply = self.transact(Command::SetSizes, data.clone(), 4, 0, true)?;
-        if reply.data != data {
-            let got = parse_two_u16(&reply.data)
-                .map_err(|problem| BoardError::Reply { command: Command::SetSizes, problem })?;
-            return Err(BoardError::Reply {
-                command: Command::SetSizes,
-                problem: MessageError::Field {
-                    field: "sizes",
-                    got: ((got.0 as u64) << 16) | got.1 as u64,
-                    expected: ((model as u64) << 16) | scan as u64,
-                },
-            });
-        }
-        self.sizes = (model as u16, scan as u16);
-        Ok(())
-    }
-
-    /// One Evaluate frame: `poses` (at most [`MAX_POSES`]; none only with `last`) evaluated
-    /// over the scan in use; with `first` the stored costs are forgotten first; with `last`
-    /// every stored cost is weighed with `scale` afterwards.
-    pub fn evaluate(
-        &mut self,
-        first: bool,
-        last: bool,
-        scale: WeightScale,
-        poses: &[FxPose],
-    ) -> Result<EvaluateReply, BoardError> {
-        let n = poses.len();
-        if n > MAX_POSES || (n == 0 && !last) {
-            return Err(BoardError::Limit(format!(
-                "an Evaluate frame carries 1 to {MAX_POSES} poses (or none to weigh), not {n}"
-            )));
-        }
-        let after = if first { n } else { self.stored + n };
-        if after == 0 || after > self.max_particles() {
-            return Err(BoardError::Limit(format!(
-                "{after} particle costs would be stored; the board holds 1 to {}",
-                self.max_particles()
-            )));
-        }
-        let request = EvaluateRequest { first, last, scale, poses: poses.to_vec() };
-        let reply_bytes = 6 * n + if last { 11 + 2 * after } else { 0 };
-        let clocks = n as u64 * evaluation_clocks_bound(self.sizes.1 as usize, self.sizes.0 as usize, self.lanes())
-            + if last { after as u64 + 16 } else { 0 };
-        // Appending costs twice would corrupt the iteration: only FIRST or weigh-only repeat.
-        let repeatable = first || n == 0;
-        let reply = self.transact(Command::Evaluate, request.encode(), reply_bytes, clocks, repeatable)?;
-        let r = EvaluateReply::decode(&reply.data, n, last)
-            .map_err(|problem| BoardError::Reply { command: Command::Evaluate, problem })?;
-        self.stored = after;
-        if let Some(s) = &r.summary {
-            if s.weights.len() != after {
-                return Err(BoardError::Reply {
-                    command: Command::Evaluate,
-                    problem: MessageError::Field {
-                        field: "stored",
-                        got: s.weights.len() as u64,
-                        expected: after as u64,
-                    },
-                });
-            }
-        }
-        Ok(r)
-    }
-
-    /// Weigh the stored costs with `scale` (Evaluate with no poses and LAST).
-    pub fn weigh(&mut self, scale: WeightScale) -> Result<WeightSummary, BoardError> {
-        let r = self.evaluate(false, true, scale, &[])?;
-        Ok(r.summary.expect("decoded with LAST"))
-    }
-
-    /// The costs of `poses` (1 to 256), in frames of [`MAX_POSES`] without LAST (the first
-    /// with FIRST): they become the stored costs. Started over (at most [`MAX_RETRIES`]
-    /// times) when a reply is lost.
-    pub fn costs(&mut self, poses: &[FxPose]) -> Result<Vec<u64>, BoardError> {
-        if poses.is_empty() || poses.len() > self.max_particles() {
-            return Err(BoardError::Limit(format!(
-                "{} particles: the board weighs 1 to {}",
-                poses.len(),
-                self.max_particles()
-            )));
-        }
-        let mut restarts = 0;
-        'again: loop {
-            let mut costs = Vec::with_capacity(poses.len());
-            for (k, batch) in poses.chunks(MAX_POSES).enumerate() {
-                match self.evaluate(k == 0, false, WeightScale::default(), batch) {
-                    Ok(r) => costs.extend(r.costs),
-                    Err(BoardError::ReplyLost { .. }) if restarts < MAX_RETRIES => {
-                        restarts += 1;
-                        self.stats.restarts += 1;
-                        continue 'again;
-                    }
-                    Err(e) => return Err(e),
-                }
-            }
-            return Ok(costs);
-        }
-    }
-
-    /// One filter iteration on the board: the costs of `poses` ([`Self::costs`]), then
-    /// `scale_fn(costs)` chooses the weight scale and the stored costs are weighed
-    /// ([`Self::weigh`]). Returns the costs and the weights (checked: one per pose, `w_sum`
-    /// their sum).
-    pub fn costs_and_weights(
-        &mut self,
-        poses: &[FxPose],
-        scale_fn: impl FnOnce(&[u64]) -> WeightScale,
-    ) -> Result<(Vec<u64>, WeightSummary), BoardError> {
-        let costs = self.costs(poses)?;
-        let scale = scale_fn(&costs);
-        let summary = self.weigh(scale)?;
-        let sum: u64 = summary.weights.iter().map(|&w| w as u64).sum();
-        if sum == 0 {
-            // Normalising would divide by zero: every weight NaN.
-            return Err(BoardError::Filter(format!(
-                "the board on {} returned {} weights that are all 0 (the best particle always weighs 1)",
-                self.name,
-                summary.weights.len()
-            )));
-        }
-        if sum != summary.w_sum as u64 {
-            return Err(BoardError::Reply {
-                command: Command::Evaluate,
-                problem: MessageError::Field { field: "w_sum", got: summary.w_sum as u64, expected: sum },
-            });
-        }
-        let min = costs.iter().copied().min().unwrap_or(0);
-        if summary.min_cost != min {
-            return Err(BoardError::Reply {
-                command: Command::Evaluate,
-                problem: MessageError::Field { field: "min_cost", got: summary.min_cost, expected: min },
-            });
-        }
-        if summary.weights != pficp_fpga::filter::weights::weights(&costs, &scale) {
-            return Err(BoardError::Filter(format!(
-                "the board on {} returned weights that are not the exp table's for its own costs",
-                self.name
-            )));
-        }
-        Ok((costs, summary))
-    }
-
     /// Nearest model point and squared distance of scan points `first .. first + count` at
     /// `pose`, in frames of [`MAX_NEAREST`]; `cost` is the sum of their costs (before
     /// protocol 4 the distances, checked equal; since, the surface residuals, checked between
@@ -619,9 +319,9 @@ impl BoardClient {
     /// [`Self::nearest_model`] gives the host's), and a protocol 3 board reports a point
     /// farther than the cap as index 0 at distance [`CAP_D2`].
     pub fn nearest(&mut self, first: usize, count: usize, pose: &FxPose) -> Result<NearestReply, BoardError> {
-        if count == 0 || first + count > MAX_POINTS {
+        if count == 0 || first + count > BOARD_MAX_STORE_POINTS {
             return Err(BoardError::Limit(format!(
-                "scan points {first}..{}: the board holds points 0..{MAX_POINTS}",
+                "scan points {first}..{}: the board holds points 0..{BOARD_MAX_STORE_POINTS}",
                 first + count
             )));
         }
@@ -690,7 +390,7 @@ impl BoardClient {
     }
 
     fn max_particles(&self) -> usize {
-        self.identity.map_or(MAX_PARTICLES, |i| i.max_particles as usize).min(MAX_PARTICLES)
+        self.identity.map_or(BOARD_MAX_PARTICLES, |i| i.max_particles as usize).min(BOARD_MAX_PARTICLES)
     }
 
     /// Lanes for the compute-time model: the board's once identified, else 1 (the slowest).

@@ -12,7 +12,7 @@
 //!    its costs are surface residuals capped at `h^2`, `pficp_fpga::surface`), on a version
 //!    1 or 2 board as it is (brute force). The
 //!    weight sample (the scan points the software filter takes its costs over) goes to the
-//!    scan store in Morton order ([`super::morton_sorted`]; the costs are sums, so the
+//!    scan store in Morton order ([`super::quantise::morton_sorted`]; the costs are sums, so the
 //!    order changes no cost).
 //! 2. Each iteration the particles' poses are normalised and quantised
 //!    ([`normalised_pose`], [`quantise_pose`]) and sent in Evaluate frames without LAST; the
@@ -27,11 +27,11 @@
 //! The poses the filter carries, refines and reports are in the clouds' own frame, so
 //! nothing has to be un-normalised at the end but the costs.
 
-use super::fixed::{normalised_pose, quantise_pose, Normalisation};
 use super::on_board::OnBoardStep;
-use super::{
-    board_grid, board_model, morton_sorted, BoardClient, BoardError, ClientStats, Upload, MAX_PARTICLES, MAX_POINTS,
+use super::quantise::{
+    board_grid, board_model, morton_sorted, normalised_pose, quantise_pose, stored_normals, Normalisation,
 };
+use super::{BoardClient, BoardError, ClientStats, Upload, BOARD_MAX_PARTICLES, BOARD_MAX_STORE_POINTS};
 use crate::geometry::Pose;
 use crate::nn::NearestNeighbours;
 use crate::pf_icp::particle_filter::{tempered_q, WeighError, Weighed};
@@ -100,7 +100,7 @@ impl ParticleWeights for BoardWeights<'_> {
     fn prepare(&self, sample: &[Point3<f64>]) -> Result<(), WeighError> {
         let mut client = self.client.lock().expect("not poisoned");
         let mut progress = self.progress.lock().expect("not poisoned");
-        let max_scan = client.identity().map_or(MAX_POINTS, |i| i.max_scan as usize);
+        let max_scan = client.identity().map_or(BOARD_MAX_STORE_POINTS, |i| i.max_scan as usize);
         if sample.len() > max_scan {
             return Err(Box::new(BoardError::Limit(format!(
                 "the weight sample has {} scan points; the board holds at most {max_scan}",
@@ -179,14 +179,14 @@ pub fn register_reporting(
     if let Some(why) = refusal(identity.version, Mode::HostDriven) {
         return Err(BoardError::Limit(why));
     }
-    let max_particles = (identity.max_particles as usize).min(MAX_PARTICLES);
+    let max_particles = (identity.max_particles as usize).min(BOARD_MAX_PARTICLES);
     let most = settings.adaptive.map_or(settings.particles, |a| a.max.max(settings.particles));
     if most == 0 || most > max_particles {
         return Err(BoardError::Limit(format!(
             "{most} particles: the board weighs 1 to {max_particles} per iteration"
         )));
     }
-    let max_scan = (identity.max_scan as usize).min(MAX_POINTS);
+    let max_scan = (identity.max_scan as usize).min(BOARD_MAX_STORE_POINTS);
     let sample_len = scan.len().min(settings.weight_points);
     if sample_len > max_scan {
         return Err(BoardError::Limit(format!(
@@ -194,14 +194,14 @@ pub fn register_reporting(
         )));
     }
     let model = nn.points();
-    let max_model = (identity.max_model as usize).min(MAX_POINTS);
+    let max_model = (identity.max_model as usize).min(BOARD_MAX_STORE_POINTS);
     let board_points = board_model(model, max_model, settings.seed);
     let model_norm = Normalisation::of(model);
     let scan_norm = Normalisation::of(scan);
     let model_q = model_norm.quantise(&board_points);
     let grid = if capabilities(identity.version).grid_with_normals {
         let grid = board_grid(&model_q)?;
-        let normals = super::on_board::stored_normals(&grid);
+        let normals = stored_normals(&grid);
         Some((grid, normals))
     } else {
         None

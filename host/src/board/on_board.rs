@@ -2,7 +2,7 @@
 //! the host computes the start and the covariance (PF-ICP stages 1 and 2,
 //! [`crate::pf_icp::prior`]), uploads the model gridded (sorted by cell, with its normals
 //! and its cell table, [`pficp_fpga::search::grid::Grid`]; docs/board-modes.md) and a sample of
-//! `board_points` scan points in Morton order ([`super::morton_sorted`]) followed by the
+//! `board_points` scan points in Morton order ([`super::quantise::morton_sorted`]) followed by the
 //! rest of the scan, sends the prior as a Run request ([`pf_config`]) with the polish's
 //! starts ([`polish_request`]), polls Status, reads Result and polishes the board's pose
 //! with ICP on the whole scan. The filter itself (steps 6 to 8 of Algorithm 6) runs on the
@@ -10,19 +10,18 @@
 //! 6: [`POLISH_STARTS`] starts, the winner polished further;
 //! `pficp_fpga::protocol::run_request::execute`): the board's pose alone is the polished one.
 
-use super::fixed::{normalised_pose, original_pose, quantise_pose, Normalisation};
-use super::{
-    board_grid, board_model, morton_sorted, BoardClient, BoardError, ClientStats, Upload, MAX_PARTICLES, MAX_POINTS,
+use super::quantise::{
+    binary_angle, board_grid, board_model, morton_sorted, normalised_pose, original_pose, param24, quantise_pose,
+    sigma22, stored_normals, Normalisation,
 };
+use super::{BoardClient, BoardError, ClientStats, Upload, BOARD_MAX_PARTICLES, BOARD_MAX_STORE_POINTS};
 use crate::geometry::Pose;
 use crate::nn::NearestNeighbours;
 use crate::pf_icp::{prior, weight_sample, PfIcpResult, PfIcpSettings, Prior, StageTimes};
 use crate::registration::icp::Registration;
 use nalgebra::Point3;
-use pficp_fpga::common::format::{coord_to_f64, FxPoint, DIST_FRAC};
-use pficp_fpga::filter::pf::{
-    wrap24, Particle, PfConfig, PARAMS, PARAM_BITS, PARAM_TRANSLATION_FRAC, SCALE, SCALE_FRAC, SIGMA_BITS,
-};
+use pficp_fpga::common::format::{FxPoint, DIST_FRAC};
+use pficp_fpga::filter::pf::{Particle, PfConfig, PARAMS, PARAM_BITS, PARAM_TRANSLATION_FRAC, SCALE, SCALE_FRAC};
 use pficp_fpga::protocol::messages::{Identity, ResultReply, RunState, MAX_D2_MASK, NO_COST};
 use pficp_fpga::protocol::run_request::{PolishRequest, RunOutcome, RunRequest, MAX_STARTS};
 use pficp_fpga::protocol::versions::{refusal, Mode};
@@ -90,27 +89,6 @@ pub struct OnBoardPlan {
     pub config: PfConfig,
     /// The polish's part ([`polish_request`]).
     pub polish: PolishRequest,
-}
-
-/// `x * 2^frac` rounded and saturated to a 24-bit signed parameter.
-fn param24(x: f64, frac: u32) -> i32 {
-    let v = (x * (1u64 << frac) as f64).round();
-    v.clamp(-(1i64 << 23) as f64, ((1i64 << 23) - 1) as f64) as i32
-}
-
-/// An angle in radians as a binary angle (2^24 a turn, wrapped).
-fn binary_angle(rad: f64) -> i32 {
-    let turns = crate::geometry::wrap_angle(rad) / std::f64::consts::TAU;
-    wrap24((turns * (1u64 << PARAM_BITS) as f64).round() as i64)
-}
-
-/// A sigma in parameter LSBs: rounded, at least 1, at most `2^22 - 1`.
-fn sigma22(x: f64) -> u32 {
-    let v = x.round();
-    if v.is_nan() {
-        return 1;
-    }
-    v.clamp(1.0, ((1u64 << SIGMA_BITS) - 1) as f64) as u32
 }
 
 /// The board's 32-bit PRNG seed for a host seed: deterministic, never 0.
@@ -242,7 +220,7 @@ pub fn plan_with_prior(
     let config = pf_config(&prior, &model_norm, &scan_norm, sample.len(), settings);
     let model_q = model_norm.quantise(&on_board);
     let grid = board_grid(&model_q)?;
-    let rest = scan_norm.quantise(&rest_of(scan, &sample, MAX_POINTS.saturating_sub(sample.len())));
+    let rest = scan_norm.quantise(&rest_of(scan, &sample, BOARD_MAX_STORE_POINTS.saturating_sub(sample.len())));
     let polish = polish_request(&prior, &model_norm, &scan_norm, sample.len() + rest.len());
     Ok(OnBoardPlan {
         prior,
@@ -300,7 +278,7 @@ pub fn polish_request(
         .map(|p| quantise_pose(&normalised_pose(p, scan_norm, model_norm)))
         .collect();
     PolishRequest {
-        points: points.min(MAX_POINTS) as u16,
+        points: points.min(BOARD_MAX_STORE_POINTS) as u16,
         steps: POLISH_STEPS,
         winner_steps: POLISH_WINNER_STEPS,
         hypotheses,
@@ -342,27 +320,11 @@ impl OnBoardPlan {
     /// The board's pose alone (the polish's winner) in the original frame; the filter's
     /// pose when the polished matrix is no similarity.
     pub fn board_pose(&self, result: &ResultReply) -> Pose {
-        match super::fixed::restore_pose(&result.polish.pose) {
+        match super::quantise::restore_pose(&result.polish.pose) {
             Some(p) => original_pose(&p, &self.scan_norm, &self.model_norm),
             None => params_pose(&result.params, &self.model_norm, &self.scan_norm),
         }
     }
-}
-
-/// The normals of the stored model points (the grid's order), in the board's format: each
-/// point's principal axis of least spread over itself and its 8 nearest stored neighbours,
-/// as the host's surface computes them (`pf_icp::surface`), from the quantised points the
-/// board stores, so they depend on nothing but the store.
-pub fn stored_normals(grid: &Grid) -> Vec<FxNormal> {
-    let pts: Vec<Point3<f64>> =
-        grid.points.iter().map(|p| Point3::new(coord_to_f64(p[0]), coord_to_f64(p[1]), coord_to_f64(p[2]))).collect();
-    let nn = NearestNeighbours::new(&pts);
-    pts.iter()
-        .map(|p| {
-            let near: Vec<Point3<f64>> = nn.nearest_k(p, 9).iter().map(|c| pts[c.index]).collect();
-            crate::board::fixed::quantise_normal(&crate::pf_icp::surface::least_axis(&near))
-        })
-        .collect()
 }
 
 /// The board's cost and largest residual for a pose ([`pficp_fpga::surface::evaluate`]: the
@@ -447,7 +409,7 @@ pub fn emulate_registration(
     settings: &PfIcpSettings,
     board_points: usize,
 ) -> Result<PfIcpResult, BoardError> {
-    let plan = plan(nn, scan, settings, board_points, crate::board::MAX_POINTS)?;
+    let plan = plan(nn, scan, settings, board_points, crate::board::BOARD_MAX_STORE_POINTS)?;
     let reply = ResultReply::of(&plan.emulate());
     Ok(finish(&plan, nn, scan, settings, &reply, Duration::ZERO))
 }
@@ -509,7 +471,7 @@ pub fn register_on_board(
     if let Some(why) = refusal(identity.version, Mode::OnBoard) {
         return Err(BoardError::Limit(why));
     }
-    let max_particles = (identity.max_particles as usize).min(MAX_PARTICLES);
+    let max_particles = (identity.max_particles as usize).min(BOARD_MAX_PARTICLES);
     if settings.particles == 0 || settings.particles > max_particles {
         return Err(BoardError::Limit(format!(
             "{} particles: the board runs 1 to {max_particles}",
@@ -522,7 +484,7 @@ pub fn register_on_board(
     if settings.adaptive.is_some() {
         return Err(BoardError::Limit("the on-board filter has a fixed particle count (no adaptation)".into()));
     }
-    let max_scan = (identity.max_scan as usize).min(MAX_POINTS);
+    let max_scan = (identity.max_scan as usize).min(BOARD_MAX_STORE_POINTS);
     if board_points == 0 || board_points > max_scan {
         return Err(BoardError::Limit(format!("{board_points} board scan points: the board holds 1 to {max_scan}")));
     }
@@ -540,7 +502,7 @@ pub fn register_on_board(
             status.iterations
         )));
     }
-    let max_model = (identity.max_model as usize).min(MAX_POINTS);
+    let max_model = (identity.max_model as usize).min(BOARD_MAX_STORE_POINTS);
     let plan = plan(nn, scan, settings, board_points, max_model)?;
     let start = Instant::now();
     if !client.ensure_grid(&plan.grid, &plan.normals, |done, total| {
@@ -583,30 +545,4 @@ pub fn register_on_board(
         },
         pf,
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn stored_normals_of_a_tilted_patch_are_its_normal() {
-        // A patch of the plane z = 0.5 x, in the board's format; its unit normal is
-        // (-0.5, 0, 1) / |.|, either sign.
-        let mut model = Vec::new();
-        for i in -12..12 {
-            for j in -12..12 {
-                let (x, y) = (i as f64 * 0.03, j as f64 * 0.027);
-                model.push(pficp_fpga::common::format::point([x, y, 0.5 * x]));
-            }
-        }
-        let grid = Grid::build(&model).unwrap();
-        let normals = stored_normals(&grid);
-        assert_eq!(normals.len(), grid.points.len());
-        let want = nalgebra::Vector3::new(-0.5, 0.0, 1.0).normalize() * 16384.0;
-        for n in normals {
-            let n = nalgebra::Vector3::new(n[0] as f64, n[1] as f64, n[2] as f64);
-            assert!((n.dot(&want).abs() - 16384.0 * 16384.0).abs() < 16384.0 * 40.0, "{n:?}");
-        }
-    }
 }

@@ -5,7 +5,7 @@
 //! points into a [`Cloud`]; [`write_cloud`] writes raw points in a chosen
 //! [`Format`]. [`read_points`] streams any reader: one line (at most
 //! [`MAX_LINE_BYTES`]) or one binary record at a time, and no more than the point limit
-//! ([`crate::cloud::MAX_POINTS`] for files), so a huge file costs at most the limit's
+//! ([`crate::cloud::MAX_CLOUD_POINTS`] for files), so a huge file costs at most the limit's
 //! points in memory, never the file's size. [`read_points_from_bytes`] and
 //! [`write_points_to_bytes`] are the byte-level forms. Every error is an [`IoError`] whose
 //! one-line message names the file.
@@ -313,7 +313,7 @@ pub fn read_cloud(path: &Path, name: &str) -> Result<Cloud, IoError> {
     let format = format_from_path(path)?;
     let f = std::fs::File::open(path).map_err(|error| IoError::Read { file: file.clone(), error })?;
     let reader = std::io::BufReader::with_capacity(1 << 16, f);
-    let points = read_points(reader, format, crate::cloud::MAX_POINTS)
+    let points = read_points(reader, format, crate::cloud::MAX_CLOUD_POINTS)
         .map_err(|problem| IoError::Parse { file: file.clone(), problem })?;
     Cloud::new(name, points).map_err(|problem| IoError::Cloud { file, problem })
 }
@@ -344,9 +344,9 @@ pub fn read_points(reader: impl BufRead, format: Format, limit: usize) -> Result
     }
 }
 
-/// [`read_points`] of `bytes`, at most [`crate::cloud::MAX_POINTS`].
+/// [`read_points`] of `bytes`, at most [`crate::cloud::MAX_CLOUD_POINTS`].
 pub fn read_points_from_bytes(bytes: &[u8], format: Format) -> Result<Vec<Point3<f64>>, ParseError> {
-    read_points(bytes, format, crate::cloud::MAX_POINTS)
+    read_points(bytes, format, crate::cloud::MAX_CLOUD_POINTS)
 }
 
 /// Serialise `points` in `format`. Every format round-trips every f64 exactly (text

@@ -24,7 +24,7 @@ use super::lines::{read_error, Lines};
 use super::{fmt_float, shorten, ParseError};
 
 /// The largest `binary_compressed` block (compressed or not) read: 512 MiB, room for
-/// [`crate::cloud::MAX_POINTS`] points of 53 bytes.
+/// [`crate::cloud::MAX_CLOUD_POINTS`] points of 53 bytes.
 pub const MAX_BODY_BYTES: usize = 1 << 29;
 
 /// The largest point record (the sum of `SIZE` × `COUNT`): PCL's biggest descriptors

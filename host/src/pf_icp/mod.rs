@@ -60,7 +60,7 @@ use rand_chacha::ChaCha8Rng;
 use std::time::{Duration, Instant};
 
 /// Most particles the software filter takes (memory: a particle is 7 numbers and a cost).
-pub const MAX_PARTICLES: usize = 100_000;
+pub const MAX_FILTER_PARTICLES: usize = 100_000;
 /// Most filter iterations.
 pub const MAX_ITERATIONS: usize = 100_000;
 /// Most clusters per cloud.

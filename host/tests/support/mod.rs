@@ -183,9 +183,9 @@ pub fn poses(n: usize, seed: u64) -> Vec<FxPose> {
 }
 
 /// The model gridded as the host uploads it.
-/// The normals the host uploads with `grid(model)` (`on_board::stored_normals`).
+/// The normals the host uploads with `grid(model)` (`quantise::stored_normals`).
 pub fn normals(model: &[FxPoint]) -> Vec<pficp_fpga::surface::FxNormal> {
-    pficp::board::on_board::stored_normals(&grid(model))
+    pficp::board::quantise::stored_normals(&grid(model))
 }
 
 pub fn grid(model: &[FxPoint]) -> pficp_fpga::search::grid::Grid {
@@ -224,7 +224,7 @@ pub fn loaded(model: &[FxPoint], scan: &[FxPoint]) -> (PtyBoard, BoardClient) {
 pub fn upload(client: &mut BoardClient, model: &[FxPoint], scan: &[FxPoint]) {
     client.identify().unwrap();
     let g = grid(model);
-    client.load_grid(&g, &pficp::board::on_board::stored_normals(&g), |_, _| {}).unwrap();
+    client.load_grid(&g, &pficp::board::quantise::stored_normals(&g), |_, _| {}).unwrap();
     client.load_scan(scan, |_, _| {}).unwrap();
     client.set_sizes(model.len(), scan.len()).unwrap();
 }

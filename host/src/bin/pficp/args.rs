@@ -172,9 +172,9 @@ impl PfArgs {
         if self.clusters == 0 {
             bail!("--clusters must be at least 1");
         }
-        use pficp::pf_icp::{MAX_CLUSTERS, MAX_ITERATIONS, MAX_PARTICLES};
+        use pficp::pf_icp::{MAX_CLUSTERS, MAX_FILTER_PARTICLES, MAX_ITERATIONS};
         for (flag, value, limit) in [
-            ("--particles", self.particles, MAX_PARTICLES),
+            ("--particles", self.particles, MAX_FILTER_PARTICLES),
             ("--iterations", self.iterations, MAX_ITERATIONS),
             ("--clusters", self.clusters, MAX_CLUSTERS),
         ] {

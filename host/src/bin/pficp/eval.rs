@@ -31,8 +31,8 @@ pub(crate) fn eval(a: &EvalArgs) -> Result<()> {
 /// `--board-points`, checked.
 pub(crate) fn board_points(a: &EvalArgs) -> Result<usize> {
     let n = a.board_points.unwrap_or(pficp::board::on_board::DEFAULT_BOARD_POINTS);
-    if n == 0 || n > pficp::board::MAX_POINTS {
-        bail!("--board-points must be 1 to {} (got {n})", pficp::board::MAX_POINTS);
+    if n == 0 || n > pficp::board::BOARD_MAX_STORE_POINTS {
+        bail!("--board-points must be 1 to {} (got {n})", pficp::board::BOARD_MAX_STORE_POINTS);
     }
     Ok(n)
 }

@@ -49,7 +49,7 @@ fn gen(a: &GenArgs) -> Result<()> {
     if a.points < 3 || a.scan_points < 3 {
         bail!("--points and --scan-points must be at least 3");
     }
-    let limit = pficp::cloud::MAX_POINTS;
+    let limit = pficp::cloud::MAX_CLOUD_POINTS;
     if a.points > limit || a.scan_points > limit {
         bail!("--points and --scan-points must be at most {limit} (got {} and {})", a.points, a.scan_points);
     }

@@ -71,7 +71,7 @@ pub struct RealisticOptions {
     /// Also run PF-ICP with the filter on the board (column `pf-icp-board`): the host's
     /// prior and conclusion around `fpga::filter::pf::run`, the bit-exact reference of the board's
     /// filter (what the board computes, byte for byte: the grid search over the gridded
-    /// model), with `board_points` scan points and at most [`crate::board::MAX_POINTS`]
+    /// model), with `board_points` scan points and at most [`crate::board::BOARD_MAX_STORE_POINTS`]
     /// model points; and the board's pose alone, without the host's polish (column
     /// `pf-icp-board-filter`).
     pub board: bool,

@@ -1,5 +1,8 @@
-//! The bridge between the host's f64 clouds and the board's fixed-point formats
-//! (`pficp_fpga::common::format`, docs/fixed-point.md).
+//! The one quantise stage between the host's f64 clouds and the board's fixed-point formats
+//! (`pficp_fpga::common::format`, docs/fixed-point.md): the normalisation, the Q formats of points,
+//! poses, normals and the filter's parameters, the model points that go to the board
+//! ([`board_model`]), their grid ([`board_grid`]) and stored normals ([`stored_normals`]), and
+//! the scan's Morton order ([`morton_sorted`]).
 //!
 //! Each cloud is normalised by its own similarity: `x_n = (x - c) / r`, with `c` the
 //! centroid and `r` the largest distance from it, so every normalised point lies in the
@@ -7,9 +10,16 @@
 //! becomes `d_n = (s r_m / r_d) R m_n + (s R c_m + T - c_d) / r_d` between the normalised
 //! ones, and squared distances scale by `1 / r_d^2`.
 
+use super::BoardError;
 use crate::geometry::Pose;
+use crate::nn::NearestNeighbours;
 use nalgebra::{Point3, Vector3};
-use pficp_fpga::common::format::{self, FxPoint, FxPose};
+use pficp_fpga::common::format::{self, coord_to_f64, FxPoint, FxPose};
+use pficp_fpga::filter::pf::{wrap24, PARAM_BITS, SIGMA_BITS};
+use pficp_fpga::search::grid::{cell_of, Grid, CELLS_PER_AXIS, GRID_BITS};
+use pficp_fpga::surface::FxNormal;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
 
 /// The similarity that normalises one cloud: `x_n = (x - centre) / radius`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -115,6 +125,89 @@ pub fn cost_error_bound(distances: &[f64], s: f64) -> f64 {
     distances.iter().map(|d| 2.0 * d * e + e * e).sum()
 }
 
+// The filter's parameters.
+
+/// `x * 2^frac` rounded and saturated to a 24-bit signed parameter.
+pub fn param24(x: f64, frac: u32) -> i32 {
+    let v = (x * (1u64 << frac) as f64).round();
+    v.clamp(-(1i64 << 23) as f64, ((1i64 << 23) - 1) as f64) as i32
+}
+
+/// An angle in radians as a binary angle (2^24 a turn, wrapped).
+pub fn binary_angle(rad: f64) -> i32 {
+    let turns = crate::geometry::wrap_angle(rad) / std::f64::consts::TAU;
+    wrap24((turns * (1u64 << PARAM_BITS) as f64).round() as i64)
+}
+
+/// A sigma in parameter LSBs: rounded, at least 1, at most `2^22 - 1`.
+pub fn sigma22(x: f64) -> u32 {
+    let v = x.round();
+    if v.is_nan() {
+        return 1;
+    }
+    v.clamp(1.0, ((1u64 << SIGMA_BITS) - 1) as f64) as u32
+}
+
+// The model on the board: its points, grid and normals; the scan's order.
+
+/// The model points that go to the board: all of them when they fit, else `max` of them
+/// drawn without replacement with the seed, in their original order.
+pub fn board_model(model: &[Point3<f64>], max: usize, seed: u64) -> Vec<Point3<f64>> {
+    if model.len() <= max {
+        return model.to_vec();
+    }
+    // A stream of its own, so the draw does not shift any other random choice.
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x626f_6172_645f_6d64);
+    let mut picks = rand::seq::index::sample(&mut rng, model.len(), max).into_vec();
+    picks.sort_unstable();
+    picks.into_iter().map(|i| model[i]).collect()
+}
+
+/// The board's gridded model (protocol 3: the model store sorted by cell and the cell
+/// table, `pficp_fpga::search::grid`) of the normalised, quantised model points. A model the grid
+/// refuses (a point outside the cube `[-1, 1]^3`, more points than the board stores) is a
+/// one-line [`BoardError::Limit`]; the host's normalisation puts every model point in the
+/// unit ball, so it does not happen to a model planned by the host.
+pub fn board_grid(model: &[FxPoint]) -> Result<Grid, BoardError> {
+    Grid::build(model).map_err(|e| BoardError::Limit(format!("the board's grid refuses the model: {e}")))
+}
+
+/// The Morton key (Z order: the cell's bits interleaved, `x` lowest) of a point's grid
+/// cell, each axis clipped to the grid.
+pub fn morton_key(p: FxPoint) -> u32 {
+    let k = cell_of(p).map(|c| c.clamp(0, CELLS_PER_AXIS as i32 - 1) as u32);
+    (0..GRID_BITS).map(|b| ((k[0] >> b & 1) | (k[1] >> b & 1) << 1 | (k[2] >> b & 1) << 2) << (3 * b)).sum()
+}
+
+/// The scan sample sorted by the [`morton_key`] of each point's cell in the normalised scan
+/// frame, ties in the given order (a stable sort). The first protocol-3 board's grid
+/// pipeline swept the rows around batches of points and needed close points consecutive
+/// (2.3 to 3.2 times fewer clocks); the neighbour pipeline that replaced it searches each
+/// point's own rows, and the order changes its clocks by about 2% (docs/board-modes.md,
+/// "The scan sample's order"). The
+/// costs are sums over the sample, so the order changes no result.
+pub fn morton_sorted(scan: &[FxPoint]) -> Vec<FxPoint> {
+    let mut s = scan.to_vec();
+    s.sort_by_key(|&p| morton_key(p));
+    s
+}
+
+/// The normals of the stored model points (the grid's order), in the board's format: each
+/// point's principal axis of least spread over itself and its 8 nearest stored neighbours,
+/// as the host's surface computes them (`pf_icp::surface`), from the quantised points the
+/// board stores, so they depend on nothing but the store.
+pub fn stored_normals(grid: &Grid) -> Vec<FxNormal> {
+    let pts: Vec<Point3<f64>> =
+        grid.points.iter().map(|p| Point3::new(coord_to_f64(p[0]), coord_to_f64(p[1]), coord_to_f64(p[2]))).collect();
+    let nn = NearestNeighbours::new(&pts);
+    pts.iter()
+        .map(|p| {
+            let near: Vec<Point3<f64>> = nn.nearest_k(p, 9).iter().map(|c| pts[c.index]).collect();
+            quantise_normal(&crate::pf_icp::surface::least_axis(&near))
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -167,5 +260,26 @@ mod tests {
         }
         let p = n.restore(n.quantise(&pts)[7]);
         assert!((p - pts[7]).norm() <= n.radius * 2e-4);
+    }
+
+    #[test]
+    fn stored_normals_of_a_tilted_patch_are_its_normal() {
+        // A patch of the plane z = 0.5 x, in the board's format; its unit normal is
+        // (-0.5, 0, 1) / |.|, either sign.
+        let mut model = Vec::new();
+        for i in -12..12 {
+            for j in -12..12 {
+                let (x, y) = (i as f64 * 0.03, j as f64 * 0.027);
+                model.push(pficp_fpga::common::format::point([x, y, 0.5 * x]));
+            }
+        }
+        let grid = Grid::build(&model).unwrap();
+        let normals = stored_normals(&grid);
+        assert_eq!(normals.len(), grid.points.len());
+        let want = nalgebra::Vector3::new(-0.5, 0.0, 1.0).normalize() * 16384.0;
+        for n in normals {
+            let n = nalgebra::Vector3::new(n[0] as f64, n[1] as f64, n[2] as f64);
+            assert!((n.dot(&want).abs() - 16384.0 * 16384.0).abs() < 16384.0 * 40.0, "{n:?}");
+        }
     }
 }
