@@ -17,10 +17,9 @@ pub struct Capabilities {
     /// The host-driven mode (Evaluate and Nearest, the host's filter): 1, 2 and 4 to
     /// [`VERSION`].
     pub host_driven: bool,
-    /// The model uploaded as it is, searched by brute force: 1 and 2.
-    pub brute_force_model: bool,
     /// The model uploaded gridded with its normals (LoadModel, LoadTable), the costs
-    /// surface residuals: from 4 on.
+    /// surface residuals: from 4 on (a version 1 or 2 board gets the model as it is and
+    /// searches it by brute force).
     pub grid_with_normals: bool,
     /// The on-board filter and its polish (Run): [`VERSION`] only.
     pub on_board_run: bool,
@@ -30,7 +29,6 @@ pub struct Capabilities {
 pub fn capabilities(version: u16) -> Capabilities {
     Capabilities {
         host_driven: matches!(version, 1 | 2) || (4..=VERSION).contains(&version),
-        brute_force_model: matches!(version, 1 | 2),
         grid_with_normals: version >= 4,
         on_board_run: version == VERSION,
     }
@@ -69,7 +67,6 @@ mod tests {
     fn the_table() {
         let host_driven: Vec<u16> = (0..=VERSION + 1).filter(|&v| capabilities(v).host_driven).collect();
         assert_eq!(host_driven, [1, 2].into_iter().chain(4..=VERSION).collect::<Vec<_>>());
-        assert!(capabilities(2).brute_force_model && !capabilities(4).brute_force_model);
         assert!(capabilities(4).grid_with_normals && !capabilities(3).grid_with_normals);
         assert!(capabilities(VERSION).on_board_run && !capabilities(VERSION - 1).on_board_run);
         assert!(refusal(3, Mode::HostDriven).is_some() && refusal(VERSION, Mode::HostDriven).is_none());
