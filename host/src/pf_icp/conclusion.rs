@@ -46,9 +46,10 @@ use crate::cloud::{bbox_diagonal, centroid};
 use crate::geometry::{Pose, ScaleBounds};
 use crate::pf_icp::evidence::Evidence;
 use crate::pf_icp::hypotheses::{same_pose, Hypothesis};
-use crate::pf_icp::surface::{Surface, COST_CAP};
+use crate::pf_icp::surface::{Contact, Curvature, Surface, COST_CAP};
 use crate::pf_icp::verdict::{judge, Checks, Verdict};
 use nalgebra::Point3;
+use nalgebra::SMatrix;
 use rayon::prelude::*;
 
 /// Hypotheses polished and compared at the end besides the filter's estimate: the best
@@ -174,6 +175,68 @@ pub fn candidates(filter_pose: &Pose, hypotheses: &[Hypothesis]) -> Vec<Pose> {
         .collect()
 }
 
+/// The uncertainty of a pose from its [`Surface::curvature`] (module doc, step 3): the
+/// cluster-robust sandwich `H^-1 M H^-1`, never tighter than the independent residuals'
+/// `sigma^2 H^-1`, inflated by [`COVARIANCE_INFLATION`], plus `spread` (the basin probe's;
+/// zero without it); undetermined parameters named and left out.
+pub fn uncertainty_of(curv: &Curvature, diag: f64, spread: &SMatrix<f64, 7, 7>) -> Uncertainty {
+    let k2 = COVARIANCE_INFLATION * COVARIANCE_INFLATION;
+    let inv = &curv.degeneracy.inverse;
+    let sandwich = inv * curv.meat * inv;
+    // (The residuals' variance floored at float precision: an exact answer's one sigma is
+    // its rounding, not 0.)
+    let independent = inv * curv.residual_variance.max((1e-9 * diag).powi(2));
+    let cov = if sandwich.trace() > independent.trace() { sandwich } else { independent } * k2;
+    let cov = cov + spread;
+    // (A parameter whose variance is not a finite number is reported as undetermined: a
+    // NaN must never print as a confident 0.)
+    let mut undetermined = curv.degeneracy.motions.clone();
+    if (0..7).any(|k| !curv.degeneracy.free[k] && !cov[(k, k)].is_finite()) {
+        undetermined.push("any parameter (the covariance is not a finite number)".to_string());
+    }
+    let known = |k: usize| !curv.degeneracy.free[k] && cov[(k, k)].is_finite();
+    let mut covariance = [[None; 7]; 7];
+    let mut sigma = [None; 7];
+    for a in 0..7 {
+        if known(a) {
+            sigma[a] = Some(cov[(a, a)].max(0.0).sqrt());
+            for b in 0..7 {
+                if known(b) {
+                    covariance[a][b] = Some(cov[(a, b)]);
+                }
+            }
+        }
+    }
+    Uncertainty { covariance, sigma, undetermined }
+}
+
+/// The fit (module doc, step 4) from the scan's contacts with the surface of a model of
+/// diagonal `diag`.
+pub fn fit_of(contacts: &[Contact], diag: f64) -> Fit {
+    let cap = COST_CAP * diag;
+    let inlier_distance = INLIER_DISTANCE * diag;
+    let d: Vec<f64> = contacts.iter().map(|c| c.dist2.sqrt()).collect();
+    let inliers: Vec<f64> = d.into_iter().filter(|&x| x <= inlier_distance).collect();
+    Fit {
+        fitness: inliers.len() as f64 / contacts.len().max(1) as f64,
+        inlier_rmse: if inliers.is_empty() {
+            0.0
+        } else {
+            (inliers.iter().map(|x| x * x).sum::<f64>() / inliers.len() as f64).sqrt()
+        },
+        inlier_distance,
+        // (Surface::cost over the scan.)
+        cost: contacts.iter().map(|c| c.dist2.min(cap * cap)).sum::<f64>() / contacts.len().max(1) as f64,
+    }
+}
+
+/// The verdict's widest one-sigma values: rotation [deg], translation [fraction of the
+/// diagonal], relative scale.
+pub fn widest_sigma(sigma: &[Option<f64>; 7], diag: f64, scale: f64) -> [f64; 3] {
+    let widest = |r: std::ops::Range<usize>, unit: f64| r.filter_map(|k| sigma[k]).fold(0.0f64, f64::max) / unit;
+    [widest(4..7, 1f64.to_radians()), widest(0..3, diag), widest(3..4, scale)]
+}
+
 /// Conclude a registration: `filter_pose` from the filter, `hypotheses` of the search
 /// (best first); every polish keeps the scale within `bounds`; `evidence` ranks the
 /// candidates.
@@ -212,7 +275,6 @@ pub fn conclude_on(
     let large = crate::pf_icp::is_large(full.nn().points().len(), scan.len());
     let nn = full.nn();
     let diag = bbox_diagonal(nn.points());
-    let cap = COST_CAP * diag;
     let at = centroid(scan);
     // Every candidate starts inside the scale bounds (a fixed scale exactly).
     let starts: Vec<Pose> = candidates(filter_pose, hypotheses).iter().map(|p| bounds.apply(p, &at)).collect();
@@ -315,15 +377,6 @@ pub fn conclude_on(
     // One pass over the scan for the curvature and the fit.
     let contacts = full.contacts(scan, &pose);
     let curv = full.curvature_of(&contacts, &pose, &image, bounds.fixed_value().is_some());
-    // The sandwich H^-1 M H^-1 over spatial blocks, never tighter than the independent
-    // residuals' sigma^2 H^-1 (each inflated by k).
-    let k2 = COVARIANCE_INFLATION * COVARIANCE_INFLATION;
-    let inv = &curv.degeneracy.inverse;
-    let sandwich = inv * curv.meat * inv;
-    // (The residuals' variance floored at float precision: an exact answer's one sigma is
-    // its rounding, not 0.)
-    let independent = inv * curv.residual_variance.max((1e-9 * diag).powi(2));
-    let cov = if sandwich.trace() > independent.trace() { sandwich } else { independent } * k2;
     // The basin probe's spread: where restarts of the polish about the answer end that
     // fit the scan as well ([`crate::pf_icp::probe`]).
     let probe = crate::pf_icp::probe::probe(
@@ -338,40 +391,8 @@ pub fn conclude_on(
         diag,
         |best, other| paired_excess(best, other) < ALTERNATIVE_SIGMAS,
     );
-    let cov = cov + probe.spread;
-    // (A parameter whose variance is not a finite number is reported as undetermined: a
-    // NaN must never print as a confident 0.)
-    let mut undetermined = curv.degeneracy.motions.clone();
-    if (0..7).any(|k| !curv.degeneracy.free[k] && !cov[(k, k)].is_finite()) {
-        undetermined.push("any parameter (the covariance is not a finite number)".to_string());
-    }
-    let known = |k: usize| !curv.degeneracy.free[k] && cov[(k, k)].is_finite();
-    let mut covariance = [[None; 7]; 7];
-    let mut sigma = [None; 7];
-    for a in 0..7 {
-        if known(a) {
-            sigma[a] = Some(cov[(a, a)].max(0.0).sqrt());
-            for b in 0..7 {
-                if known(b) {
-                    covariance[a][b] = Some(cov[(a, b)]);
-                }
-            }
-        }
-    }
-    let inlier_distance = INLIER_DISTANCE * diag;
-    let d: Vec<f64> = contacts.1.iter().map(|c| c.dist2.sqrt()).collect();
-    let inliers: Vec<f64> = d.into_iter().filter(|&x| x <= inlier_distance).collect();
-    let fit = Fit {
-        fitness: inliers.len() as f64 / scan.len().max(1) as f64,
-        inlier_rmse: if inliers.is_empty() {
-            0.0
-        } else {
-            (inliers.iter().map(|x| x * x).sum::<f64>() / inliers.len() as f64).sqrt()
-        },
-        inlier_distance,
-        // (Surface::cost over the scan.)
-        cost: contacts.1.iter().map(|c| c.dist2.min(cap * cap)).sum::<f64>() / scan.len().max(1) as f64,
-    };
+    let uncertainty = uncertainty_of(&curv, diag, &probe.spread);
+    let fit = fit_of(&contacts.1, diag);
     // The verdict's checks.
     // (In a large registration the answer's own, after its final polish, against the whole
     // model: a model subset's coarser surface leaves more of a scan outside the noise.)
@@ -388,26 +409,16 @@ pub fn conclude_on(
     });
     let at_bound = |b: f64| b.is_finite() && (pose.scale / b - 1.0).abs() < 1e-9;
     let scale_at_bound = bounds.fixed_value().is_none() && (at_bound(bounds.lo) || at_bound(bounds.hi));
-    let widest = |r: std::ops::Range<usize>, unit: f64| r.filter_map(|k| sigma[k]).fold(0.0f64, f64::max) / unit;
     let checks = Checks {
         explained,
         hidden,
         scale_at_bound,
         alternatives: alternatives.len(),
-        undetermined: undetermined.clone(),
-        widest_sigma: [widest(4..7, 1f64.to_radians()), widest(0..3, diag), widest(3..4, pose.scale)],
+        undetermined: uncertainty.undetermined.clone(),
+        widest_sigma: widest_sigma(&uncertainty.sigma, diag, pose.scale),
     };
     let (verdict, reasons) = judge(&checks);
-    Conclusion {
-        pose,
-        from_hypothesis: best != 0,
-        alternatives,
-        uncertainty: Uncertainty { covariance, sigma, undetermined },
-        fit,
-        checks,
-        verdict,
-        reasons,
-    }
+    Conclusion { pose, from_hypothesis: best != 0, alternatives, uncertainty, fit, checks, verdict, reasons }
 }
 
 #[cfg(test)]
