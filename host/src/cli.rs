@@ -349,6 +349,102 @@ impl RegisterReport {
     }
 }
 
+/// One frame of `pficp track --json` (one JSON object a line).
+#[derive(Clone, Debug, Serialize)]
+pub struct TrackFrameReport {
+    /// Frame index from 0.
+    pub frame: usize,
+    /// The frame's file (`-` on standard input).
+    pub file: String,
+    /// The track's state after the frame: `acquiring`, `tracking`, `lost`, `reacquired`.
+    pub state: crate::tracking::TrackState,
+    /// The verdict on the frame's pose, as `register` gives it.
+    pub verdict: crate::pf_icp::verdict::Verdict,
+    /// The verdict's reasons in words (empty for `confident`).
+    pub reasons: Vec<String>,
+    /// Scale factor.
+    pub scale: f64,
+    /// Rotation, row-major.
+    pub rotation: [[f64; 3]; 3],
+    /// Translation.
+    pub translation: [f64; 3],
+    /// `[phi, theta, psi]` in degrees.
+    pub euler_deg: [f64; 3],
+    /// The 4x4 matrix `[[sR, T], [0, 1]]`, row-major.
+    pub matrix: [[f64; 4]; 4],
+    /// Names and order of the covariance's parameters.
+    pub covariance_order: [&'static str; 7],
+    /// Covariance (model units, scale, rad); `null` for undetermined parameters.
+    pub covariance: [[Option<f64>; 7]; 7],
+    /// One-sigma values in that order.
+    pub sigma: [Option<f64>; 7],
+    /// Fraction of scan points within the inlier distance of the model's surface.
+    pub fitness: f64,
+    /// RMS distance of those points.
+    pub inlier_rmse: f64,
+    /// Share of the scan on the surface within the noise.
+    pub explained: f64,
+    /// Other poses that fit as well.
+    pub alternatives: Vec<PoseRecord>,
+    /// Whether the frame ran a global registration.
+    pub global: bool,
+    /// Wall time of the frame [s].
+    pub seconds: f64,
+}
+
+impl TrackFrameReport {
+    /// From the tracker's frame read from `file`.
+    pub fn new(file: &str, f: &crate::tracking::TrackFrame) -> Self {
+        let PoseRecord { scale, rotation, translation, euler_deg } = f.pose.record();
+        let m = f.pose.matrix4();
+        TrackFrameReport {
+            frame: f.frame,
+            file: file.to_string(),
+            state: f.state,
+            verdict: f.verdict,
+            reasons: f.reasons.clone(),
+            scale,
+            rotation,
+            translation,
+            euler_deg,
+            matrix: std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)])),
+            covariance_order: crate::pf_icp::surface::LOCAL_NAMES,
+            covariance: f.uncertainty.covariance,
+            sigma: f.uncertainty.sigma,
+            fitness: f.fit.fitness,
+            inlier_rmse: f.fit.inlier_rmse,
+            explained: f.checks.explained,
+            alternatives: f.alternatives.iter().map(|p| p.record()).collect(),
+            global: f.global,
+            seconds: f.seconds,
+        }
+    }
+
+    /// One line: frame, state, verdict, pose, widest sigmas, time.
+    pub fn text(&self) -> String {
+        let deg = |k: usize| self.sigma[k].map_or("undetermined".to_string(), |v| format!("{:.3}", v.to_degrees()));
+        let sigma_deg = (4..7).map(deg).collect::<Vec<_>>().join("/");
+        format!(
+            "frame {:>5} {:<10} {:<10} scale {:.5} euler_deg [{:.3}, {:.3}, {:.3}] t [{:.5}, {:.5}, {:.5}] \
+             sigma_deg {} fitness {:.3} {:.4} s {}\n",
+            self.frame,
+            self.state.name(),
+            self.verdict.name(),
+            self.scale,
+            self.euler_deg[0],
+            self.euler_deg[1],
+            self.euler_deg[2],
+            self.translation[0],
+            self.translation[1],
+            self.translation[2],
+            sigma_deg,
+            self.fitness,
+            self.seconds,
+            self.file
+        )
+    }
+}
+
 /// A table of the 7 parameters for several poses (columns), angles in degrees.
 pub fn pose_table(columns: &[(&str, &Pose)]) -> String {
     let mut s = format!("{:<12}", "parameter");

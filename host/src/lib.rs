@@ -35,4 +35,5 @@ pub mod registration;
 pub mod request;
 #[cfg(test)]
 mod test_support;
+pub mod tracking;
 pub mod visibility;

@@ -468,7 +468,7 @@ fn every_help_has_an_example_and_the_readme_lists_the_same_options() {
     let global = help_options(&String::from_utf8(pficp(&["--help"]).stdout).unwrap());
     assert!(global.contains("--quiet"), "{global:?}");
     assert_eq!(readme_options.remove("(global)").unwrap_or_default(), global, "global options");
-    let subcommands = ["demo", "register", "gen", "eval", "bench", "board info"];
+    let subcommands = ["demo", "register", "track", "gen", "eval", "bench", "board info"];
     assert_eq!(
         readme_options.keys().cloned().collect::<std::collections::BTreeSet<_>>(),
         subcommands.iter().map(|s| s.to_string()).collect()
@@ -566,4 +566,117 @@ fn pcd_files_go_through_gen_register_and_out_aligned() {
     let bad =
         write(dir.path(), "lzf.pcd", b"FIELDS x y z\nPOINTS 1\nDATA binary_compressed\n\xff\xff\xff\xff\x0c\0\0\0");
     assert_error(&register(&organised, &bad, &[]), &["lzf.pcd", "4294967295 bytes", "more than the limit"]);
+}
+
+/// `pficp track` on a folder of frames and on the same frames through standard input: one
+/// JSON object a line and a frame with the documented keys, the first frame a global
+/// registration, the next ones tracked; the same poses either way.
+#[test]
+fn track_prints_one_json_line_a_frame_from_a_folder_and_from_standard_input() {
+    use pficp::eval::realistic::Shape;
+    use std::io::Write;
+    let dir = tempfile::tempdir().unwrap();
+    let seq = pficp::eval::tracking::sequence::sequence(Shape::Part(pficp::parts::Part::BlockBoss), 3, true);
+    let model = dir.path().join("model.ply");
+    pficp::io::write_cloud(&model, &seq.model, pficp::io::Format::PlyBinary).unwrap();
+    let frames = dir.path().join("frames");
+    std::fs::create_dir(&frames).unwrap();
+    let n = 6;
+    let mut stream = String::new();
+    for (k, f) in seq.frames.iter().take(n).enumerate() {
+        pficp::io::write_cloud(&frames.join(format!("{k:04}.xyz")), &f.scan, pficp::io::Format::Xyz).unwrap();
+        stream += &String::from_utf8(pficp::io::write_points_to_bytes(&f.scan, pficp::io::Format::Xyz)).unwrap();
+        stream += "\n";
+    }
+    let args = ["track", "-q", "--model", model.to_str().unwrap(), "--scale", "1", "--json", "--scans"];
+    let o = pficp(&[&args[..], &[frames.to_str().unwrap()]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let lines: Vec<serde_json::Value> =
+        String::from_utf8(o.stdout).unwrap().lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    assert_eq!(lines.len(), n);
+    for (k, v) in lines.iter().enumerate() {
+        for key in [
+            "frame",
+            "file",
+            "scale",
+            "rotation",
+            "translation",
+            "matrix",
+            "covariance",
+            "sigma",
+            "fitness",
+            "inlier_rmse",
+            "verdict",
+            "state",
+            "seconds",
+        ] {
+            assert!(v.get(key).is_some(), "frame {k}: no {key}");
+        }
+        assert_eq!(v["frame"], k);
+        assert!(v["file"].as_str().unwrap().ends_with(&format!("{k:04}.xyz")));
+        assert_eq!(v["scale"], 1.0);
+    }
+    assert_eq!((lines[0]["state"].as_str(), lines[0]["global"].as_bool()), (Some("acquiring"), Some(true)));
+    // A frame after one that holds the track is tracked (no global registration); one
+    // without a track is a global registration.
+    for k in 1..n {
+        let (prev, this) = (&lines[k - 1], &lines[k]);
+        let held = prev["verdict"] != "unreliable" || prev["state"] == "tracking";
+        assert!(["acquiring", "tracking", "lost", "reacquired"].contains(&this["state"].as_str().unwrap()));
+        if held && prev["state"] != "lost" {
+            assert_eq!(this["global"], false, "frame {k}: {this}");
+        }
+        if prev["state"] == "acquiring" && prev["verdict"] == "unreliable" {
+            assert_eq!(this["global"], true, "frame {k}: {this}");
+        }
+    }
+    // The same frames on standard input.
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_pficp"))
+        .args([&args[..], &["-"]].concat())
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    child.stdin.take().unwrap().write_all(stream.as_bytes()).unwrap();
+    let o = child.wait_with_output().unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let piped: Vec<serde_json::Value> =
+        String::from_utf8(o.stdout).unwrap().lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    assert_eq!(piped.len(), n);
+    for (a, b) in lines.iter().zip(&piped) {
+        assert_eq!((&a["matrix"], &a["state"]), (&b["matrix"], &b["state"]));
+        assert_eq!(b["file"], "-");
+    }
+}
+
+/// Bad frames and options: one-line errors, no panic.
+#[test]
+fn track_refuses_bad_frames_and_options() {
+    use std::io::Write;
+    let dir = tempfile::tempdir().unwrap();
+    let model = write(dir.path(), "model.xyz", cloud_text(300).as_bytes());
+    let m = model.to_str().unwrap();
+    let empty = dir.path().join("empty");
+    std::fs::create_dir(&empty).unwrap();
+    assert_error(&pficp(&["track", "--model", m, "--scans", empty.to_str().unwrap()]), &["no PLY"]);
+    assert_error(&pficp(&["track", "--model", m, "--scans", "/nonexistent/frames"]), &["not a folder"]);
+    assert_error(&pficp(&["track", "--model", m, "--scans", empty.to_str().unwrap(), "--fps", "0"]), &["--fps"]);
+    let bad = dir.path().join("bad");
+    std::fs::create_dir(&bad).unwrap();
+    write(&bad, "0000.xyz", b"1 2 3\n4 5 nan\n");
+    assert_error(&pficp(&["track", "--model", m, "--scans", bad.to_str().unwrap()]), &["0000.xyz"]);
+    for (input, words) in
+        [("1 2 3\n1 2 x\n", &["frame 0"][..]), ("", &["no frame"][..]), ("1 2 3\n\n", &["frame 0", "at least"][..])]
+    {
+        let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_pficp"))
+            .args(["track", "--model", m, "--scans", "-"])
+            .stdin(std::process::Stdio::piped())
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        child.stdin.take().unwrap().write_all(input.as_bytes()).unwrap();
+        assert_error(&child.wait_with_output().unwrap(), words);
+    }
 }

@@ -17,6 +17,7 @@ pub mod plots;
 pub mod realistic;
 pub mod success;
 mod text_table;
+pub mod tracking;
 
 use crate::geometry::{param, Params, Pose};
 use crate::nn::NearestNeighbours;

@@ -155,6 +155,27 @@ fn fig15(opts: &EvalOptions) -> anyhow::Result<String> {
     Ok(path.display().to_string())
 }
 
+/// The tracking benchmark's figure: each sequence's rotation error [deg] per frame (log
+/// axis), the tolerance as the reference line. Returns the path written.
+pub fn tracking_figure(
+    path: &Path,
+    subtitle: &str,
+    series: &[(String, Vec<(f64, f64)>)],
+    tolerance_deg: f64,
+) -> anyhow::Result<()> {
+    let frames = series.iter().flat_map(|(_, p)| p.iter().map(|q| q.0)).fold(1.0f64, f64::max);
+    let worst = series.iter().flat_map(|(_, p)| p.iter().map(|q| q.1)).fold(tolerance_deg, f64::max);
+    let chart = Chart {
+        title: "Tracking: rotation error over the frames",
+        subtitle,
+        x: Axis::linear(0.0, frames, "frame"),
+        y: Axis::log10(1e-3, worst.min(180.0), "rotation error (deg)"),
+        reference: Some(("tolerance", tolerance_deg)),
+        legend: SeriesLabelPosition::UpperLeft,
+    };
+    line_chart(path, &chart, series)
+}
+
 /// Mean closest-point distance of `scan` mapped by `pose` to the model.
 fn mean_distance(nn: &NearestNeighbours, scan: &[nalgebra::Point3<f64>], pose: &Pose) -> f64 {
     let moved = pose.apply_all(scan);

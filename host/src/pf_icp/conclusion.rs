@@ -150,7 +150,7 @@ pub struct Conclusion {
 
 /// The mean per-point cost excess of `other` over `best`, in standard errors of that mean
 /// (a paired test over the same scan points).
-fn paired_excess(best: &[f64], other: &[f64]) -> f64 {
+pub fn paired_excess(best: &[f64], other: &[f64]) -> f64 {
     let n = best.len().max(2) as f64;
     let d: Vec<f64> = other.iter().zip(best).map(|(a, b)| a - b).collect();
     let mean = d.iter().sum::<f64>() / n;

@@ -35,8 +35,14 @@ pub(crate) enum Command {
     /// Write a built-in model, its scan and the truth pose to files.
     #[command(after_help = "Example:\n  pficp gen --model model-2 --out-dir data --sampling independent --noise 0.1")]
     Gen(GenArgs),
+    /// Track a moving part: register every scan of a sequence to the model, each frame from
+    /// the last (`acquiring`, `tracking`, `lost`, `reacquired`), one line a frame.
+    #[command(
+        after_help = "Example:\n  pficp track --model part.ply --scans frames/ --json\n  camera-driver | pficp track --model part.ply --scans - --scale 1 --json"
+    )]
+    Track(TrackArgs),
     /// Reproduce the paper's Tables 2 to 7, the success rates and the figures, or run the
-    /// realistic benchmark.
+    /// realistic or the tracking benchmark.
     #[command(after_help = "Example:\n  pficp eval --suite realistic --quick --out eval-out")]
     Eval(EvalArgs),
     /// Time one PF-ICP registration per stage (model-1, 2,000 + 2,000 points, K = 100,
@@ -262,6 +268,26 @@ pub(crate) struct RegisterArgs {
     pub(crate) link: LinkArgs,
 }
 
+#[derive(clap::Args)]
+pub(crate) struct TrackArgs {
+    /// Model cloud (PLY, PCD, XYZ or CSV).
+    #[arg(long)]
+    pub(crate) model: PathBuf,
+    /// The frames: every PLY, PCD, XYZ or CSV file in this folder in name order, or `-`:
+    /// frames on standard input, each a block of `x y z` lines ended by an empty line or
+    /// the end of the input.
+    #[arg(long, value_name = "DIR")]
+    pub(crate) scans: PathBuf,
+    /// Frames a second (the motion model's time step).
+    #[arg(long, default_value_t = pficp::tracking::DEFAULT_FPS)]
+    pub(crate) fps: f64,
+    #[command(flatten)]
+    pub(crate) pf: PfArgs,
+    /// Print one JSON object a frame, one a line, as soon as the frame is done.
+    #[arg(long)]
+    pub(crate) json: bool,
+}
+
 #[derive(Clone, Copy, ValueEnum)]
 pub(crate) enum ModelArg {
     #[value(name = "model-1")]
@@ -377,6 +403,16 @@ pub(crate) struct EvalArgs {
     /// Realistic suite: do not tell PF-ICP where the camera was in the camera-view families.
     #[arg(long)]
     pub(crate) without_viewpoint: bool,
+    /// Tracking suite: sequences (one a shape, at most 4) [default: 4, or 2 with --quick].
+    #[arg(long)]
+    pub(crate) sequences: Option<usize>,
+    /// Tracking suite: frames a sequence (at most 300) [default: 300, or 200 with --quick].
+    #[arg(long)]
+    pub(crate) frames: Option<usize>,
+    /// Tracking suite: each part at a scale of its own, not told to the tracker [default:
+    /// scale 1, told as --scale 1].
+    #[arg(long)]
+    pub(crate) unknown_scale: bool,
     /// Realistic suite: export every case (model, scan, truth, symmetries) to this folder
     /// for the peers' script (tests/peers).
     #[arg(long, value_name = "DIR")]
@@ -387,6 +423,7 @@ pub(crate) struct EvalArgs {
 pub(crate) enum SuiteArg {
     Paper,
     Realistic,
+    Tracking,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]

@@ -10,8 +10,10 @@ use pficp::registration::methods::Method;
 use std::time::Instant;
 
 pub(crate) fn eval(a: &EvalArgs) -> Result<()> {
-    if a.suite == SuiteArg::Realistic {
-        return eval_realistic(a);
+    match a.suite {
+        SuiteArg::Realistic => return eval_realistic(a),
+        SuiteArg::Tracking => return eval_tracking(a),
+        SuiteArg::Paper => {}
     }
     let opts = pficp::eval::EvalOptions {
         out_dir: a.out.clone(),
@@ -35,6 +37,24 @@ pub(crate) fn board_points(a: &EvalArgs) -> Result<usize> {
         bail!("--board-points must be 1 to {} (got {n})", pficp::board::BOARD_MAX_STORE_POINTS);
     }
     Ok(n)
+}
+
+pub(crate) fn eval_tracking(a: &EvalArgs) -> Result<()> {
+    use pficp::eval::realistic::Split;
+    use pficp::eval::tracking::{self, TrackingOptions};
+    let opts = TrackingOptions {
+        seed: a.seed,
+        split: if a.split == SplitArg::Dev { Split::Dev } else { Split::Test },
+        sequences: a.sequences.unwrap_or(if a.quick { 2 } else { 4 }),
+        frames: a.frames.unwrap_or(if a.quick { 200 } else { tracking::sequence::FRAMES }),
+        metric: !a.unknown_scale,
+        out_dir: Some(a.out.clone()),
+        ..Default::default()
+    };
+    let report = tracking::run(&opts)?;
+    print!("{}", report.text());
+    note(format_args!("wrote {} and {}", a.out.join("tracking.json").display(), a.out.join("tracking.svg").display()));
+    Ok(())
 }
 
 pub(crate) fn eval_realistic(a: &EvalArgs) -> Result<()> {

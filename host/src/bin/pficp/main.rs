@@ -7,6 +7,7 @@
 mod args;
 mod eval;
 mod register;
+mod track;
 
 use anyhow::{bail, Context, Result};
 use args::*;
@@ -23,6 +24,7 @@ fn main() {
     let result = match cli.command {
         Command::Demo(a) => demo(&a),
         Command::Register(a) => register::register(&a),
+        Command::Track(a) => track::track(&a),
         Command::Gen(a) => gen(&a),
         Command::Eval(a) => eval::eval(&a),
         Command::Bench(a) => eval::bench(&a),
@@ -34,7 +36,7 @@ fn main() {
     }
 }
 
-fn load(path: &Path, name: &str) -> Result<Cloud> {
+pub(crate) fn load(path: &Path, name: &str) -> Result<Cloud> {
     Ok(read_cloud(path, name)?)
 }
 

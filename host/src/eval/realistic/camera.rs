@@ -64,7 +64,7 @@ fn unit_vector(rng: &mut impl Rng) -> Vector3<f64> {
 }
 
 /// The median distance of a point of `points` to its nearest other point.
-fn spacing(points: &[Point3<f64>]) -> f64 {
+pub fn spacing(points: &[Point3<f64>]) -> f64 {
     let nn = crate::nn::NearestNeighbours::new(points);
     let step = (points.len() / 2000).max(1);
     let gaps: Vec<f64> = points

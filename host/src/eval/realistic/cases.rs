@@ -167,7 +167,7 @@ impl Shape {
     }
 
     /// `model` points and `scan` points of the surface, drawn independently of each other.
-    fn draw(&self, model: usize, scan: usize, rng: &mut ChaCha8Rng) -> (Vec<Point3<f64>>, Vec<Point3<f64>>) {
+    pub fn draw(&self, model: usize, scan: usize, rng: &mut ChaCha8Rng) -> (Vec<Point3<f64>>, Vec<Point3<f64>>) {
         match self {
             Shape::Real(s) => {
                 let pts = s.points();

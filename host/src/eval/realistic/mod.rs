@@ -36,7 +36,7 @@ mod cases;
 mod report;
 mod scoring;
 
-pub use camera::{camera_view, CameraView};
+pub use camera::{camera_view, spacing, CameraView};
 
 pub use cases::*;
 pub use report::*;

@@ -1,0 +1,337 @@
+//! The tracking benchmark (`pficp eval --suite tracking`): [`crate::tracking::Tracker`] on
+//! seeded sequences of a part moving in front of a depth camera ([`sequence`]).
+//!
+//! **Scoring**: a frame is right when its pose is within [`TOLERANCE`] of the truth (1 deg,
+//! 1% of the diagonal at the scan's centroid, 1% of scale; an exactly symmetric shape
+//! modulo its symmetries); confidently wrong when its verdict is `confident` and it is not
+//! right. Per sequence: the share of frames right outside the hidden stretch and the
+//! [`REACQUIRE_WINDOW`] frames after it, confidently wrong frames anywhere, frames after
+//! the hidden stretch until the first right frame that holds the track again, the median
+//! rotation error of the tracked frames, and the frames a second (the inverse of the
+//! median frame time; tracked frames and all frames).
+//!
+//! **Shapes**: the `test` split runs the surgical and held-out shapes of [`TEST_SHAPES`]
+//! (no setting was tuned on them), the `dev` split [`DEV_SHAPES`], each with its own seed.
+
+pub mod sequence;
+
+use crate::eval::realistic::{pose_errors, symmetric_truth, Shape, Split, Tolerance};
+use crate::nn::NearestNeighbours;
+use crate::pf_icp::verdict::Verdict;
+use crate::progress::Progress;
+use crate::tracking::{TrackSettings, TrackState, Tracker};
+use serde::Serialize;
+use std::path::PathBuf;
+
+/// A frame is right within 1 deg, 1% of the diagonal and 1% of scale.
+pub const TOLERANCE: Tolerance = Tolerance { rotation_deg: 1.0, translation_frac: 0.01, scale_frac: 0.01 };
+/// Frames after the hidden stretch allowed for re-acquisition (not counted in the share
+/// right).
+pub const REACQUIRE_WINDOW: usize = 10;
+/// The test split's shapes: two anatomical surfaces, a held-out scan, a held-out
+/// near-symmetric part.
+pub const TEST_SHAPES: [&str; 4] = ["dog_pelvis", "dog_vertebra", "armadillo", "flange-key"];
+/// The dev split's shapes.
+pub const DEV_SHAPES: [&str; 4] = ["dog_skull", "bunny", "fandisk", "near-cube-notch"];
+
+/// What to run.
+#[derive(Clone, Debug)]
+pub struct TrackingOptions {
+    /// Seed of the sequences (each sequence's is mixed from it, the split and its index).
+    pub seed: u64,
+    /// Shapes and seeds.
+    pub split: Split,
+    /// Frames per sequence (at most [`sequence::FRAMES`]; fewer cut the sequence short,
+    /// the hidden stretch with it).
+    pub frames: usize,
+    /// Sequences (at most 4: one a shape).
+    pub sequences: usize,
+    /// The parts at scale 1 and the tracker told so (`--scale 1`: a metric camera and a
+    /// model in the same units); else each part at a scale of its own, unknown to the
+    /// tracker.
+    pub metric: bool,
+    /// The tracker's settings (the seed is replaced by each sequence's).
+    pub settings: TrackSettings,
+    /// Write `tracking.json` and `tracking.svg` here.
+    pub out_dir: Option<PathBuf>,
+    /// Progress on stderr.
+    pub progress: bool,
+}
+
+impl Default for TrackingOptions {
+    fn default() -> Self {
+        TrackingOptions {
+            seed: 1,
+            split: Split::Test,
+            frames: sequence::FRAMES,
+            sequences: 4,
+            metric: true,
+            settings: TrackSettings::default(),
+            out_dir: None,
+            progress: true,
+        }
+    }
+}
+
+/// One frame's record.
+#[derive(Clone, Debug, Serialize)]
+pub struct FrameRecord {
+    /// Frame index.
+    pub frame: usize,
+    /// The part is almost hidden.
+    pub hidden: bool,
+    /// Rotation error [deg], translation error [fraction of the diagonal], scale error.
+    pub errors: [f64; 3],
+    /// Within [`TOLERANCE`].
+    pub right: bool,
+    /// The verdict.
+    pub verdict: Verdict,
+    /// Its reasons.
+    pub reasons: Vec<String>,
+    /// The track's state.
+    pub state: TrackState,
+    /// A global registration ran.
+    pub global: bool,
+    /// Wall time [s].
+    pub seconds: f64,
+}
+
+/// One sequence's figures.
+#[derive(Clone, Debug, Serialize)]
+pub struct SequenceReport {
+    /// `shape/seed`.
+    pub id: String,
+    /// Frames scored for the share right (outside the hidden stretch and the window after it).
+    pub scored: usize,
+    /// Of those, right.
+    pub right: usize,
+    /// Frames confidently wrong (anywhere).
+    pub confidently_wrong: usize,
+    /// Frames confident and off by more than the realistic benchmark's tolerance (2 deg, 2%
+    /// of the diagonal, 1% of scale), the one the verdict's limits were set for.
+    pub confidently_wrong_2deg: usize,
+    /// Frames after the hidden stretch until the first right frame that holds the track
+    /// (`None`: never within the sequence).
+    pub reacquire_frames: Option<usize>,
+    /// Median rotation error of the tracked frames [deg].
+    pub median_rotation_deg: f64,
+    /// Largest rotation error of the right-scored frames [deg].
+    pub worst_scored_rotation_deg: f64,
+    /// Frames a second: the inverse of the median time of a tracked frame.
+    pub tracked_fps: f64,
+    /// Median time of a tracked frame [s].
+    pub tracked_median_seconds: f64,
+    /// Frames a second over the whole sequence (global registrations included).
+    pub overall_fps: f64,
+    /// Every frame.
+    pub frames: Vec<FrameRecord>,
+}
+
+/// The benchmark's report.
+#[derive(Clone, Debug, Serialize)]
+pub struct TrackingReport {
+    /// The seed.
+    pub seed: u64,
+    /// `dev` or `test`.
+    pub split: &'static str,
+    /// Parts at scale 1, the tracker told so.
+    pub metric: bool,
+    /// The tolerance of a right frame.
+    pub tolerance: Tolerance,
+    /// Per sequence.
+    pub sequences: Vec<SequenceReport>,
+}
+
+/// The shapes of a split.
+pub fn shapes(split: Split) -> Vec<Shape> {
+    let names = match split {
+        Split::Test => TEST_SHAPES,
+        Split::Dev => DEV_SHAPES,
+    };
+    names
+        .iter()
+        .map(|n| {
+            crate::real_shapes::all()
+                .iter()
+                .find(|s| s.name == *n)
+                .map(Shape::Real)
+                .or_else(|| crate::parts::Part::ALL.iter().find(|p| p.name() == *n).map(|&p| Shape::Part(p)))
+                .expect("a known shape")
+        })
+        .collect()
+}
+
+/// The seed of sequence `index` of `split`.
+pub fn sequence_seed(seed: u64, split: Split, index: usize) -> u64 {
+    let split_code = match split {
+        Split::Dev => 1,
+        Split::Test => 2,
+    };
+    super::mix(super::mix(super::mix(seed, 0x0074_7261_636b), split_code), index as u64 + 1)
+}
+
+/// Score one sequence's frames.
+fn score(seq: &sequence::Sequence, frames: &[crate::tracking::TrackFrame]) -> SequenceReport {
+    let symmetries = seq.shape.symmetries();
+    let records: Vec<FrameRecord> = frames
+        .iter()
+        .zip(&seq.frames)
+        .map(|(f, truth)| {
+            let at = crate::cloud::centroid(&truth.scan);
+            let errors = symmetries
+                .iter()
+                .map(|g| pose_errors(&f.pose, &symmetric_truth(&truth.truth, g, &seq.shape.centre()), &at, seq.diag))
+                .min_by(|a, b| a.0.total_cmp(&b.0))
+                .expect("the identity");
+            FrameRecord {
+                frame: f.frame,
+                hidden: truth.hidden,
+                errors: [errors.0, errors.1, errors.2],
+                right: TOLERANCE.accepts(errors),
+                verdict: f.verdict,
+                reasons: f.reasons.clone(),
+                state: f.state,
+                global: f.global,
+                seconds: f.seconds,
+            }
+        })
+        .collect();
+    let hidden = sequence::HIDDEN;
+    let after = hidden.end..hidden.end + REACQUIRE_WINDOW;
+    let scored: Vec<&FrameRecord> =
+        records.iter().filter(|r| !hidden.contains(&r.frame) && !after.contains(&r.frame)).collect();
+    let holds = |r: &&FrameRecord| r.right && matches!(r.state, TrackState::Tracking | TrackState::Reacquired);
+    let reacquire_frames =
+        (records.len() > hidden.end).then(|| records[hidden.end..].iter().position(|r| holds(&r))).flatten();
+    let tracked: Vec<&FrameRecord> = records.iter().filter(|r| r.state == TrackState::Tracking).collect();
+    let median = |v: Vec<f64>| if v.is_empty() { f64::NAN } else { crate::registration::icp::median(&v) };
+    let tracked_median_seconds = median(tracked.iter().map(|r| r.seconds).collect());
+    let total: f64 = records.iter().map(|r| r.seconds).sum();
+    SequenceReport {
+        id: seq.id.clone(),
+        scored: scored.len(),
+        right: scored.iter().filter(|r| r.right).count(),
+        confidently_wrong: records.iter().filter(|r| r.verdict == Verdict::Confident && !r.right).count(),
+        confidently_wrong_2deg: records
+            .iter()
+            .filter(|r| {
+                r.verdict == Verdict::Confident
+                    && !crate::eval::realistic::TOLERANCE.accepts((r.errors[0], r.errors[1], r.errors[2]))
+            })
+            .count(),
+        reacquire_frames,
+        median_rotation_deg: median(tracked.iter().map(|r| r.errors[0]).collect()),
+        worst_scored_rotation_deg: scored.iter().map(|r| r.errors[0]).fold(0.0, f64::max),
+        tracked_fps: 1.0 / tracked_median_seconds,
+        tracked_median_seconds,
+        overall_fps: records.len() as f64 / total.max(1e-300),
+        frames: records,
+    }
+}
+
+/// Run the benchmark.
+pub fn run(opts: &TrackingOptions) -> anyhow::Result<TrackingReport> {
+    anyhow::ensure!(
+        (1..=sequence::FRAMES).contains(&opts.frames),
+        "--frames must be 1 to {} (got {})",
+        sequence::FRAMES,
+        opts.frames
+    );
+    let shapes = shapes(opts.split);
+    anyhow::ensure!(
+        (1..=shapes.len()).contains(&opts.sequences),
+        "--sequences must be 1 to {} (got {})",
+        shapes.len(),
+        opts.sequences
+    );
+    let mut reports = Vec::new();
+    for (index, shape) in shapes.into_iter().take(opts.sequences).enumerate() {
+        let seed = sequence_seed(opts.seed, opts.split, index);
+        let mut seq = sequence::sequence(shape, seed, opts.metric);
+        seq.frames.truncate(opts.frames);
+        let nn = NearestNeighbours::new(&seq.model);
+        let mut settings = opts.settings.clone();
+        settings.registration.seed = seed;
+        if opts.metric {
+            settings.registration.scale = crate::geometry::ScaleBounds::fixed(1.0);
+        }
+        let mut tracker = Tracker::new(&nn, settings);
+        let bar =
+            opts.progress.then(|| Progress::bar(&format!("tracking {}", seq.id), seq.frames.len() as u64, "frames"));
+        let mut frames = Vec::with_capacity(seq.frames.len());
+        for (k, f) in seq.frames.iter().enumerate() {
+            frames.push(tracker.update(&f.scan));
+            if let Some(b) = &bar {
+                b.set(k as u64 + 1);
+            }
+        }
+        let report = score(&seq, &frames);
+        if let Some(b) = bar {
+            b.finish(format_args!("tracked {}: {}/{} frames right", seq.id, report.right, report.scored));
+        }
+        reports.push(report);
+    }
+    let report = TrackingReport {
+        seed: opts.seed,
+        split: opts.split.name(),
+        metric: opts.metric,
+        tolerance: TOLERANCE,
+        sequences: reports,
+    };
+    if let Some(dir) = &opts.out_dir {
+        std::fs::create_dir_all(dir).map_err(|e| anyhow::anyhow!("cannot create {}: {e}", dir.display()))?;
+        let json = dir.join("tracking.json");
+        std::fs::write(&json, serde_json::to_string_pretty(&report)?)
+            .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", json.display()))?;
+        let series: Vec<(String, Vec<(f64, f64)>)> = report
+            .sequences
+            .iter()
+            .map(|s| (s.id.clone(), s.frames.iter().map(|r| (r.frame as f64, r.errors[0])).collect()))
+            .collect();
+        let subtitle = format!(
+            "{} split, seed {}; hidden frames {}..{}, a jump of {} deg in their middle",
+            report.split,
+            report.seed,
+            sequence::HIDDEN.start,
+            sequence::HIDDEN.end,
+            sequence::JUMP_DEG
+        );
+        super::plots::tracking_figure(&dir.join("tracking.svg"), &subtitle, &series, TOLERANCE.rotation_deg)?;
+    }
+    Ok(report)
+}
+
+impl TrackingReport {
+    /// The table: one row a sequence.
+    pub fn text(&self) -> String {
+        let mut s = format!(
+            "tracking benchmark, {} split, seed {}, {} (right: {} deg, {:.0}% of the diagonal, {:.0}% of scale)\n",
+            self.split,
+            self.seed,
+            if self.metric { "scale known (1)" } else { "scale unknown" },
+            self.tolerance.rotation_deg,
+            100.0 * self.tolerance.translation_frac,
+            100.0 * self.tolerance.scale_frac
+        );
+        s += &format!(
+            "{:<30} {:>14} {:>10} {:>10} {:>10} {:>11} {:>12} {:>12}\n",
+            "sequence", "right", "conf.wrong", "(at 2 deg)", "reacquire", "median deg", "tracked fps", "overall fps"
+        );
+        for q in &self.sequences {
+            s += &format!(
+                "{:<30} {:>4}/{:<4} {:>4.0}% {:>10} {:>10} {:>10} {:>11.3} {:>12.1} {:>12.1}\n",
+                q.id,
+                q.right,
+                q.scored,
+                100.0 * q.right as f64 / q.scored.max(1) as f64,
+                q.confidently_wrong,
+                q.confidently_wrong_2deg,
+                q.reacquire_frames.map_or("never".to_string(), |n| n.to_string()),
+                q.median_rotation_deg,
+                q.tracked_fps,
+                q.overall_fps
+            );
+        }
+        s
+    }
+}

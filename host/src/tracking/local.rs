@@ -1,0 +1,216 @@
+//! One tracked frame: a short particle filter about the predicted pose, one short polish,
+//! and the cheap part of the conclusion (no global search, no basin probe).
+//!
+//! 1. **Filter**: the SIR filter of [`crate::pf_icp::particle_filter`] over a
+//!    [`LocalDelta`] from the prediction (translation of the scan centroid's image, relative
+//!    scale, rotation vector: no Euler angles, so no gimbal lock at any pose), the prior's
+//!    spread from [`super::motion::Motion::spread`], the particles weighed by the capped
+//!    surface cost on a seeded sample of the scan.
+//! 2. **Polish**: point-to-plane ICP ([`Surface::polish`]) from the filter's estimate on a
+//!    seeded subset of the scan.
+//! 3. **Checks**: the contacts of the scan give the uncertainty
+//!    ([`crate::pf_icp::conclusion::uncertainty_of`], the curvature's sandwich, no probe),
+//!    the fit, the share explained within the acquisition's noise and, with a viewpoint,
+//!    the share hidden; the carried alternatives (a near-symmetric part's other poses,
+//!    moved with the track) are weighed against the answer by the conclusion's paired test.
+
+use crate::geometry::{Pose, ScaleBounds};
+use crate::pf_icp::conclusion::{
+    fit_of, paired_excess, uncertainty_of, widest_sigma, Fit, Uncertainty, ALTERNATIVE_SIGMAS,
+};
+use crate::pf_icp::evidence::Evidence;
+use crate::pf_icp::particle_filter::{self, FilterSettings, Objective};
+use crate::pf_icp::surface::{Surface, COST_CAP};
+use crate::pf_icp::verdict::{judge, Checks, Verdict};
+use crate::tracking::motion::{after, LocalDelta};
+use nalgebra::{Point3, SMatrix};
+use rand::seq::SliceRandom;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+/// How much work a tracked frame does.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameBudget {
+    /// Particles of the frame's filter.
+    pub particles: usize,
+    /// Filter iterations.
+    pub iterations: usize,
+    /// Scan points each particle is weighed on.
+    pub weight_points: usize,
+    /// Scan points the polish runs on.
+    pub polish_points: usize,
+    /// Polish iterations.
+    pub polish_iterations: usize,
+}
+
+/// The filter's objective: a [`LocalDelta`] after the prediction, about `at`.
+struct DeltaObjective<'a> {
+    surface: &'a Surface<'a>,
+    sample: &'a [Point3<f64>],
+    predicted: Pose,
+    at: Point3<f64>,
+    cap: f64,
+    bounds: ScaleBounds,
+}
+
+impl DeltaObjective<'_> {
+    fn pose(&self, x: &[f64]) -> Pose {
+        after(&self.predicted, x, &self.at)
+    }
+}
+
+impl Objective for DeltaObjective<'_> {
+    fn dim(&self) -> usize {
+        7
+    }
+    fn is_angle(&self, _i: usize) -> bool {
+        // (A rotation vector's components are no angles on a circle; the spread keeps them
+        // far below pi.)
+        false
+    }
+    fn cost(&self, x: &[f64]) -> f64 {
+        self.surface.cost(self.sample, &self.pose(x), self.cap)
+    }
+    fn distances(&self, x: &[f64]) -> (f64, f64) {
+        let pose = self.pose(x);
+        let (mut sum, mut max) = (0.0f64, 0.0f64);
+        for p in self.sample {
+            let d = self.surface.distance2(&pose.apply(p)).sqrt();
+            sum += d;
+            max = max.max(d);
+        }
+        (sum / self.sample.len().max(1) as f64, max)
+    }
+    fn constrain(&self, x: &mut [f64]) {
+        let s = self.predicted.scale * (1.0 + x[3]);
+        x[3] = self.bounds.clamp(s) / self.predicted.scale - 1.0;
+    }
+}
+
+/// What one tracked frame found.
+#[derive(Clone, Debug)]
+pub struct Local {
+    /// The answer (scan to model).
+    pub pose: Pose,
+    /// Its uncertainty (curvature only).
+    pub uncertainty: Uncertainty,
+    /// Its fit.
+    pub fit: Fit,
+    /// What the verdict was judged on.
+    pub checks: Checks,
+    /// The verdict.
+    pub verdict: Verdict,
+    /// Its reasons.
+    pub reasons: Vec<String>,
+    /// The carried alternatives still as good as the answer, as model-frame maps `G`
+    /// (the alternative is `G T`).
+    pub alternatives: Vec<Pose>,
+}
+
+/// `count` points of `scan` drawn with `seed` (all of them, shuffled, when fewer).
+fn sample(scan: &[Point3<f64>], count: usize, seed: u64) -> Vec<Point3<f64>> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    scan.choose_multiple(&mut rng, count.min(scan.len())).copied().collect()
+}
+
+/// Track one frame: the filter from `predicted` with standard deviations `spread`, the
+/// polish, the checks; the scale within `bounds` (the track's), judged at a bound against
+/// the user's `user_bounds`. `evidence` is the acquisition's (the sensor's noise), `symmetries`
+/// the carried alternatives' model-frame maps, `seed` this frame's.
+#[allow(clippy::too_many_arguments)]
+pub fn track_frame(
+    surface: &Surface,
+    scan: &[Point3<f64>],
+    predicted: &Pose,
+    spread: &LocalDelta,
+    bounds: &ScaleBounds,
+    user_bounds: &ScaleBounds,
+    evidence: &Evidence,
+    symmetries: &[Pose],
+    budget: &FrameBudget,
+    seed: u64,
+) -> Local {
+    let diag = crate::cloud::bbox_diagonal(surface.nn().points());
+    let centroid = crate::cloud::centroid(scan);
+    let at = predicted.apply(&centroid);
+    let weighed = sample(scan, budget.weight_points, seed);
+    let objective =
+        DeltaObjective { surface, sample: &weighed, predicted: *predicted, at, cap: COST_CAP * diag, bounds: *bounds };
+    let floor: Vec<f64> = spread.iter().map(|s| 0.25 * s).collect();
+    let settings = FilterSettings {
+        particles: budget.particles,
+        iterations: budget.iterations,
+        region_sigmas: 2.0,
+        q: 0.0,
+        sigma_floor: floor,
+        threshold_avg: 0.0,
+        threshold_max: 0.0,
+        adaptive: None,
+        patience: None,
+        seed: seed.wrapping_add(1),
+    };
+    let filtered = particle_filter::run(&objective, &[0.0; 7], spread, &settings);
+    let filter_pose = objective.pose(&filtered.estimate);
+    let polished_on = sample(scan, budget.polish_points, seed.wrapping_add(2));
+    let mut pose = surface.polish(&polished_on, &filter_pose, budget.polish_iterations, bounds);
+    if !pose.scale.is_finite() || !bounds.contains(pose.scale) {
+        pose = filter_pose;
+    }
+
+    // The carried alternatives: each `G T`, polished as the answer is, against the answer
+    // over the same points (the conclusion's paired test).
+    let tight = |p: &Pose| evidence.tight_costs(surface, &polished_on, p);
+    let polish = |p: &Pose| surface.polish(&polished_on, p, budget.polish_iterations, bounds);
+    let mut costs = tight(&pose);
+    let mut maps: Vec<Pose> = symmetries.to_vec();
+    let mut kept = Vec::new();
+    let mut swaps = 0;
+    // An alternative the scan now clearly prefers becomes the answer (the old answer, clearly
+    // behind, is dropped); one clearly behind the answer is dropped.
+    while let Some(g) = maps.pop() {
+        let other = polish(&g.compose(&pose));
+        let c = tight(&other);
+        if paired_excess(&c, &costs) > ALTERNATIVE_SIGMAS && swaps < symmetries.len() {
+            swaps += 1;
+            // The others relative to the new answer: an alternative `H T` is `(H B) T'`,
+            // `B` the map from the new answer `T'` back to the old one.
+            let back = pose.compose(&other.inverse());
+            maps = maps.iter().chain(&kept).map(|h: &Pose| h.compose(&back)).collect();
+            kept.clear();
+            pose = other;
+            costs = c;
+        } else if paired_excess(&costs, &c) < ALTERNATIVE_SIGMAS {
+            // (Kept as the map to the polished alternative.)
+            kept.push(other.compose(&pose.inverse()));
+        }
+    }
+    let alternatives = kept;
+
+    let contacts = surface.contacts(scan, &pose);
+    let image = pose.apply(&centroid);
+    let curv = surface.curvature_of(&contacts, &pose, &image, bounds.fixed_value().is_some());
+    let uncertainty = uncertainty_of(&curv, diag, &SMatrix::zeros());
+    let fit = fit_of(&contacts.1, diag);
+    let cap2 = evidence.tight_cap * evidence.tight_cap;
+    let s2 = pose.scale * pose.scale;
+    let hidden_mask = evidence.viewpoint.map(|v| crate::pf_icp::evidence::hidden(surface, scan, &pose, &v));
+    let explained = contacts
+        .1
+        .iter()
+        .enumerate()
+        .filter(|(i, c)| c.dist2 / s2 < cap2 && !hidden_mask.as_ref().is_some_and(|h| h[*i]))
+        .count() as f64
+        / scan.len().max(1) as f64;
+    let hidden = hidden_mask.map(|h| h.iter().filter(|&&x| x).count() as f64 / scan.len().max(1) as f64);
+    let at_bound = |b: f64| b.is_finite() && (pose.scale / b - 1.0).abs() < 1e-9;
+    let checks = Checks {
+        explained,
+        hidden,
+        scale_at_bound: user_bounds.fixed_value().is_none() && (at_bound(user_bounds.lo) || at_bound(user_bounds.hi)),
+        alternatives: alternatives.len(),
+        undetermined: uncertainty.undetermined.clone(),
+        widest_sigma: widest_sigma(&uncertainty.sigma, diag, pose.scale),
+    };
+    let (verdict, reasons) = judge(&checks);
+    Local { pose, uncertainty, fit, checks, verdict, reasons, alternatives }
+}
