@@ -105,6 +105,11 @@ pub struct SequenceReport {
     pub scored: usize,
     /// Of those, right.
     pub right: usize,
+    /// Of those, right or flagged (a verdict other than `confident`: a robot told not to act
+    /// on the frame, or that another pose fits as well).
+    pub right_or_flagged: usize,
+    /// Of those, right and `confident` (a robot may act).
+    pub confident_right: usize,
     /// Frames confidently wrong (anywhere).
     pub confidently_wrong: usize,
     /// Frames confident and off by more than the realistic benchmark's tolerance (2 deg, 2%
@@ -211,6 +216,8 @@ fn score(seq: &sequence::Sequence, frames: &[crate::tracking::TrackFrame]) -> Se
         id: seq.id.clone(),
         scored: scored.len(),
         right: scored.iter().filter(|r| r.right).count(),
+        right_or_flagged: scored.iter().filter(|r| r.right || r.verdict != Verdict::Confident).count(),
+        confident_right: scored.iter().filter(|r| r.right && r.verdict == Verdict::Confident).count(),
         confidently_wrong: records.iter().filter(|r| r.verdict == Verdict::Confident && !r.right).count(),
         confidently_wrong_2deg: records
             .iter()
@@ -314,16 +321,27 @@ impl TrackingReport {
             100.0 * self.tolerance.scale_frac
         );
         s += &format!(
-            "{:<30} {:>14} {:>10} {:>10} {:>10} {:>11} {:>12} {:>12}\n",
-            "sequence", "right", "conf.wrong", "(at 2 deg)", "reacquire", "median deg", "tracked fps", "overall fps"
+            "{:<34} {:>14} {:>9} {:>9} {:>10} {:>10} {:>9} {:>10} {:>11} {:>11}\n",
+            "sequence",
+            "right",
+            "or flag.",
+            "conf.right",
+            "conf.wrong",
+            "(at 2 deg)",
+            "reacquire",
+            "median deg",
+            "tracked fps",
+            "overall fps"
         );
         for q in &self.sequences {
             s += &format!(
-                "{:<30} {:>4}/{:<4} {:>4.0}% {:>10} {:>10} {:>10} {:>11.3} {:>12.1} {:>12.1}\n",
+                "{:<34} {:>4}/{:<4} {:>4.0}% {:>8.0}% {:>8.0}% {:>10} {:>10} {:>9} {:>10.3} {:>11.1} {:>11.1}\n",
                 q.id,
                 q.right,
                 q.scored,
                 100.0 * q.right as f64 / q.scored.max(1) as f64,
+                100.0 * q.right_or_flagged as f64 / q.scored.max(1) as f64,
+                100.0 * q.confident_right as f64 / q.scored.max(1) as f64,
                 q.confidently_wrong,
                 q.confidently_wrong_2deg,
                 q.reacquire_frames.map_or("never".to_string(), |n| n.to_string()),
