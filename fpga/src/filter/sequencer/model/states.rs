@@ -24,33 +24,6 @@ pub(super) struct Drive {
 /// The state's arm: `n` (the registers after the edge, as the step has set them so far)
 /// and `d` from the registers `r`, the signals `s` and the input ports `i`.
 pub(super) fn next(r: &Regs, s: &Signals, i: &SeqInputs, n: &mut Regs, d: &mut Drive) {
-    let Signals {
-        rng_next,
-        u_hi,
-        prod_sh14,
-        prod_sh15,
-        diff26,
-        lim26,
-        v_fix,
-        ex_now,
-        ex_masked,
-        ang,
-        ang_x,
-        sel_atan,
-        cx_sh,
-        cy_sh,
-        prog_word,
-        rf_b,
-        m_round16,
-        m_sat,
-        tr_sat,
-        sig_new,
-        est_fix,
-        abs26,
-        exp_data,
-        e_tmp,
-        ..
-    } = *s;
     // `(x + 1) == n_part` / `< n_part` are 32-bit in the Verilog: no wrap at 9 bits.
     let last = |x: u64| x + 1 == r.n_part;
     let pa_of = |half: bool, p: u64| ((half as u64) << 11) | ((p & m(8)) << 3);
@@ -89,23 +62,23 @@ pub(super) fn next(r: &Regs, s: &Signals, i: &SeqInputs, n: &mut Regs, d: &mut D
             n.cy = 0;
             n.ci = 0;
             n.cflip = false;
-            n.cz = sx(ang, 24) as u64 & m(25);
+            n.cz = sx(s.ang, 24) as u64 & m(25);
             // `ang_x > 0xc0_0000 || ang_x < 0x40_0000`.
-            if !(0x40_0000..=0xc0_0000).contains(&ang_x) {
+            if !(0x40_0000..=0xc0_0000).contains(&s.ang_x) {
                 n.cflip = true;
-                n.cz = sx(ang_x, 24) as u64 & m(25);
+                n.cz = sx(s.ang_x, 24) as u64 & m(25);
             }
             n.state = S::CorStep;
         }
         S::CorStep => {
             if (r.cz >> 24) & 1 == 0 {
-                n.cx = r.cx.wrapping_sub(cy_sh) & m(22);
-                n.cy = (r.cy + cx_sh) & m(22);
-                n.cz = r.cz.wrapping_sub(sel_atan) & m(25);
+                n.cx = r.cx.wrapping_sub(s.cy_sh) & m(22);
+                n.cy = (r.cy + s.cx_sh) & m(22);
+                n.cz = r.cz.wrapping_sub(s.sel_atan) & m(25);
             } else {
-                n.cx = (r.cx + cy_sh) & m(22);
-                n.cy = r.cy.wrapping_sub(cx_sh) & m(22);
-                n.cz = (r.cz + sel_atan) & m(25);
+                n.cx = (r.cx + s.cy_sh) & m(22);
+                n.cy = r.cy.wrapping_sub(s.cx_sh) & m(22);
+                n.cz = (r.cz + s.sel_atan) & m(25);
             }
             n.ci = (r.ci + 1) & m(5);
             if r.ci == 17 {
@@ -132,10 +105,10 @@ pub(super) fn next(r: &Regs, s: &Signals, i: &SeqInputs, n: &mut Regs, d: &mut D
             n.state = S::OpFetch;
         }
         S::OpFetch => {
-            d.rf_ra = ((prog_word >> 7) & m(5)) as usize;
-            n.op_kind = prog_word & m(2);
-            n.op_dst = (prog_word >> 2) & m(5);
-            n.op_b = (prog_word >> 12) & m(5);
+            d.rf_ra = ((s.prog_word >> 7) & m(5)) as usize;
+            n.op_kind = s.prog_word & m(2);
+            n.op_dst = (s.prog_word >> 2) & m(5);
+            n.op_b = (s.prog_word >> 12) & m(5);
             n.state = S::OpA;
         }
         S::OpA => {
@@ -146,30 +119,30 @@ pub(super) fn next(r: &Regs, s: &Signals, i: &SeqInputs, n: &mut Regs, d: &mut D
             if (r.op_kind >> 1) & 1 == 1 {
                 d.rf_w.we = true;
                 d.rf_w.data =
-                    if r.op_kind & 1 == 1 { r.opa.wrapping_sub(rf_b) & m(26) } else { (r.opa + rf_b) & m(26) };
+                    if r.op_kind & 1 == 1 { r.opa.wrapping_sub(s.rf_b) & m(26) } else { (r.opa + s.rf_b) & m(26) };
                 n.pc = (r.pc + 1) & m(5);
                 n.state = S::OpFetch;
             } else {
                 d.mul_go = true;
                 d.mul_a_in = r.opa;
-                d.mul_b_in = rf_b & m(18);
+                d.mul_b_in = s.rf_b & m(18);
                 n.state = S::OpMul;
             }
         }
         S::OpMul => {
             if r.m_cnt == 0 {
                 if r.op_kind & 1 == 1 {
-                    n.pose_r = shift_in18(r.pose_r, m_sat);
+                    n.pose_r = shift_in18(r.pose_r, s.m_sat);
                 } else {
                     d.rf_w.we = true;
-                    d.rf_w.data = (m_round16 >> 16) & m(26);
+                    d.rf_w.data = (s.m_round16 >> 16) & m(26);
                 }
                 n.pc = (r.pc + 1) & m(5);
                 n.state = if r.pc == 27 { S::PoseT } else { S::OpFetch };
             }
         }
         S::PoseT => {
-            n.pose_r = shift_in18(r.pose_r, tr_sat);
+            n.pose_r = shift_in18(r.pose_r, s.tr_sat);
             n.cj = (r.cj + 1) & m(2);
             if r.cj == 2 {
                 n.state = r.ret;
@@ -205,7 +178,7 @@ pub(super) fn next(r: &Regs, s: &Signals, i: &SeqInputs, n: &mut Regs, d: &mut D
             n.state = S::PropAddr;
         }
         S::PropAddr => {
-            n.rng = rng_next;
+            n.rng = s.rng_next;
             n.state = S::PropRead;
         }
         S::PropRead => {
@@ -215,14 +188,14 @@ pub(super) fn next(r: &Regs, s: &Signals, i: &SeqInputs, n: &mut Regs, d: &mut D
         S::PropMul => {
             n.x_r = r.pram_q;
             if r.m_cnt == 0 {
-                n.off = if r.first { prod_sh14 } else { (diff26 + prod_sh15) & m(26) };
+                n.off = if r.first { s.prod_sh14 } else { (s.diff26 + s.prod_sh15) & m(26) };
                 n.state = S::PropClamp;
             }
         }
         S::PropClamp => {
-            let neg_lim = 0u64.wrapping_sub(lim26) & m(26);
-            if (r.off ^ 0x200_0000) > (lim26 ^ 0x200_0000) {
-                n.off = lim26;
+            let neg_lim = 0u64.wrapping_sub(s.lim26) & m(26);
+            if (r.off ^ 0x200_0000) > (s.lim26 ^ 0x200_0000) {
+                n.off = s.lim26;
             }
             if (r.off ^ 0x200_0000) < (neg_lim ^ 0x200_0000) {
                 n.off = neg_lim;
@@ -232,7 +205,7 @@ pub(super) fn next(r: &Regs, s: &Signals, i: &SeqInputs, n: &mut Regs, d: &mut D
         S::PropWrite => {
             // (The write port is `pram_port`.)
             if (r.pd as usize) < PARAMS {
-                n.cur[r.pd as usize] = v_fix;
+                n.cur[r.pd as usize] = s.v_fix;
             }
             n.pa = (r.pa + 1) & m(12);
             n.pd = (r.pd + 1) & m(3);
@@ -298,7 +271,7 @@ pub(super) fn next(r: &Regs, s: &Signals, i: &SeqInputs, n: &mut Regs, d: &mut D
                 n.i = (r.i + 1) & m(9);
             }
             n.sq = ((r.sq << 1) | issue as u64) & m(2);
-            if (r.sq >> 1) & 1 == 1 && ex_masked == 0 {
+            if (r.sq >> 1) & 1 == 1 && s.ex_masked == 0 {
                 n.cnt = (r.cnt + 1) & m(9);
             }
             if !issue && r.sq & 1 == 0 {
@@ -326,7 +299,7 @@ pub(super) fn next(r: &Regs, s: &Signals, i: &SeqInputs, n: &mut Regs, d: &mut D
             }
         }
         S::TSet => {
-            n.pre = if e_tmp > 5 { (e_tmp - 5) & m(6) } else { 0 };
+            n.pre = if s.e_tmp > 5 { (s.e_tmp - 5) & m(6) } else { 0 };
             n.i = 0;
             n.cnt = 0;
             n.sq = 0;
@@ -344,10 +317,10 @@ pub(super) fn next(r: &Regs, s: &Signals, i: &SeqInputs, n: &mut Regs, d: &mut D
             }
             n.sq = ((r.sq << 1) | issue as u64) & m(3);
             if (r.sq >> 1) & 1 == 1 {
-                n.sh = if r.pre >= 64 { 0 } else { ex_now >> r.pre };
+                n.sh = if r.pre >= 64 { 0 } else { s.ex_now >> r.pre };
             }
             if (r.sq >> 2) & 1 == 1 {
-                n.w_sum = (r.w_sum + exp_data) & m(24);
+                n.w_sum = (r.w_sum + s.exp_data) & m(24);
                 n.cnt = (r.cnt + 1) & m(9);
             }
             if !issue && r.sq & 3 == 0 {
@@ -410,7 +383,7 @@ pub(super) fn next(r: &Regs, s: &Signals, i: &SeqInputs, n: &mut Regs, d: &mut D
             if (r.sq >> 2) & 1 == 1 {
                 d.mul_go = true;
                 d.mul_b_in = r.w_r & m(18);
-                d.mul_a_in = if r.spread { abs26 } else { diff26 };
+                d.mul_a_in = if r.spread { s.abs26 } else { s.diff26 };
             }
             if (r.m_v >> 2) & 1 == 1 {
                 let prod48 = (sx(r.m_acc, 44) as u64) & m(48);
@@ -428,9 +401,9 @@ pub(super) fn next(r: &Regs, s: &Signals, i: &SeqInputs, n: &mut Regs, d: &mut D
             if r.dv_cnt == 0 {
                 if (r.pd as usize) < PARAMS {
                     if r.spread {
-                        n.sigma[r.pd as usize] = sig_new;
+                        n.sigma[r.pd as usize] = s.sig_new;
                     } else {
-                        n.est[r.pd as usize] = est_fix;
+                        n.est[r.pd as usize] = s.est_fix;
                     }
                 }
                 n.pd = (r.pd + 1) & m(3);
@@ -470,7 +443,7 @@ pub(super) fn next(r: &Regs, s: &Signals, i: &SeqInputs, n: &mut Regs, d: &mut D
             if (r.best_cost_r <= r.thr_cost && r.best_max_r <= r.thr_max) || r.iter_done == r.n_iter {
                 n.state = S::Fin;
             } else {
-                n.rng = rng_next;
+                n.rng = s.rng_next;
                 n.state = S::RsBegin;
             }
         }
@@ -478,7 +451,7 @@ pub(super) fn next(r: &Regs, s: &Signals, i: &SeqInputs, n: &mut Regs, d: &mut D
         S::RsBegin => {
             d.mul_go = true;
             d.mul_a_in = r.w_sum;
-            d.mul_b_in = u_hi;
+            d.mul_b_in = s.u_hi;
             n.wra = 0;
             n.i = 0;
             n.j = 0;
