@@ -1,9 +1,9 @@
 //! `Cordic`: cosine and sine of a binary angle (Q2.16) in 18 rotation steps, the RTL twin
-//! of [`crate::filter::pf::cordic`] (test: `fpga/tests/sequencer_blocks.rs`). Angles beyond a
+//! of [`crate::filter::cordic::cordic`] (test: `fpga/tests/sequencer_blocks.rs`). Angles beyond a
 //! quarter turn are turned by half a turn first and the result negated; the result is
 //! rounded from Q2.18 to Q2.16.
 
-use crate::filter::pf::{CORDIC_ATAN, CORDIC_K, CORDIC_STEPS};
+use crate::filter::cordic::{CORDIC_ATAN, CORDIC_K, CORDIC_STEPS};
 use rust_hdl::prelude::*;
 
 /// The CORDIC: `load` (one clock), then `step` for 18 clocks (`last` on the 18th); `value`

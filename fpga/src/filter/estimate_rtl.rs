@@ -1,5 +1,5 @@
 //! `Estimate`: the datapath after a weighted sum, combinational, the RTL twin of
-//! [`crate::filter::pf::estimate_param`] and [`crate::filter::pf::spread`] (test:
+//! [`crate::filter::estimate::estimate_param`] and [`crate::filter::estimate::spread`] (test:
 //! `fpga/tests/sequencer_blocks.rs`). The sum's magnitude goes to the divider; its quotient
 //! comes back as the new estimate (`centre +- q`) or the new spread (`1.25 q` within
 //! `[floor, cap]`).

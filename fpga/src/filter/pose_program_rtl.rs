@@ -1,11 +1,11 @@
-//! `PoseProgram`: the datapath that runs [`crate::filter::pf::POSE_PROGRAM`] (in ROM) over a
-//! 32 x 26-bit register file, the RTL twin of [`crate::filter::pf::run_program`] (test:
+//! `PoseProgram`: the datapath that runs [`crate::filter::pose_program::POSE_PROGRAM`] (in ROM) over a
+//! 32 x 26-bit register file, the RTL twin of [`crate::filter::pose_program::run_program`] (test:
 //! `fpga/tests/sequencer_blocks.rs`). The sequencer's states drive it a step at a time
 //! (`fetch`, `latch`, `exec`, `retire`) and lend it the pipelined multiplier; the CORDIC's
 //! cosines and sines and the scale come in through `load`. The nine `MulM` results (the
 //! pose matrix, Q3.15) leave through `entry` instead of the register file.
 
-use crate::filter::pf::{Op, POSE_PROGRAM};
+use crate::filter::pose_program::{Op, POSE_PROGRAM};
 use rust_hdl::prelude::*;
 
 /// The pose program's datapath.

@@ -1,5 +1,5 @@
 //! `Propagate`: the datapath of a particle's propagation, combinational, the RTL twin of
-//! [`crate::filter::pf::propagate`] (test: `fpga/tests/sequencer_blocks.rs`). The sequencer's
+//! [`crate::filter::propagate::propagate`] (test: `fpga/tests/sequencer_blocks.rs`). The sequencer's
 //! states take `step` (after the multiplier's `sigma u`), then `clamped`, then `value`;
 //! `diff` and `abs_diff` also serve the estimate's and the spread's weighted sums.
 

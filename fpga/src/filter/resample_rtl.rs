@@ -1,5 +1,5 @@
 //! `Resample`: the two running sums of systematic resampling, the RTL twin of
-//! [`crate::filter::pf::resample`] (test: `fpga/tests/sequencer_blocks.rs`). The pointer starts at
+//! [`crate::filter::resample::resample`] (test: `fpga/tests/sequencer_blocks.rs`). The pointer starts at
 //! `u0 W` and moves by `W 2^16` a pick; the cumulative sum adds `n w_i 2^16` a particle;
 //! the sequencer advances `i` while the pointer is `beyond` it. The products come from the
 //! sequencer's pipelined multiplier (`PipeMul`).

@@ -2,27 +2,27 @@
 //! [`crate::filter::pf::run`]. It owns the particle set (two halves of a 4,096 x 24 RAM), the
 //! per-particle costs and weights and the state machine (`kernel.rs`), and drives the
 //! nearest-neighbour pipeline through `start` / `pose`. Its parameter vectors and its
-//! arithmetic are one block a file, each the twin of a [`crate::filter::pf`] function or state
-//! (tests: `fpga/tests/sequencer_blocks.rs`):
+//! arithmetic are one block a file, each the twin of the model of the same stem beside it
+//! (`cordic_rtl.rs` and `cordic.rs`; tests: `fpga/tests/sequencer_blocks.rs`):
 //! - [`param_bank`]: `ParamBank`, the centre, cap, floor, spread, estimate, best and current
 //!   particle vectors;
 //! - [`pipe_mul`]: `PipeMul`, 26 x 18 bits in LUTs, two clocks, one pair a clock;
 //! - [`serial_div`]: `SerialDiv`, 48 / 24 bits (quotient below 2^24) in 24 clocks
-//!   ([`crate::filter::pf::div_signed`]);
-//! - [`xorshift`]: `Xorshift32`, the PRNG's step ([`crate::filter::pf::Xorshift32`]);
-//! - [`cordic`]: `Cordic`, cosine and sine in 18 steps ([`crate::filter::pf::cordic`]);
-//! - [`pose_program`]: `PoseProgram`, [`crate::filter::pf::POSE_PROGRAM`] in ROM over a 32 x 26
-//!   register file ([`crate::filter::pf::run_program`]);
+//!   ([`crate::filter::serial_div::div_signed`]);
+//! - [`xorshift`]: `Xorshift32`, the PRNG's step ([`crate::filter::xorshift::Xorshift32`]);
+//! - [`cordic`]: `Cordic`, cosine and sine in 18 steps ([`crate::filter::cordic::cordic`]);
+//! - [`pose_program`]: `PoseProgram`, [`crate::filter::pose_program::POSE_PROGRAM`] in ROM
+//!   over a 32 x 26 register file ([`crate::filter::pose_program::run_program`]);
 //! - [`propagate`]: `Propagate`, a particle's parameter moved and clamped
-//!   ([`crate::filter::pf::propagate`]);
+//!   ([`crate::filter::propagate::propagate`]);
 //! - [`estimate`]: `Estimate`, the estimate and spread after a weighted sum
-//!   ([`crate::filter::pf::estimate_param`], [`crate::filter::pf::spread`]);
+//!   ([`crate::filter::estimate::estimate_param`], [`crate::filter::estimate::spread`]);
 //! - [`translation`]: `Translation`, a translation parameter to the pose's
-//!   ([`crate::filter::pf::translation`]);
+//!   ([`crate::filter::translation::translation`]);
 //! - [`weight`]: `Weight`, a cost excess to its weight through the exp table in ROM
-//!   ([`crate::filter::pf::weight`], [`crate::filter::pf::temper`]'s exponent);
+//!   ([`crate::filter::weight::weight`], [`crate::filter::weight::temper`]'s exponent);
 //! - [`resample`]: `Resample`, the pointer and cumulative sum of systematic resampling
-//!   ([`crate::filter::pf::resample`]).
+//!   ([`crate::filter::resample::resample`]).
 //!
 //! Everything is sequential and small next to the pipeline's ~10^4 clocks per particle.
 //! The cycle-accurate mirror is [`crate::filter::sequencer::SequencerModel`].

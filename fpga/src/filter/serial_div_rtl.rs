@@ -1,6 +1,6 @@
 //! `SerialDiv`: the sequencer's restoring divider, `quotient = n / d` in 24 clocks (`n` 48
 //! bits, `d` 24 bits, unsigned, `n < d 2^24`; the quotient's low 26 bits out), the magnitude
-//! step of [`crate::filter::pf::div_signed`]; the test is `fpga/tests/sequencer_blocks.rs`.
+//! step of [`crate::filter::serial_div::div_signed`]; the test is `fpga/tests/sequencer_blocks.rs`.
 //!
 //! The filter's quotients are a mean offset or a mean absolute deviation of 24-bit
 //! parameters: `|sum w x| <= 2^23 W`, so the quotient is at most `2^23` and its top 24 bits

@@ -1,5 +1,5 @@
 //! `Translation`: a translation parameter (Q5.19) to the pose's translation (Q5.13,
-//! saturated to 18 bits), combinational, the RTL twin of [`crate::filter::pf::translation`]
+//! saturated to 18 bits), combinational, the RTL twin of [`crate::filter::translation::translation`]
 //! (test: `fpga/tests/sequencer_blocks.rs`).
 
 use rust_hdl::prelude::*;

@@ -1,10 +1,10 @@
 //! `Weight`: a particle's weight from its cost excess, `EXP[min(255, excess >> (e - 5))]`,
-//! the RTL twin of [`crate::filter::pf::weight`] with the exponent rule of [`crate::filter::pf::temper`]
+//! the RTL twin of [`crate::filter::weight::weight`] with the exponent rule of [`crate::filter::weight::temper`]
 //! (`e = max(tq, p - 2, 5)`, `p` the bit length the temperature pass found; test:
 //! `fpga/tests/sequencer_blocks.rs`). The table is [`crate::common::format::exp_table`] in ROM.
 
 use crate::common::format::{exp_table, EXP_ENTRIES};
-use crate::filter::pf::MIN_TEMPER_EXP;
+use crate::filter::weight::MIN_TEMPER_EXP;
 use rust_hdl::prelude::*;
 
 /// The weight of one excess: `temper` sets the shift, `latch` takes an excess, and

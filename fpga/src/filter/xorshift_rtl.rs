@@ -1,5 +1,5 @@
 //! `Xorshift32`: one step of the sequencer's PRNG, xorshift32 (13, 17, 5), combinational;
-//! the RTL twin of [`crate::filter::pf::Xorshift32::next`] (test: `fpga/tests/sequencer_blocks.rs`).
+//! the RTL twin of [`crate::filter::xorshift::Xorshift32::next`] (test: `fpga/tests/sequencer_blocks.rs`).
 
 use rust_hdl::prelude::*;
 
