@@ -19,6 +19,7 @@ use crate::pf_icp::conclusion::{
     fit_of, paired_excess, uncertainty_of, widest_sigma, Fit, Uncertainty, ALTERNATIVE_SIGMAS,
 };
 use crate::pf_icp::evidence::Evidence;
+use crate::pf_icp::hypotheses::same_pose;
 use crate::pf_icp::particle_filter::{self, FilterSettings, Objective};
 use crate::pf_icp::surface::{Surface, COST_CAP};
 use crate::pf_icp::verdict::{judge, Checks, Verdict};
@@ -169,6 +170,13 @@ pub fn track_frame(
     // behind, is dropped); one clearly behind the answer is dropped.
     while let Some(g) = maps.pop() {
         let other = polish(&g.compose(&pose));
+        // (An alternative that polishes into the answer, or into one already kept, is no
+        // other pose.)
+        if same_pose(&other, &pose, &centroid, diag)
+            || kept.iter().any(|h: &Pose| same_pose(&other, &h.compose(&pose), &centroid, diag))
+        {
+            continue;
+        }
         let c = tight(&other);
         if paired_excess(&c, &costs) > ALTERNATIVE_SIGMAS && swaps < symmetries.len() {
             swaps += 1;

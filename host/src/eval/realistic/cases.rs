@@ -236,7 +236,8 @@ fn uniform_rotation(rng: &mut impl Rng) -> Matrix3<f64> {
     UnitQuaternion::from_quaternion(q).to_rotation_matrix().into_inner()
 }
 
-fn unit_vector(rng: &mut impl Rng) -> Vector3<f64> {
+/// A direction uniform on the sphere.
+pub fn unit_vector(rng: &mut impl Rng) -> Vector3<f64> {
     let n = Normal::new(0.0, 1.0).expect("unit normal");
     loop {
         let v = Vector3::new(n.sample(rng), n.sample(rng), n.sample(rng));

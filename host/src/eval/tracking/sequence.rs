@@ -21,7 +21,7 @@
 //!
 //! Every sequence is a function of its seed and its shape.
 
-use crate::eval::realistic::Shape;
+use crate::eval::realistic::{unit_vector, Shape};
 use crate::geometry::Pose;
 use crate::visibility::{DepthImage, View};
 use nalgebra::{Matrix3, Point3, Rotation3, Vector3};
@@ -87,16 +87,6 @@ pub struct Sequence {
     pub diag: f64,
     /// The frames.
     pub frames: Vec<Frame>,
-}
-
-fn unit_vector(rng: &mut impl Rng) -> Vector3<f64> {
-    let n = Normal::new(0.0, 1.0).expect("unit normal");
-    loop {
-        let v = Vector3::new(n.sample(rng), n.sample(rng), n.sample(rng));
-        if v.norm() > 1e-6 {
-            return v.normalize();
-        }
-    }
 }
 
 /// A smooth vector signal: three sinusoids of random axes, frequencies and phases, its
