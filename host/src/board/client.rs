@@ -118,7 +118,7 @@ mod filter;
 mod link;
 mod load;
 
-pub use filter::run_clocks_bound;
+pub use filter::{run_clocks_bound, run_clocks_for};
 
 /// A client of one board on one serial port.
 pub struct BoardClient {

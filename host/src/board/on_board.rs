@@ -131,6 +131,44 @@ pub fn pf_config(
     scan_points: usize,
     settings: &PfIcpSettings,
 ) -> PfConfig {
+    let filter = FilterPrior {
+        init_params: prior.init_params,
+        sigma0: &prior.sigma0,
+        floor: &prior.floor,
+        q: prior.q,
+        threshold_avg: prior.threshold_avg,
+        threshold_max: prior.threshold_max,
+    };
+    filter_config(&filter, model_norm, scan_norm, scan_points, settings)
+}
+
+/// What the on-board filter's Run configuration is made of: the start in the centred
+/// frame of the clouds' normalisations, the sigmas, `Q` and the stop thresholds
+/// (PF-ICP's [`Prior`], or a tracked frame's prediction and spread).
+#[derive(Clone, Copy, Debug)]
+pub struct FilterPrior<'a> {
+    /// The start, in the frame centred on the clouds' normalisation centres.
+    pub init_params: crate::geometry::Params,
+    /// Initial sigma per state.
+    pub sigma0: &'a [f64],
+    /// Smallest sigma per state.
+    pub floor: &'a [f64],
+    /// The likelihood's `Q`.
+    pub q: f64,
+    /// Stop threshold on the average closest-point distance [units].
+    pub threshold_avg: f64,
+    /// Stop threshold on the largest closest-point distance [units].
+    pub threshold_max: f64,
+}
+
+/// [`pf_config`] from a [`FilterPrior`].
+pub fn filter_config(
+    prior: &FilterPrior,
+    model_norm: &Normalisation,
+    scan_norm: &Normalisation,
+    scan_points: usize,
+    settings: &PfIcpSettings,
+) -> PfConfig {
     let (rm, rs) = (model_norm.radius, scan_norm.radius);
     let p = &prior.init_params;
     let centre: Particle = [

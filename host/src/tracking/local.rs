@@ -23,6 +23,7 @@ use crate::pf_icp::hypotheses::same_pose;
 use crate::pf_icp::particle_filter::{self, FilterSettings, Objective};
 use crate::pf_icp::surface::{Surface, COST_CAP};
 use crate::pf_icp::verdict::{judge, Checks, Verdict};
+use crate::tracking::board::{BoardFrame, BoardModel};
 use crate::tracking::motion::{after, LocalDelta};
 use nalgebra::{Point3, SMatrix};
 use rand::seq::SliceRandom;
@@ -106,6 +107,11 @@ pub struct Local {
     /// The carried alternatives still as good as the answer, as model-frame maps `G`
     /// (the alternative is `G T`).
     pub alternatives: Vec<Pose>,
+    /// With the filter on the board: its pose, the link's bytes and the run's clocks.
+    pub board: Option<BoardFrame>,
+    /// Wall time of the host's part after the filter (the polish, the alternatives, the
+    /// checks) [s].
+    pub host_seconds: f64,
 }
 
 /// `count` points of `scan` drawn with `seed` (all of them, shuffled, when fewer).
@@ -117,7 +123,8 @@ fn sample(scan: &[Point3<f64>], count: usize, seed: u64) -> Vec<Point3<f64>> {
 /// Track one frame: the filter from `predicted` with standard deviations `spread`, the
 /// polish, the checks; the scale within `bounds` (the track's), judged at a bound against
 /// the user's `user_bounds`. `evidence` is the acquisition's (the sensor's noise), `symmetries`
-/// the carried alternatives' model-frame maps, `seed` this frame's.
+/// the carried alternatives' model-frame maps, `seed` this frame's; with `board` the filter
+/// runs on the board (its bit-exact reference, [`super::board`]) instead of the host.
 #[allow(clippy::too_many_arguments)]
 pub fn track_frame(
     surface: &Surface,
@@ -130,6 +137,7 @@ pub fn track_frame(
     symmetries: &[Pose],
     budget: &FrameBudget,
     seed: u64,
+    board: Option<&BoardModel>,
 ) -> Local {
     let diag = crate::cloud::bbox_diagonal(surface.nn().points());
     let centroid = crate::cloud::centroid(scan);
@@ -150,8 +158,17 @@ pub fn track_frame(
         patience: None,
         seed: seed.wrapping_add(1),
     };
-    let filtered = particle_filter::run(&objective, &[0.0; 7], spread, &settings);
-    let filter_pose = objective.pose(&filtered.estimate);
+    let (filter_pose, board) = match board {
+        None => (objective.pose(&particle_filter::run(&objective, &[0.0; 7], spread, &settings).estimate), None),
+        Some(b) => {
+            let f = b.filter(&weighed, predicted, spread, budget.particles, budget.iterations, seed);
+            (f.pose, Some(f))
+        }
+    };
+    let host = std::time::Instant::now();
+    // (Inside the track's scale bounds: the board's scale parameter holds a fixed scale to
+    // its least step only, and a polish keeps a fixed scale where it starts.)
+    let filter_pose = bounds.apply(&filter_pose, &centroid);
     let polished_on = sample(scan, budget.polish_points, seed.wrapping_add(2));
     let mut pose = surface.polish(&polished_on, &filter_pose, budget.polish_iterations, bounds);
     if !pose.scale.is_finite() || !bounds.contains(pose.scale) {
@@ -220,5 +237,6 @@ pub fn track_frame(
         widest_sigma: widest_sigma(&uncertainty.sigma, diag, pose.scale),
     };
     let (verdict, reasons) = judge(&checks);
-    Local { pose, uncertainty, fit, checks, verdict, reasons, alternatives }
+    let host_seconds = host.elapsed().as_secs_f64();
+    Local { pose, uncertainty, fit, checks, verdict, reasons, alternatives, board, host_seconds }
 }

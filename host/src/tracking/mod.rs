@@ -25,6 +25,7 @@
 //!   the truth and the track slid along the part's near-symmetry while its frames said
 //!   `confident`.
 
+pub mod board;
 pub mod local;
 pub mod motion;
 
@@ -98,11 +99,19 @@ pub struct TrackSettings {
     pub fps: f64,
     /// A tracked frame's work.
     pub budget: FrameBudget,
+    /// Run each tracked frame's filter on the board, by its bit-exact reference
+    /// ([`board`]): the board's pose, its link bytes and clocks in [`TrackFrame::board`].
+    pub board_reference: bool,
 }
 
 impl Default for TrackSettings {
     fn default() -> Self {
-        TrackSettings { registration: PfIcpSettings::default(), fps: DEFAULT_FPS, budget: FRAME_BUDGET }
+        TrackSettings {
+            registration: PfIcpSettings::default(),
+            fps: DEFAULT_FPS,
+            budget: FRAME_BUDGET,
+            board_reference: false,
+        }
     }
 }
 
@@ -131,6 +140,10 @@ pub struct TrackFrame {
     pub global: bool,
     /// Wall time of the frame [s].
     pub seconds: f64,
+    /// A tracked frame's filter on the board (with [`TrackSettings::board_reference`]).
+    pub board: Option<board::BoardFrame>,
+    /// A tracked frame's host part after the filter [s] (0 for a global registration).
+    pub host_seconds: f64,
 }
 
 /// What the track knows of the scale.
@@ -166,6 +179,7 @@ pub fn holds(c: &Checks, scale_settling: bool, holding: bool) -> bool {
 /// A tracker of one model over consecutive scans.
 pub struct Tracker<'a> {
     surface: Surface<'a>,
+    board: Option<board::BoardModel>,
     settings: TrackSettings,
     diag: f64,
     motion: Motion,
@@ -182,11 +196,17 @@ pub struct Tracker<'a> {
 }
 
 impl<'a> Tracker<'a> {
-    /// A tracker of the model behind `nn`.
-    pub fn new(nn: &'a NearestNeighbours, settings: TrackSettings) -> Self {
+    /// A tracker of the model behind `nn`; with [`TrackSettings::board_reference`] a model
+    /// the board refuses is an error.
+    pub fn new(nn: &'a NearestNeighbours, settings: TrackSettings) -> Result<Self, crate::board::BoardError> {
         let user = settings.registration.scale;
-        Tracker {
+        let board = match settings.board_reference {
+            true => Some(board::BoardModel::new(nn.points(), settings.registration.seed)?),
+            false => None,
+        };
+        Ok(Tracker {
             surface: Surface::new(nn),
+            board,
             diag: crate::cloud::bbox_diagonal(nn.points()),
             settings,
             motion: Motion::new(),
@@ -197,7 +217,7 @@ impl<'a> Tracker<'a> {
             symmetries: Vec::new(),
             ambiguous: false,
             scale: Scale { user, working: user, settling: Vec::new() },
-        }
+        })
     }
 
     /// Frames seen so far.
@@ -284,6 +304,8 @@ impl<'a> Tracker<'a> {
             state,
             global: true,
             seconds: 0.0,
+            board: None,
+            host_seconds: 0.0,
         }
     }
 
@@ -334,6 +356,7 @@ impl<'a> Tracker<'a> {
             &self.symmetries,
             budget,
             seed,
+            self.board.as_ref(),
         )
     }
 
@@ -358,6 +381,8 @@ impl<'a> Tracker<'a> {
             state,
             global,
             seconds: 0.0,
+            board: local.board,
+            host_seconds: local.host_seconds,
         }
     }
 }
@@ -381,7 +406,7 @@ mod tests {
             registration: PfIcpSettings { scale: ScaleBounds::fixed(1.0), seed: 5, ..Default::default() },
             ..Default::default()
         };
-        let mut tracker = Tracker::new(&nn, settings.clone());
+        let mut tracker = Tracker::new(&nn, settings.clone()).unwrap();
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
         let (lo, hi) = crate::cloud::bbox(&seq.frames[0].scan);
         let foreign: Vec<Point3<f64>> = (0..800)
@@ -421,7 +446,7 @@ mod tests {
         let e = error(back, &frames[back]);
         assert!(e.0 < 2.0 && e.1 < 0.02, "re-acquired at frame {back}: {e:?}");
         // The same seed, the same poses.
-        let mut again = Tracker::new(&nn, settings);
+        let mut again = Tracker::new(&nn, settings).unwrap();
         for (k, f) in frames.iter().enumerate().take(4) {
             assert_eq!(again.update(&seq.frames[k].scan).pose, f.pose, "frame {k}");
         }

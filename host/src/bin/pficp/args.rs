@@ -393,7 +393,8 @@ pub(crate) struct EvalArgs {
     /// Also run PF-ICP with the filter and its polish on the board, the board's part by its
     /// bit-exact reference (what the board computes): columns pf-icp-board (then the
     /// host's polish) and pf-icp-board-filter (the board's pose alone), in the realistic
-    /// suite and in the paper suite's success rates.
+    /// suite and in the paper suite's success rates; in the tracking suite every tracked
+    /// frame's filter, with the board's modelled frames a second.
     #[arg(long)]
     pub(crate) board_reference: bool,
     /// With --board-reference: scan points the on-board filter weighs each particle over

@@ -48,6 +48,7 @@ pub(crate) fn eval_tracking(a: &EvalArgs) -> Result<()> {
         sequences: a.sequences.unwrap_or(if a.quick { 2 } else { 4 }),
         frames: a.frames.unwrap_or(if a.quick { 200 } else { tracking::sequence::FRAMES }),
         metric: !a.unknown_scale,
+        board: a.board_reference,
         out_dir: Some(a.out.clone()),
         ..Default::default()
     };

@@ -24,7 +24,7 @@ pub(crate) fn track(a: &TrackArgs) -> Result<()> {
     let registration = a.pf.settings()?;
     let model = load(&a.model, "model")?;
     let nn = NearestNeighbours::new(model.points());
-    let mut tracker = Tracker::new(&nn, TrackSettings { registration, fps: a.fps, ..Default::default() });
+    let mut tracker = Tracker::new(&nn, TrackSettings { registration, fps: a.fps, ..Default::default() })?;
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     let mut emit = |file: &str, scan: &Cloud, tracker: &mut Tracker| -> Result<()> {

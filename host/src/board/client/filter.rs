@@ -227,9 +227,15 @@ impl BoardClient {
 /// the residual stage) plus one clock:
 /// `particles x iterations + iterations + 1` poses.
 pub fn run_clocks_bound(particles: u16, iterations: u16, scan_points: usize, model_points: usize, lanes: usize) -> u64 {
+    run_clocks_for(particles, iterations, evaluation_clocks_bound(scan_points, model_points, lanes.max(1)))
+}
+
+/// [`run_clocks_bound`] with every evaluation taking `evaluation_clocks` (the start edge to
+/// the residual stage's `cost_valid`).
+pub fn run_clocks_for(particles: u16, iterations: u16, evaluation_clocks: u64) -> u64 {
     use pficp_fpga::filter::sequencer::{run_clocks, IterationShape, MAX_TEMPER_PASSES};
     let n = particles as u64;
-    let eval = 1 + evaluation_clocks_bound(scan_points, model_points, lanes.max(1));
+    let eval = 1 + evaluation_clocks;
     let shape = |last: bool| IterationShape {
         particles: n,
         // The particles' evaluations overlap the next particle's propagation: at most each

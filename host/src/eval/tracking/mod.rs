@@ -28,6 +28,9 @@ pub const TOLERANCE: Tolerance = Tolerance { rotation_deg: 1.0, translation_frac
 /// Frames after the hidden stretch allowed for re-acquisition (not counted in the share
 /// right).
 pub const REACQUIRE_WINDOW: usize = 10;
+/// The baud rates the board's frames a second are modelled at.
+pub const BOARD_BAUDS: [u32; 2] = [3_000_000, 921_600];
+
 /// The test split's shapes: two anatomical surfaces, a held-out scan, a held-out
 /// near-symmetric part.
 pub const TEST_SHAPES: [&str; 4] = ["dog_pelvis", "dog_vertebra", "armadillo", "flange-key"];
@@ -50,6 +53,9 @@ pub struct TrackingOptions {
     /// model in the same units); else each part at a scale of its own, unknown to the
     /// tracker.
     pub metric: bool,
+    /// Run each tracked frame's filter on the board (its bit-exact reference) and report
+    /// the board's modelled frames a second ([`BOARD_BAUDS`]).
+    pub board: bool,
     /// The tracker's settings (the seed is replaced by each sequence's).
     pub settings: TrackSettings,
     /// Write `tracking.json` and `tracking.svg` here.
@@ -66,6 +72,7 @@ impl Default for TrackingOptions {
             frames: sequence::FRAMES,
             sequences: 4,
             metric: true,
+            board: false,
             settings: TrackSettings::default(),
             out_dir: None,
             progress: true,
@@ -84,6 +91,10 @@ pub struct FrameRecord {
     pub errors: [f64; 3],
     /// Within [`TOLERANCE`].
     pub right: bool,
+    /// With the filter on the board: the board's pose alone (its filter's best, before the
+    /// host's polish), its errors as `errors`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub board_errors: Option<[f64; 3]>,
     /// The verdict.
     pub verdict: Verdict,
     /// Its reasons.
@@ -128,6 +139,13 @@ pub struct SequenceReport {
     pub tracked_median_seconds: f64,
     /// Frames a second over the whole sequence (global registrations included).
     pub overall_fps: f64,
+    /// With the filter on the board: tracked frames a second at each of [`BOARD_BAUDS`],
+    /// the inverse of the median of the board's modelled time (link and run) plus the
+    /// host's measured part after the filter.
+    pub board_fps: Option<[f64; 2]>,
+    /// With the filter on the board: the median rotation error of the board's pose alone
+    /// on the tracked frames [deg].
+    pub board_median_rotation_deg: Option<f64>,
     /// Every frame.
     pub frames: Vec<FrameRecord>,
 }
@@ -177,6 +195,19 @@ pub fn sequence_seed(seed: u64, split: Split, index: usize) -> u64 {
 
 /// Score one sequence's frames.
 fn score(seq: &sequence::Sequence, frames: &[crate::tracking::TrackFrame]) -> SequenceReport {
+    let board_fps = {
+        let on_board: Vec<&crate::tracking::TrackFrame> =
+            frames.iter().filter(|f| f.state == TrackState::Tracking && f.board.is_some()).collect();
+        (!on_board.is_empty()).then(|| {
+            BOARD_BAUDS.map(|baud| {
+                let t: Vec<f64> = on_board
+                    .iter()
+                    .filter_map(|f| f.board.as_ref().map(|b| b.seconds(baud) + f.host_seconds))
+                    .collect();
+                1.0 / crate::registration::icp::median(&t)
+            })
+        })
+    };
     let symmetries = seq.shape.symmetries();
     let records: Vec<FrameRecord> = frames
         .iter()
@@ -188,8 +219,19 @@ fn score(seq: &sequence::Sequence, frames: &[crate::tracking::TrackFrame]) -> Se
                 .map(|g| pose_errors(&f.pose, &symmetric_truth(&truth.truth, g, &seq.shape.centre()), &at, seq.diag))
                 .min_by(|a, b| a.0.total_cmp(&b.0))
                 .expect("the identity");
+            let board_errors = f.board.as_ref().map(|b| {
+                let e = symmetries
+                    .iter()
+                    .map(|g| {
+                        pose_errors(&b.pose, &symmetric_truth(&truth.truth, g, &seq.shape.centre()), &at, seq.diag)
+                    })
+                    .min_by(|a, b| a.0.total_cmp(&b.0))
+                    .expect("the identity");
+                [e.0, e.1, e.2]
+            });
             FrameRecord {
                 frame: f.frame,
+                board_errors,
                 hidden: truth.hidden,
                 errors: [errors.0, errors.1, errors.2],
                 right: TOLERANCE.accepts(errors),
@@ -232,6 +274,11 @@ fn score(seq: &sequence::Sequence, frames: &[crate::tracking::TrackFrame]) -> Se
         tracked_fps: 1.0 / tracked_median_seconds,
         tracked_median_seconds,
         overall_fps: records.len() as f64 / total.max(1e-300),
+        board_fps,
+        board_median_rotation_deg: {
+            let e: Vec<f64> = tracked.iter().filter_map(|r| r.board_errors.map(|e| e[0])).collect();
+            (!e.is_empty()).then(|| crate::registration::icp::median(&e))
+        },
         frames: records,
     }
 }
@@ -259,10 +306,11 @@ pub fn run(opts: &TrackingOptions) -> anyhow::Result<TrackingReport> {
         let nn = NearestNeighbours::new(&seq.model);
         let mut settings = opts.settings.clone();
         settings.registration.seed = seed;
+        settings.board_reference = opts.board;
         if opts.metric {
             settings.registration.scale = crate::geometry::ScaleBounds::fixed(1.0);
         }
-        let mut tracker = Tracker::new(&nn, settings);
+        let mut tracker = Tracker::new(&nn, settings)?;
         let bar =
             opts.progress.then(|| Progress::bar(&format!("tracking {}", seq.id), seq.frames.len() as u64, "frames"));
         let mut frames = Vec::with_capacity(seq.frames.len());
@@ -348,6 +396,19 @@ impl TrackingReport {
                 q.median_rotation_deg,
                 q.tracked_fps,
                 q.overall_fps
+            );
+        }
+        for q in self.sequences.iter().filter(|q| q.board_fps.is_some()) {
+            let [a, b] = q.board_fps.unwrap_or_default();
+            s += &format!(
+                "{:<34} board (its filter by its bit-exact reference, the host's polish and checks): {:.1} frames/s \
+                 at {} baud, {:.1} at {}; the board's pose alone {:.3} deg median\n",
+                q.id,
+                a,
+                BOARD_BAUDS[0],
+                b,
+                BOARD_BAUDS[1],
+                q.board_median_rotation_deg.unwrap_or(f64::NAN)
             );
         }
         s

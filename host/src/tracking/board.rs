@@ -1,0 +1,205 @@
+//! A tracked frame's filter on the board, by the board's bit-exact reference, and the
+//! board's time for it (the model resident).
+//!
+//! **What crosses the link a frame**: the frame's scan sample (normalised, quantised, in
+//! the Morton order of its cells; LoadScan requests of at most
+//! [`pficp_fpga::protocol::messages::MAX_LOAD_POINTS`] points), SetSizes, a Run whose
+//! filter starts at the prediction with the motion's spread (the centred Euler parameters
+//! of the on-board filter, the rotation vector's spread taken for each angle's) and whose
+//! polish is the smallest the protocol takes (one start, no steps, over the sample: the
+//! host polishes and checks the board's pose as a software frame does its filter's),
+//! Status polls while it runs, then Result. Each request and reply is the framed message
+//! ([`Frame::encode`]) at 10 bits a byte.
+//!
+//! **The board's time** ([`BoardFrame::seconds`]): the bytes before and after the run at
+//! the baud rate; the run's clocks at the board's clock: the sequencer's schedule
+//! ([`run_clocks_for`]) with every evaluation as long as the prediction's, counted on the
+//! neighbour pipeline's cycle model ([`clocks_per_particle`], plus the residual stage's
+//! latency; the particles lie within a few spreads of the prediction), and the polish's
+//! bound ([`polish_clocks_bound`]); one Status round trip and half a poll period for the
+//! poll that sees it done.
+
+use crate::board::on_board::{board_seed, evaluate, filter_config, params_pose, FilterPrior};
+use crate::board::quantise::{
+    board_grid, board_model, morton_sorted, normalised_pose, quantise_pose, stored_normals, Normalisation,
+};
+use crate::board::{run_clocks_for, BoardError, BOARD_MAX_STORE_POINTS, DEFAULT_POLL};
+use crate::geometry::{Centred, Pose};
+use crate::pf_icp::PfIcpSettings;
+use nalgebra::Point3;
+use pficp_fpga::board::BoardConfig;
+use pficp_fpga::common::format::FxPoint;
+use pficp_fpga::protocol::messages::{
+    load_request, two_u16, MAX_LOAD_POINTS, RESULT_BYTES, RUN_REPLY_BYTES, STATUS_BYTES,
+};
+use pficp_fpga::protocol::run_request::{polish_clocks_bound, PolishRequest, RunRequest};
+use pficp_fpga::protocol::{Command, Frame};
+use pficp_fpga::search::grid::Grid;
+use pficp_fpga::search::neighbour_pipeline::clocks_per_particle;
+use pficp_fpga::surface::surface_residual::SURFACE_LATENCY;
+use pficp_fpga::surface::FxNormal;
+
+/// Bits a byte on the wire (8N1).
+const BITS_PER_BYTE: f64 = 10.0;
+
+/// The model as the board holds it, for a track's frames.
+pub struct BoardModel {
+    grid: Grid,
+    normals: Vec<FxNormal>,
+    model_norm: Normalisation,
+    config: BoardConfig,
+}
+
+/// One frame's filter on the board.
+#[derive(Clone, Debug)]
+pub struct BoardFrame {
+    /// The board's pose (its filter's best; scan to model).
+    pub pose: Pose,
+    /// Bytes on the wire before the run (the scan, SetSizes, Run, their replies) and after
+    /// it (Result and its reply).
+    pub link_bytes: usize,
+    /// Bytes of one Status round trip.
+    pub poll_bytes: usize,
+    /// The run's clocks (bound).
+    pub clocks: u64,
+    /// The board's clock [Hz].
+    pub clock_hz: u32,
+}
+
+impl BoardFrame {
+    /// The board's time for the frame at `baud` (module doc).
+    pub fn seconds(&self, baud: u32) -> f64 {
+        let wire = |bytes: usize| bytes as f64 * BITS_PER_BYTE / baud as f64;
+        wire(self.link_bytes)
+            + self.clocks as f64 / self.clock_hz as f64
+            + wire(self.poll_bytes)
+            + 0.5 * DEFAULT_POLL.as_secs_f64()
+    }
+}
+
+/// The bytes of a request with `data` and its reply of `reply` data bytes.
+fn round_trip(command: Command, data: Vec<u8>, reply: usize) -> usize {
+    let code = command as u8;
+    Frame { code, seq: 0, data }.encode().len()
+        + Frame { code: code | 0x80, seq: 0, data: vec![0; reply] }.encode().len()
+}
+
+impl BoardModel {
+    /// The model on the shipped board ([`BoardConfig::default`]): at most
+    /// [`BOARD_MAX_STORE_POINTS`] of its points (drawn with `seed`), normalised, gridded,
+    /// with their normals.
+    pub fn new(model: &[Point3<f64>], seed: u64) -> Result<Self, BoardError> {
+        let model_norm = Normalisation::of(model);
+        let on_board = board_model(model, BOARD_MAX_STORE_POINTS, seed);
+        let grid = board_grid(&model_norm.quantise(&on_board))?;
+        Ok(BoardModel { normals: stored_normals(&grid), grid, model_norm, config: BoardConfig::default() })
+    }
+
+    /// The filter from `predicted` with standard deviations `spread` (translation, relative
+    /// scale, rotation) over `sample` (the frame's weighed scan points), `particles` and
+    /// `iterations`, seeded by `seed`.
+    pub fn filter(
+        &self,
+        sample: &[Point3<f64>],
+        predicted: &Pose,
+        spread: &[f64; 7],
+        particles: usize,
+        iterations: usize,
+        seed: u64,
+    ) -> BoardFrame {
+        let scan_norm = Normalisation::of(sample);
+        let frame = Centred { scan: scan_norm.centre, model: self.model_norm.centre };
+        let sigma0: Vec<f64> =
+            spread.iter().enumerate().map(|(d, s)| if d == 3 { s * predicted.scale } else { *s }).collect();
+        let floor: Vec<f64> = sigma0.iter().map(|s| 0.25 * s).collect();
+        let prior = FilterPrior {
+            init_params: frame.params(predicted),
+            sigma0: &sigma0,
+            floor: &floor,
+            q: 0.0,
+            threshold_avg: 0.0,
+            threshold_max: 0.0,
+        };
+        let settings = PfIcpSettings { particles, iterations, seed, ..Default::default() };
+        let scan: Vec<FxPoint> = morton_sorted(&scan_norm.quantise(sample));
+        let config = filter_config(&prior, &self.model_norm, &scan_norm, scan.len(), &settings);
+        debug_assert_eq!(config.seed, board_seed(seed));
+        let outcome = pficp_fpga::filter::pf::run(&config, |p| evaluate(&self.grid, &self.normals, &scan, p));
+        let pose = params_pose(&outcome.params, &self.model_norm, &scan_norm);
+
+        let polish = PolishRequest { points: scan.len() as u16, steps: 0, winner_steps: 0, hypotheses: Vec::new() };
+        let run = RunRequest { filter: config.clone(), polish: polish.clone() };
+        let model_points = self.grid.points.len();
+        let uploads: usize = scan
+            .chunks(MAX_LOAD_POINTS)
+            .scan(0usize, |offset, chunk| {
+                let bytes = round_trip(Command::LoadScan, load_request(*offset as u16, chunk), 4);
+                *offset += chunk.len();
+                Some(bytes)
+            })
+            .sum();
+        let link_bytes = uploads
+            + round_trip(Command::SetSizes, two_u16(model_points as u16, scan.len() as u16), 4)
+            + round_trip(Command::Run, run.encode(), RUN_REPLY_BYTES)
+            + round_trip(Command::Result, Vec::new(), RESULT_BYTES);
+        // Every evaluation as long as the prediction's on the neighbour pipeline's cycle
+        // model (the particles lie within a few spreads of it), plus the residual stage.
+        let at_prediction = quantise_pose(&normalised_pose(predicted, &scan_norm, &self.model_norm));
+        let evaluation =
+            clocks_per_particle(&self.grid, &scan, &at_prediction, self.config.lanes).clocks + SURFACE_LATENCY as u64;
+        let clocks = run_clocks_for(config.particles, config.iterations, evaluation)
+            + polish_clocks_bound(&polish, model_points, self.config.lanes);
+        BoardFrame {
+            pose,
+            link_bytes,
+            poll_bytes: round_trip(Command::Status, Vec::new(), STATUS_BYTES),
+            clocks,
+            clock_hz: self.config.clock_hz,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::board::run_clocks_bound;
+    use crate::eval::realistic::{pose_errors, Shape};
+    use crate::eval::tracking::sequence::sequence;
+    use crate::geometry::ScaleBounds;
+
+    /// From a prediction a little off the truth, the board's filter (its bit-exact
+    /// reference) and the host's polish after it land as near the truth as the polish from
+    /// the prediction does; the modelled clocks are within the host's bound and the bytes
+    /// hold at least the scan sample.
+    #[test]
+    fn the_boards_filter_then_the_polish_lands_on_the_truth() {
+        let bunny = crate::real_shapes::all().iter().find(|s| s.name == "bunny").expect("the bunny");
+        let seq = sequence(Shape::Real(bunny), 5, true);
+        let board = BoardModel::new(&seq.model, 1).unwrap();
+        let nn = crate::nn::NearestNeighbours::new(&seq.model);
+        let surface = crate::pf_icp::surface::Surface::new(&nn);
+        let fixed = ScaleBounds::fixed(1.0);
+        for k in [20, 40, 60] {
+            let f = &seq.frames[k];
+            let at = crate::cloud::centroid(&f.scan);
+            let step = [0.01 * seq.diag, 0.0, -0.005 * seq.diag, 0.0, 0.0, 0.02, -0.01];
+            let off = crate::tracking::motion::after(&f.truth, &step, &f.truth.apply(&at));
+            let d = 0.01 * seq.diag;
+            let spread = [d, d, d, 0.0, 0.02, 0.02, 0.02];
+            let sample: Vec<Point3<f64>> = f.scan.iter().take(150).copied().collect();
+            let b = board.filter(&sample, &off, &spread, 16, 3, 7);
+            let polish = |p: &Pose| surface.polish(&f.scan, &fixed.apply(p, &at), 10, &fixed);
+            let from_board = pose_errors(&polish(&b.pose), &f.truth, &at, seq.diag);
+            let from_prediction = pose_errors(&polish(&off), &f.truth, &at, seq.diag);
+            assert!(
+                from_board.0 <= from_prediction.0 + 0.2 && from_board.1 <= from_prediction.1 + 0.002,
+                "frame {k}: from the board's pose {from_board:?}, from the prediction {from_prediction:?}"
+            );
+            assert!(from_board.0 < 1.0 && from_board.1 < 0.01, "frame {k}: {from_board:?}");
+            let bound = run_clocks_bound(16, 3, sample.len(), seq.model.len(), 8);
+            assert!(b.clocks > 0 && b.clocks < bound, "frame {k}: {} clocks, bound {bound}", b.clocks);
+            assert!(b.link_bytes > sample.len() * pficp_fpga::protocol::layout::POINT_BYTES);
+            assert!(b.seconds(921_600) > b.seconds(3_000_000));
+        }
+    }
+}
