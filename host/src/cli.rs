@@ -356,6 +356,11 @@ pub struct TrackFrameReport {
     pub frame: usize,
     /// The frame's file (`-` on standard input).
     pub file: String,
+    /// Where the tracked frames' filter runs: `software` or `board`.
+    pub engine: String,
+    /// The board's serial port when `engine` is `board`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub port: Option<String>,
     /// The track's state after the frame: `acquiring`, `tracking`, `lost`, `reacquired`.
     pub state: crate::tracking::TrackState,
     /// The verdict on the frame's pose, as `register` gives it.
@@ -393,13 +398,16 @@ pub struct TrackFrameReport {
 }
 
 impl TrackFrameReport {
-    /// From the tracker's frame read from `file`.
-    pub fn new(file: &str, f: &crate::tracking::TrackFrame) -> Self {
+    /// From the tracker's frame read from `file`, its filter run by `engine` (`software` or
+    /// `board`, on `port`).
+    pub fn new(file: &str, f: &crate::tracking::TrackFrame, engine: &str, port: Option<&str>) -> Self {
         let PoseRecord { scale, rotation, translation, euler_deg } = f.pose.record();
         let m = f.pose.matrix4();
         TrackFrameReport {
             frame: f.frame,
             file: file.to_string(),
+            engine: engine.to_string(),
+            port: port.map(str::to_string),
             state: f.state,
             verdict: f.verdict,
             reasons: f.reasons.clone(),

@@ -648,6 +648,18 @@ fn track_prints_one_json_line_a_frame_from_a_folder_and_from_standard_input() {
         assert_eq!((&a["matrix"], &a["state"]), (&b["matrix"], &b["state"]));
         assert_eq!(b["file"], "-");
     }
+    // The tracked frames' filter on the (reference) board behind a pseudo-terminal.
+    let board = support::PtyBoard::reference();
+    let o = pficp(&[&args[..], &[frames.to_str().unwrap(), "--board", board.path.as_str()]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let on_board: Vec<serde_json::Value> =
+        String::from_utf8(o.stdout).unwrap().lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    assert_eq!(on_board.len(), n);
+    for v in &on_board {
+        assert_eq!((v["engine"].as_str(), v["port"].as_str()), (Some("board"), Some(board.path.as_str())));
+    }
+    assert!(lines.iter().all(|v| v["engine"] == "software" && v.get("port").is_none()));
+    assert_eq!(on_board[0]["matrix"], lines[0]["matrix"], "the acquisition is the host's either way");
 }
 
 /// Bad frames and options: one-line errors, no panic.

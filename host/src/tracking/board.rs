@@ -19,25 +19,28 @@
 //! bound ([`polish_clocks_bound`]); one Status round trip and half a poll period for the
 //! poll that sees it done.
 
-use crate::board::on_board::{board_seed, evaluate, filter_config, params_pose, FilterPrior};
+use crate::board::on_board::{evaluate, filter_config, params_pose, FilterPrior};
 use crate::board::quantise::{
     board_grid, board_model, morton_sorted, normalised_pose, quantise_pose, stored_normals, Normalisation,
 };
-use crate::board::{run_clocks_for, BoardError, BOARD_MAX_STORE_POINTS, DEFAULT_POLL};
+use crate::board::{run_clocks_for, BoardClient, BoardError, BOARD_MAX_STORE_POINTS, DEFAULT_POLL};
 use crate::geometry::{Centred, Pose};
 use crate::pf_icp::PfIcpSettings;
 use nalgebra::Point3;
 use pficp_fpga::board::BoardConfig;
 use pficp_fpga::common::format::FxPoint;
+use pficp_fpga::filter::pf::Particle;
 use pficp_fpga::protocol::messages::{
     load_request, two_u16, MAX_LOAD_POINTS, RESULT_BYTES, RUN_REPLY_BYTES, STATUS_BYTES,
 };
 use pficp_fpga::protocol::run_request::{polish_clocks_bound, PolishRequest, RunRequest};
+use pficp_fpga::protocol::versions::{refusal, Mode};
 use pficp_fpga::protocol::{Command, Frame};
 use pficp_fpga::search::grid::Grid;
 use pficp_fpga::search::neighbour_pipeline::clocks_per_particle;
 use pficp_fpga::surface::surface_residual::SURFACE_LATENCY;
 use pficp_fpga::surface::FxNormal;
+use std::time::Duration;
 
 /// Bits a byte on the wire (8N1).
 const BITS_PER_BYTE: f64 = 10.0;
@@ -84,21 +87,47 @@ fn round_trip(command: Command, data: Vec<u8>, reply: usize) -> usize {
         + Frame { code: code | 0x80, seq: 0, data: vec![0; reply] }.encode().len()
 }
 
+/// One tracked frame's requests: the scan sample as the board stores it and the Run.
+struct FrameRun {
+    scan_norm: Normalisation,
+    scan: Vec<FxPoint>,
+    run: RunRequest,
+}
+
 impl BoardModel {
-    /// The model on the shipped board ([`BoardConfig::default`]): at most
-    /// [`BOARD_MAX_STORE_POINTS`] of its points (drawn with `seed`), normalised, gridded,
+    /// The model on the shipped board ([`BoardConfig::default`]): at most `max` of its
+    /// points (drawn with `seed`; at most [`BOARD_MAX_STORE_POINTS`]), normalised, gridded,
     /// with their normals.
-    pub fn new(model: &[Point3<f64>], seed: u64) -> Result<Self, BoardError> {
+    pub fn new(model: &[Point3<f64>], seed: u64, max: usize) -> Result<Self, BoardError> {
         let model_norm = Normalisation::of(model);
-        let on_board = board_model(model, BOARD_MAX_STORE_POINTS, seed);
+        let on_board = board_model(model, max.min(BOARD_MAX_STORE_POINTS), seed);
         let grid = board_grid(&model_norm.quantise(&on_board))?;
         Ok(BoardModel { normals: stored_normals(&grid), grid, model_norm, config: BoardConfig::default() })
     }
 
-    /// The filter from `predicted` with standard deviations `spread` (translation, relative
-    /// scale, rotation) over `sample` (the frame's weighed scan points), `particles` and
-    /// `iterations`, seeded by `seed`.
-    pub fn filter(
+    /// Put the model on the board behind `client` unless it holds it already (its digest);
+    /// true when it uploaded. The board's lanes and clock from its Identify are used for
+    /// the modelled time from then on.
+    pub fn ensure_on(&mut self, client: &mut BoardClient) -> Result<bool, BoardError> {
+        let id = client.identify()?;
+        if let Some(why) = refusal(id.version, Mode::OnBoard) {
+            return Err(BoardError::Limit(why));
+        }
+        if self.grid.points.len() > id.max_model as usize {
+            return Err(BoardError::Limit(format!(
+                "the model has {} points on the board; the board holds {}",
+                self.grid.points.len(),
+                id.max_model
+            )));
+        }
+        self.config = BoardConfig { lanes: id.lanes as usize, clock_hz: id.clock_hz, baud: id.baud };
+        client.ensure_grid(&self.grid, &self.normals, |_, _| {})
+    }
+
+    /// The frame's requests: the filter from `predicted` with standard deviations `spread`
+    /// (translation, relative scale, rotation) over `sample` (the frame's weighed scan
+    /// points), `particles` and `iterations`, seeded by `seed`; the least polish.
+    fn frame_run(
         &self,
         sample: &[Point3<f64>],
         predicted: &Pose,
@@ -106,7 +135,7 @@ impl BoardModel {
         particles: usize,
         iterations: usize,
         seed: u64,
-    ) -> BoardFrame {
+    ) -> FrameRun {
         let scan_norm = Normalisation::of(sample);
         let frame = Centred { scan: scan_norm.centre, model: self.model_norm.centre };
         let sigma0: Vec<f64> =
@@ -122,15 +151,16 @@ impl BoardModel {
         };
         let settings = PfIcpSettings { particles, iterations, seed, ..Default::default() };
         let scan: Vec<FxPoint> = morton_sorted(&scan_norm.quantise(sample));
-        let config = filter_config(&prior, &self.model_norm, &scan_norm, scan.len(), &settings);
-        debug_assert_eq!(config.seed, board_seed(seed));
-        let outcome = pficp_fpga::filter::pf::run(&config, |p| evaluate(&self.grid, &self.normals, &scan, p));
-        let pose = params_pose(&outcome.params, &self.model_norm, &scan_norm);
-
+        let filter = filter_config(&prior, &self.model_norm, &scan_norm, scan.len(), &settings);
         let polish = PolishRequest { points: scan.len() as u16, steps: 0, winner_steps: 0, hypotheses: Vec::new() };
-        let run = RunRequest { filter: config.clone(), polish: polish.clone() };
+        FrameRun { scan_norm, scan, run: RunRequest { filter, polish } }
+    }
+
+    /// What the frame costs on the board and its pose from the filter's `params`.
+    fn frame_of(&self, f: &FrameRun, predicted: &Pose, params: &Particle) -> BoardFrame {
         let model_points = self.grid.points.len();
-        let uploads: usize = scan
+        let uploads: usize = f
+            .scan
             .chunks(MAX_LOAD_POINTS)
             .scan(0usize, |offset, chunk| {
                 let bytes = round_trip(Command::LoadScan, load_request(*offset as u16, chunk), 4);
@@ -139,23 +169,65 @@ impl BoardModel {
             })
             .sum();
         let link_bytes = uploads
-            + round_trip(Command::SetSizes, two_u16(model_points as u16, scan.len() as u16), 4)
-            + round_trip(Command::Run, run.encode(), RUN_REPLY_BYTES)
+            + round_trip(Command::SetSizes, two_u16(model_points as u16, f.scan.len() as u16), 4)
+            + round_trip(Command::Run, f.run.encode(), RUN_REPLY_BYTES)
             + round_trip(Command::Result, Vec::new(), RESULT_BYTES);
         // Every evaluation as long as the prediction's on the neighbour pipeline's cycle
         // model (the particles lie within a few spreads of it), plus the residual stage.
-        let at_prediction = quantise_pose(&normalised_pose(predicted, &scan_norm, &self.model_norm));
+        let at_prediction = quantise_pose(&normalised_pose(predicted, &f.scan_norm, &self.model_norm));
         let evaluation =
-            clocks_per_particle(&self.grid, &scan, &at_prediction, self.config.lanes).clocks + SURFACE_LATENCY as u64;
-        let clocks = run_clocks_for(config.particles, config.iterations, evaluation)
-            + polish_clocks_bound(&polish, model_points, self.config.lanes);
+            clocks_per_particle(&self.grid, &f.scan, &at_prediction, self.config.lanes).clocks + SURFACE_LATENCY as u64;
+        let clocks = run_clocks_for(f.run.filter.particles, f.run.filter.iterations, evaluation)
+            + polish_clocks_bound(&f.run.polish, model_points, self.config.lanes);
         BoardFrame {
-            pose,
+            pose: params_pose(params, &self.model_norm, &f.scan_norm),
             link_bytes,
             poll_bytes: round_trip(Command::Status, Vec::new(), STATUS_BYTES),
             clocks,
             clock_hz: self.config.clock_hz,
         }
+    }
+
+    /// The frame's filter ([`Self::frame_run`]'s arguments) by the board's bit-exact
+    /// reference.
+    pub fn filter(
+        &self,
+        sample: &[Point3<f64>],
+        predicted: &Pose,
+        spread: &[f64; 7],
+        particles: usize,
+        iterations: usize,
+        seed: u64,
+    ) -> BoardFrame {
+        let f = self.frame_run(sample, predicted, spread, particles, iterations, seed);
+        let outcome = pficp_fpga::filter::pf::run(&f.run.filter, |p| evaluate(&self.grid, &self.normals, &f.scan, p));
+        self.frame_of(&f, predicted, &outcome.params)
+    }
+
+    /// The frame's filter on the board behind `client` (the model on it:
+    /// [`Self::ensure_on`]): LoadScan, SetSizes, Run, Status every `poll`, Result. The
+    /// board's parameters are the reference's to the bit.
+    #[allow(clippy::too_many_arguments)]
+    pub fn filter_on(
+        &self,
+        client: &mut BoardClient,
+        sample: &[Point3<f64>],
+        predicted: &Pose,
+        spread: &[f64; 7],
+        particles: usize,
+        iterations: usize,
+        seed: u64,
+        poll: Duration,
+    ) -> Result<BoardFrame, BoardError> {
+        let f = self.frame_run(sample, predicted, spread, particles, iterations, seed);
+        client.load_scan(&f.scan, |_, _| {})?;
+        client.set_sizes(self.grid.points.len(), f.scan.len())?;
+        let modelled = client.modelled_run_time(&f.run);
+        let limit = client.run_allowance(&f.run);
+        client.run(&f.run)?;
+        client.wait_for_run(limit, modelled, poll, |_| {})?;
+        let result = client.result()?;
+        Ok(self.frame_of(&f, predicted, &result.params))
     }
 }
 
@@ -175,7 +247,7 @@ mod tests {
     fn the_boards_filter_then_the_polish_lands_on_the_truth() {
         let bunny = crate::real_shapes::all().iter().find(|s| s.name == "bunny").expect("the bunny");
         let seq = sequence(Shape::Real(bunny), 5, true);
-        let board = BoardModel::new(&seq.model, 1).unwrap();
+        let board = BoardModel::new(&seq.model, 1, BOARD_MAX_STORE_POINTS).unwrap();
         let nn = crate::nn::NearestNeighbours::new(&seq.model);
         let surface = crate::pf_icp::surface::Surface::new(&nn);
         let fixed = ScaleBounds::fixed(1.0);

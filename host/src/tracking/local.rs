@@ -14,6 +14,7 @@
 //!    the share hidden; the carried alternatives (a near-symmetric part's other poses,
 //!    moved with the track) are weighed against the answer by the conclusion's paired test.
 
+use crate::board::{BoardClient, BoardError};
 use crate::geometry::{Pose, ScaleBounds};
 use crate::pf_icp::conclusion::{
     fit_of, paired_excess, uncertainty_of, widest_sigma, Fit, Uncertainty, ALTERNATIVE_SIGMAS,
@@ -89,6 +90,16 @@ impl Objective for DeltaObjective<'_> {
     }
 }
 
+/// Where a tracked frame's filter runs.
+pub enum FrameFilter<'a> {
+    /// On the host.
+    Host,
+    /// On the board, by its bit-exact reference.
+    BoardReference(&'a BoardModel),
+    /// On the board behind the client (the model on it), polled every so often.
+    Board(&'a BoardModel, &'a mut BoardClient, std::time::Duration),
+}
+
 /// What one tracked frame found.
 #[derive(Clone, Debug)]
 pub struct Local {
@@ -123,8 +134,8 @@ fn sample(scan: &[Point3<f64>], count: usize, seed: u64) -> Vec<Point3<f64>> {
 /// Track one frame: the filter from `predicted` with standard deviations `spread`, the
 /// polish, the checks; the scale within `bounds` (the track's), judged at a bound against
 /// the user's `user_bounds`. `evidence` is the acquisition's (the sensor's noise), `symmetries`
-/// the carried alternatives' model-frame maps, `seed` this frame's; with `board` the filter
-/// runs on the board (its bit-exact reference, [`super::board`]) instead of the host.
+/// the carried alternatives' model-frame maps, `seed` this frame's; `filter` says where the
+/// frame's filter runs. Only a board's failure is an error.
 #[allow(clippy::too_many_arguments)]
 pub fn track_frame(
     surface: &Surface,
@@ -137,8 +148,8 @@ pub fn track_frame(
     symmetries: &[Pose],
     budget: &FrameBudget,
     seed: u64,
-    board: Option<&BoardModel>,
-) -> Local {
+    filter: FrameFilter,
+) -> Result<Local, BoardError> {
     let diag = crate::cloud::bbox_diagonal(surface.nn().points());
     let centroid = crate::cloud::centroid(scan);
     let at = predicted.apply(&centroid);
@@ -158,10 +169,17 @@ pub fn track_frame(
         patience: None,
         seed: seed.wrapping_add(1),
     };
-    let (filter_pose, board) = match board {
-        None => (objective.pose(&particle_filter::run(&objective, &[0.0; 7], spread, &settings).estimate), None),
-        Some(b) => {
+    let (filter_pose, board) = match filter {
+        FrameFilter::Host => {
+            (objective.pose(&particle_filter::run(&objective, &[0.0; 7], spread, &settings).estimate), None)
+        }
+        FrameFilter::BoardReference(b) => {
             let f = b.filter(&weighed, predicted, spread, budget.particles, budget.iterations, seed);
+            (f.pose, Some(f))
+        }
+        FrameFilter::Board(b, client, poll) => {
+            let f =
+                b.filter_on(client, &weighed, predicted, spread, budget.particles, budget.iterations, seed, poll)?;
             (f.pose, Some(f))
         }
     };
@@ -238,5 +256,5 @@ pub fn track_frame(
     };
     let (verdict, reasons) = judge(&checks);
     let host_seconds = host.elapsed().as_secs_f64();
-    Local { pose, uncertainty, fit, checks, verdict, reasons, alternatives, board, host_seconds }
+    Ok(Local { pose, uncertainty, fit, checks, verdict, reasons, alternatives, board, host_seconds })
 }

@@ -29,6 +29,7 @@ pub mod board;
 pub mod local;
 pub mod motion;
 
+use crate::board::{BoardClient, BoardError, BOARD_MAX_STORE_POINTS};
 use crate::geometry::{Pose, ScaleBounds};
 use crate::nn::NearestNeighbours;
 use crate::pf_icp::conclusion::{Fit, Uncertainty};
@@ -180,6 +181,8 @@ pub fn holds(c: &Checks, scale_settling: bool, holding: bool) -> bool {
 pub struct Tracker<'a> {
     surface: Surface<'a>,
     board: Option<board::BoardModel>,
+    /// The board the tracked frames' filters run on (with [`Tracker::on_board`]).
+    client: Option<&'a mut BoardClient>,
     settings: TrackSettings,
     diag: f64,
     motion: Motion,
@@ -198,15 +201,16 @@ pub struct Tracker<'a> {
 impl<'a> Tracker<'a> {
     /// A tracker of the model behind `nn`; with [`TrackSettings::board_reference`] a model
     /// the board refuses is an error.
-    pub fn new(nn: &'a NearestNeighbours, settings: TrackSettings) -> Result<Self, crate::board::BoardError> {
+    pub fn new(nn: &'a NearestNeighbours, settings: TrackSettings) -> Result<Self, BoardError> {
         let user = settings.registration.scale;
         let board = match settings.board_reference {
-            true => Some(board::BoardModel::new(nn.points(), settings.registration.seed)?),
+            true => Some(board::BoardModel::new(nn.points(), settings.registration.seed, BOARD_MAX_STORE_POINTS)?),
             false => None,
         };
         Ok(Tracker {
             surface: Surface::new(nn),
             board,
+            client: None,
             diag: crate::cloud::bbox_diagonal(nn.points()),
             settings,
             motion: Motion::new(),
@@ -220,6 +224,24 @@ impl<'a> Tracker<'a> {
         })
     }
 
+    /// A tracker whose tracked frames run their filter on the board behind `client`
+    /// (protocol 6): the model put on it now unless it holds it already (true in the
+    /// second value when it was uploaded). The global registrations stay on the host.
+    pub fn on_board(
+        nn: &'a NearestNeighbours,
+        settings: TrackSettings,
+        client: &'a mut BoardClient,
+    ) -> Result<(Self, bool), BoardError> {
+        let id = client.identify()?;
+        let max = (id.max_model as usize).min(BOARD_MAX_STORE_POINTS);
+        let mut model = board::BoardModel::new(nn.points(), settings.registration.seed, max)?;
+        let uploaded = model.ensure_on(client)?;
+        let mut tracker = Tracker::new(nn, TrackSettings { board_reference: false, ..settings })?;
+        tracker.board = Some(model);
+        tracker.client = Some(client);
+        Ok((tracker, uploaded))
+    }
+
     /// Frames seen so far.
     pub fn frames(&self) -> usize {
         self.frames
@@ -230,46 +252,47 @@ impl<'a> Tracker<'a> {
         self.scale.working.fixed_value()
     }
 
-    /// Take the next frame's scan (at least a few points; the caller validates it).
-    pub fn update(&mut self, scan: &[Point3<f64>]) -> TrackFrame {
+    /// Take the next frame's scan (at least a few points; the caller validates it). Only a
+    /// board's failure is an error (the track is kept: the next frame may try again).
+    pub fn update(&mut self, scan: &[Point3<f64>]) -> Result<TrackFrame, BoardError> {
         let t0 = Instant::now();
         let index = self.frames;
         self.frames += 1;
         let seed = self.settings.registration.seed ^ (index as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15);
-        let mut frame = if self.held { self.tracked(scan, seed) } else { self.find(scan, seed) };
+        let mut frame = if self.held { self.tracked(scan, seed)? } else { self.find(scan, seed)? };
         frame.frame = index;
         frame.seconds = t0.elapsed().as_secs_f64();
-        frame
+        Ok(frame)
     }
 
     /// A held track's frame.
-    fn tracked(&mut self, scan: &[Point3<f64>], seed: u64) -> TrackFrame {
+    fn tracked(&mut self, scan: &[Point3<f64>], seed: u64) -> Result<TrackFrame, BoardError> {
         let predicted = self.motion.predict().expect("a held track has an answer");
         let spread = self.motion.spread(self.diag, self.scale.working.fixed_value().is_some());
         let budget = self.settings.budget;
-        let local = self.local(scan, &predicted, &spread, &budget, seed);
+        let local = self.local(scan, &predicted, &spread, &budget, seed)?;
         if !holds(&local.checks, self.settling(), true) {
             self.held = false;
-            return self.frame_of(local, TrackState::Lost, false);
+            return Ok(self.frame_of(local, TrackState::Lost, false));
         }
         let at = predicted.apply(&crate::cloud::centroid(scan));
         self.motion.accept(local.pose, &predicted, &at);
         self.symmetries = local.alternatives.clone();
         self.settle_scale(local.pose.scale);
-        self.frame_of(local, TrackState::Tracking, false)
+        Ok(self.frame_of(local, TrackState::Tracking, false))
     }
 
     /// A frame without a held track: the wide local search about the last good pose,
     /// then a global registration.
-    fn find(&mut self, scan: &[Point3<f64>], seed: u64) -> TrackFrame {
+    fn find(&mut self, scan: &[Point3<f64>], seed: u64) -> Result<TrackFrame, BoardError> {
         if let (Some(last), Some(_)) = (self.motion.last(), self.evidence) {
             let (t, s, r) = REACQUIRE_SPREAD;
             let (t, r) = (t * self.diag, r.to_radians());
             let s = if self.scale.working.fixed_value().is_some() { 0.0 } else { s };
-            let local = self.local(scan, &last, &[t, t, t, s, r, r, r], &REACQUIRE_BUDGET, seed);
+            let local = self.local(scan, &last, &[t, t, t, s, r, r, r], &REACQUIRE_BUDGET, seed)?;
             if holds(&local.checks, self.settling(), false) {
                 self.hold(local.pose, local.alternatives.clone());
-                return self.frame_of(local, TrackState::Reacquired, false);
+                return Ok(self.frame_of(local, TrackState::Reacquired, false));
             }
         }
         let settings = PfIcpSettings { scale: self.scale.working, seed, ..self.settings.registration.clone() };
@@ -292,7 +315,7 @@ impl<'a> Tracker<'a> {
             self.hold(c.pose, maps);
             self.ambiguous = c.verdict == Verdict::Ambiguous;
         }
-        TrackFrame {
+        Ok(TrackFrame {
             frame: 0,
             pose: c.pose,
             uncertainty: c.uncertainty,
@@ -306,7 +329,7 @@ impl<'a> Tracker<'a> {
             seconds: 0.0,
             board: None,
             host_seconds: 0.0,
-        }
+        })
     }
 
     /// Whether the scale is still settling (free and not fixed yet).
@@ -336,15 +359,20 @@ impl<'a> Tracker<'a> {
     }
 
     fn local(
-        &self,
+        &mut self,
         scan: &[Point3<f64>],
         predicted: &Pose,
         spread: &LocalDelta,
         budget: &FrameBudget,
         seed: u64,
-    ) -> local::Local {
+    ) -> Result<local::Local, BoardError> {
         let evidence = self.evidence.expect("a track has the acquisition's evidence");
         let predicted = self.scale.working.apply(predicted, &crate::cloud::centroid(scan));
+        let filter = match (&self.board, &mut self.client) {
+            (Some(b), Some(c)) => local::FrameFilter::Board(b, c, crate::board::DEFAULT_POLL),
+            (Some(b), None) => local::FrameFilter::BoardReference(b),
+            _ => local::FrameFilter::Host,
+        };
         local::track_frame(
             &self.surface,
             scan,
@@ -356,7 +384,7 @@ impl<'a> Tracker<'a> {
             &self.symmetries,
             budget,
             seed,
-            self.board.as_ref(),
+            filter,
         )
     }
 
@@ -419,7 +447,7 @@ mod tests {
         let mut frames = Vec::new();
         for k in 0..40 {
             let scan = if (26..29).contains(&k) { &foreign } else { &seq.frames[k].scan };
-            frames.push(tracker.update(scan));
+            frames.push(tracker.update(scan).unwrap());
         }
         // Never a confident pose that is wrong.
         for (k, f) in frames.iter().enumerate() {
@@ -448,7 +476,7 @@ mod tests {
         // The same seed, the same poses.
         let mut again = Tracker::new(&nn, settings).unwrap();
         for (k, f) in frames.iter().enumerate().take(4) {
-            assert_eq!(again.update(&seq.frames[k].scan).pose, f.pose, "frame {k}");
+            assert_eq!(again.update(&seq.frames[k].scan).unwrap().pose, f.pose, "frame {k}");
         }
     }
 }

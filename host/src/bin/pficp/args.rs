@@ -286,6 +286,13 @@ pub(crate) struct TrackArgs {
     /// Print one JSON object a frame, one a line, as soon as the frame is done.
     #[arg(long)]
     pub(crate) json: bool,
+    /// Run every tracked frame's filter on the board at this serial port (the model stays
+    /// on it; a frame sends its scan sample and a Run from the prediction); the global
+    /// registrations stay on the host.
+    #[arg(long, value_name = "PORT")]
+    pub(crate) board: Option<String>,
+    #[command(flatten)]
+    pub(crate) link: LinkArgs,
 }
 
 #[derive(Clone, Copy, ValueEnum)]

@@ -24,12 +24,39 @@ pub(crate) fn track(a: &TrackArgs) -> Result<()> {
     let registration = a.pf.settings()?;
     let model = load(&a.model, "model")?;
     let nn = NearestNeighbours::new(model.points());
-    let mut tracker = Tracker::new(&nn, TrackSettings { registration, fps: a.fps, ..Default::default() })?;
+    let settings = TrackSettings { registration, fps: a.fps, ..Default::default() };
+    // Open the port before the work starts: a missing or silent board fails at once.
+    let mut client = match &a.board {
+        Some(port) => {
+            let (c, id) = a.link.connect(port)?;
+            note(format_args!(
+                "board on {port}: protocol {}, {} lanes at {} Hz, {} baud",
+                id.version, id.lanes, id.clock_hz, id.baud
+            ));
+            Some(c)
+        }
+        None => None,
+    };
+    let mut tracker = match client.as_mut() {
+        Some(c) => {
+            let (t, uploaded) = Tracker::on_board(&nn, settings, c)?;
+            note(format_args!(
+                "{}",
+                if uploaded { "uploaded the model to the board" } else { "the board holds the model already" }
+            ));
+            t
+        }
+        None => Tracker::new(&nn, settings)?,
+    };
+    let (engine, port) = match &a.board {
+        Some(p) => ("board", Some(p.as_str())),
+        None => ("software", None),
+    };
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     let mut emit = |file: &str, scan: &Cloud, tracker: &mut Tracker| -> Result<()> {
-        let frame = tracker.update(scan.points());
-        let report = TrackFrameReport::new(file, &frame);
+        let frame = tracker.update(scan.points())?;
+        let report = TrackFrameReport::new(file, &frame, engine, port);
         if a.json {
             writeln!(out, "{}", serde_json::to_string(&report)?)?;
         } else {

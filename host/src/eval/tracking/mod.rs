@@ -315,7 +315,7 @@ pub fn run(opts: &TrackingOptions) -> anyhow::Result<TrackingReport> {
             opts.progress.then(|| Progress::bar(&format!("tracking {}", seq.id), seq.frames.len() as u64, "frames"));
         let mut frames = Vec::with_capacity(seq.frames.len());
         for (k, f) in seq.frames.iter().enumerate() {
-            frames.push(tracker.update(&f.scan));
+            frames.push(tracker.update(&f.scan)?);
             if let Some(b) = &bar {
                 b.set(k as u64 + 1);
             }
