@@ -96,7 +96,8 @@ impl TrackState {
 pub struct TrackSettings {
     /// The global registrations' settings: seed, `scale` (the user's bounds), viewpoint.
     pub registration: PfIcpSettings,
-    /// Frames a second (the motion model's time step; reported velocities).
+    /// Frames a second: the time between frames, over which the prior's widest spread
+    /// grows ([`motion::SPREAD_CAP`] is given at 30).
     pub fps: f64,
     /// A tracked frame's work.
     pub budget: FrameBudget,
@@ -268,7 +269,7 @@ impl<'a> Tracker<'a> {
     /// A held track's frame.
     fn tracked(&mut self, scan: &[Point3<f64>], seed: u64) -> Result<TrackFrame, BoardError> {
         let predicted = self.motion.predict().expect("a held track has an answer");
-        let spread = self.motion.spread(self.diag, self.scale.working.fixed_value().is_some());
+        let spread = self.motion.spread(self.diag, self.scale.working.fixed_value().is_some(), self.settings.fps);
         let budget = self.settings.budget;
         let local = self.local(scan, &predicted, &spread, &budget, seed)?;
         if !holds(&local.checks, self.settling(), true) {

@@ -22,8 +22,12 @@ pub const INNOVATION_MEMORY: f64 = 0.2;
 pub const SPREAD_GAIN: f64 = 2.0;
 /// Least spread: translation [fraction of the diagonal], relative scale, rotation [deg].
 pub const SPREAD_FLOOR: (f64, f64, f64) = (0.003, 0.003, 0.3);
-/// Widest spread: translation [fraction of the diagonal], relative scale, rotation [deg].
+/// Widest spread at [`CAP_FPS`] frames a second: translation [fraction of the diagonal],
+/// relative scale, rotation [deg]; at another rate the translation and rotation caps scale
+/// with the time between frames (a part moves farther between slower frames).
 pub const SPREAD_CAP: (f64, f64, f64) = (0.05, 0.02, 5.0);
+/// The frame rate [`SPREAD_CAP`] is given at.
+pub const CAP_FPS: f64 = 30.0;
 
 /// A small change of pose about a centre `at` (in the model's frame): translation of the
 /// centre's image, relative scale `s - 1`, rotation vector; applied after a pose as
@@ -106,11 +110,13 @@ impl Motion {
     }
 
     /// Standard deviations of the next frame's prior per [`LocalDelta`] parameter, for a
-    /// model of diagonal `diag` (the scale's 0 when `scale_fixed`).
-    pub fn spread(&self, diag: f64, scale_fixed: bool) -> [f64; 7] {
-        let bound = |k: usize, floor: f64, cap: f64| (SPREAD_GAIN * self.mean_square[k].sqrt()).clamp(floor, cap);
+    /// model of diagonal `diag` at `fps` frames a second (the scale's 0 when `scale_fixed`).
+    pub fn spread(&self, diag: f64, scale_fixed: bool, fps: f64) -> [f64; 7] {
+        let bound =
+            |k: usize, floor: f64, cap: f64| (SPREAD_GAIN * self.mean_square[k].sqrt()).clamp(floor, cap.max(floor));
         let (tf, sf, rf) = SPREAD_FLOOR;
-        let (tc, sc, rc) = SPREAD_CAP;
+        let per_frame = CAP_FPS / fps;
+        let (tc, sc, rc) = (SPREAD_CAP.0 * per_frame, SPREAD_CAP.1, SPREAD_CAP.2 * per_frame);
         let mut s = [0.0; 7];
         for k in 0..3 {
             s[k] = bound(k, tf * diag, tc * diag);
@@ -158,8 +164,15 @@ mod tests {
         for pose in &poses[2..4] {
             m.accept(*pose, &m.predict().unwrap(), &at);
         }
-        let s = m.spread(1.0, true);
+        let s = m.spread(1.0, true, CAP_FPS);
         assert_eq!(s[3], 0.0);
         assert!(s[4] >= SPREAD_FLOOR.2.to_radians() && s[4] < 2.0 * SPREAD_GAIN * 0.02);
+        // A jump far beyond the cap: the spread stops at the cap, twice as wide at half the
+        // frame rate (twice the time between frames).
+        let far = after(&poses[3], &[0.5, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0], &at);
+        m.accept(far, &m.predict().unwrap(), &at);
+        let (at30, at15) = (m.spread(1.0, true, CAP_FPS), m.spread(1.0, true, CAP_FPS / 2.0));
+        assert!((at30[5] - SPREAD_CAP.2.to_radians()).abs() < 1e-12, "{at30:?}");
+        assert!((at15[5] - 2.0 * at30[5]).abs() < 1e-12 && (at15[0] - 2.0 * at30[0]).abs() < 1e-12);
     }
 }

@@ -278,7 +278,7 @@ pub(crate) struct TrackArgs {
     /// the end of the input.
     #[arg(long, value_name = "DIR")]
     pub(crate) scans: PathBuf,
-    /// Frames a second (the motion model's time step).
+    /// Frames a second: the time between frames, over which the prior's widest spread grows.
     #[arg(long, default_value_t = pficp::tracking::DEFAULT_FPS)]
     pub(crate) fps: f64,
     #[command(flatten)]
