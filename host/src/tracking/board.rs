@@ -67,6 +67,14 @@ pub struct BoardFrame {
     pub clocks: u64,
     /// The board's clock [Hz].
     pub clock_hz: u32,
+    /// The requests: the scan sample as the board stores it, and the Run.
+    pub scan: Vec<FxPoint>,
+    /// The Run.
+    pub run: RunRequest,
+    /// The filter's best parameters (the board's Result's `params`).
+    pub params: Particle,
+    /// The model's points on the board.
+    pub model_points: usize,
 }
 
 impl BoardFrame {
@@ -103,6 +111,11 @@ impl BoardModel {
         let on_board = board_model(model, max.min(BOARD_MAX_STORE_POINTS), seed);
         let grid = board_grid(&model_norm.quantise(&on_board))?;
         Ok(BoardModel { normals: stored_normals(&grid), grid, model_norm, config: BoardConfig::default() })
+    }
+
+    /// The model's grid and normals as the board stores them.
+    pub fn stores(&self) -> (&Grid, &[FxNormal]) {
+        (&self.grid, &self.normals)
     }
 
     /// Put the model on the board behind `client` unless it holds it already (its digest);
@@ -185,6 +198,10 @@ impl BoardModel {
             poll_bytes: round_trip(Command::Status, Vec::new(), STATUS_BYTES),
             clocks,
             clock_hz: self.config.clock_hz,
+            scan: f.scan.clone(),
+            run: f.run.clone(),
+            params: *params,
+            model_points,
         }
     }
 

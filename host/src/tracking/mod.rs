@@ -243,6 +243,11 @@ impl<'a> Tracker<'a> {
         Ok((tracker, uploaded))
     }
 
+    /// The model as the board holds it (with the filter on the board or its reference).
+    pub fn board_model(&self) -> Option<&board::BoardModel> {
+        self.board.as_ref()
+    }
+
     /// Frames seen so far.
     pub fn frames(&self) -> usize {
         self.frames

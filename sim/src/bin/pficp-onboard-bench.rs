@@ -23,6 +23,14 @@
 //! pose alone is the polished one. The prior and the host's optional polish run on the host
 //! (not timed here: the host's stages are the software mode's).
 //!
+//! With `--track N` it times tracked frames instead (docs/tracking.md): the tracking
+//! benchmark's dev sequence of the bunny (scale known), tracked by the host with the
+//! filter by the board's reference (`pficp::tracking`, `--board-reference`), and every
+//! tracked frame's requests among the first N frames (the scan sample, SetSizes, Run,
+//! Status every 1 ms, Result; the model uploaded once before) replayed on the Verilated
+//! board, whose Result must equal the reference's to the bit; the median frame's clocks,
+//! at 3,000,000 baud and modelled at 921,600, with the host's polish and checks.
+//!
 //! `pficp-onboard-bench [--model-points 2000] [--scan-points 1000] [--board-points 300]
 //! [--particles 50] [--iterations 50] [--runs 3] [--seed 1] [--all-iterations]
 //! [--polish-steps S] [--winner-steps W] [--polish-starts N] [--polish-points N]`; run in
@@ -84,6 +92,10 @@ struct Args {
     /// point].
     #[arg(long)]
     polish_points: Option<u16>,
+    /// Time the tracked frames among the first N frames of a tracking sequence instead
+    /// (1 to 300).
+    #[arg(long, value_name = "N")]
+    track: Option<usize>,
 }
 
 /// Send one request; run until its reply's delimiter; check the bytes so far.
@@ -170,8 +182,135 @@ fn registration(b: &mut SerialBoard, plan: &on_board::OnBoardPlan, config: Board
     Ok(Registration { uploaded, clocks: b.clocks() - t0, load_clocks, bytes, poll_bytes, polls, result })
 }
 
+/// What one tracked frame took on the simulated board.
+struct TrackedFrame {
+    clocks: u64,
+    bytes: u64,
+    poll_bytes: u64,
+    host_seconds: f64,
+}
+
+/// `--track N` (the module doc).
+fn track(frames: usize, seed: u64) -> Result<()> {
+    use pficp::eval::realistic::Split;
+    use pficp::eval::tracking::{sequence, sequence_seed, shapes};
+    use pficp::tracking::{TrackSettings, Tracker};
+    if !(1..=sequence::FRAMES).contains(&frames) {
+        bail!("--track must be 1 to {}", sequence::FRAMES);
+    }
+    let split = Split::Dev;
+    let seq_seed = sequence_seed(seed, split, 1);
+    let seq = sequence::sequence(shapes(split)[1], seq_seed, true);
+    let nn = NearestNeighbours::new(&seq.model);
+    let settings = TrackSettings {
+        registration: PfIcpSettings {
+            scale: pficp::geometry::ScaleBounds::fixed(1.0),
+            seed: seq_seed,
+            ..Default::default()
+        },
+        board_reference: true,
+        ..Default::default()
+    };
+    let mut tracker = Tracker::new(&nn, settings)?;
+    let config = BoardConfig::default();
+    let mut b = SerialBoard::new(config).with_reference();
+    b.run(100);
+    let mut seq_no = 1u8;
+    let mut next = || {
+        seq_no = seq_no.wrapping_add(1).max(1);
+        seq_no
+    };
+    {
+        let (grid, normals) = tracker.board_model().context("the board's model")?.stores();
+        for (cmd, data) in messages::grid_upload(grid, normals) {
+            exchange(&mut b, &Frame { code: cmd as u8, seq: next(), data })?;
+        }
+    }
+    let wall = Instant::now();
+    let poll = (config.clock_hz as f64 * pficp::board::DEFAULT_POLL.as_secs_f64()).round() as u64;
+    let mut timed = Vec::new();
+    for f in seq.frames.iter().take(frames) {
+        let frame = tracker.update(&f.scan)?;
+        let Some(bf) = frame.board.as_ref().filter(|_| frame.state == pficp::tracking::TrackState::Tracking) else {
+            continue;
+        };
+        let (t0, bytes0) = (b.clocks(), b.byte_counts());
+        for (k, chunk) in bf.scan.chunks(messages::MAX_LOAD_POINTS).enumerate() {
+            let data = messages::load_request((k * messages::MAX_LOAD_POINTS) as u16, chunk);
+            exchange(&mut b, &Frame { code: Command::LoadScan as u8, seq: next(), data })?;
+        }
+        let sizes = messages::two_u16(bf.model_points as u16, bf.scan.len() as u16);
+        exchange(&mut b, &Frame { code: Command::SetSizes as u8, seq: next(), data: sizes })?;
+        exchange(&mut b, &Frame { code: Command::Run as u8, seq: next(), data: bf.run.encode() })?;
+        let mut poll_bytes = 0;
+        loop {
+            b.run(poll);
+            let before = b.byte_counts();
+            let st = exchange(&mut b, &Frame { code: Command::Status as u8, seq: next(), data: vec![] })?;
+            let after = b.byte_counts();
+            poll_bytes += (after.0 - before.0) + (after.1 - before.1);
+            if StatusReply::decode(&st.data)?.state == RunState::Done {
+                break;
+            }
+        }
+        let r = exchange(&mut b, &Frame { code: Command::Result as u8, seq: next(), data: vec![] })?;
+        let result = ResultReply::decode(&r.data)?;
+        if result.params != bf.params {
+            bail!("frame {}: the board's parameters differ from the reference's", frame.frame);
+        }
+        let bytes1 = b.byte_counts();
+        timed.push(TrackedFrame {
+            clocks: b.clocks() - t0,
+            bytes: bytes1.0 - bytes0.0 + bytes1.1 - bytes0.1,
+            poll_bytes,
+            host_seconds: frame.host_seconds,
+        });
+    }
+    if timed.is_empty() {
+        bail!("no frame among the first {frames} was tracked");
+    }
+    timed.sort_by_key(|t| t.clocks);
+    let m = &timed[timed.len() / 2];
+    let hz = config.clock_hz as f64;
+    let wire_s = |bytes: u64, baud: u32| {
+        let p = BitPeriod::new(config.clock_hz, baud);
+        (bytes * 10) as f64 * p.clocks as f64 / p.bits as f64 / hz
+    };
+    let mut host: Vec<f64> = timed.iter().map(|t| t.host_seconds).collect();
+    host.sort_by(f64::total_cmp);
+    let host_s = host[host.len() / 2];
+    let board_s = m.clocks as f64 / hz;
+    let slow_s = board_s - wire_s(m.bytes, config.baud) + wire_s(m.bytes, 921_600);
+    println!(
+        "tracking {} (dev split, seed {seed}, scale known): {} of the first {frames} frames tracked on the Verilated \
+         board, every Result equal to the reference's (simulated in {:.1} s)",
+        seq.id,
+        timed.len(),
+        wall.elapsed().as_secs_f64()
+    );
+    println!(
+        "median frame on the board: {board_s:.4} s at {:.0} MHz and {} baud ({} clocks, {} bytes on the wire, {} of \
+         them Status polls); at 921600 baud (modelled from the byte counts): {slow_s:.4} s",
+        hz / 1e6,
+        config.baud,
+        m.clocks,
+        m.bytes,
+        m.poll_bytes
+    );
+    println!(
+        "with the host's polish and checks ({host_s:.4} s median): {:.1} frames/s at {} baud, {:.1} at 921600",
+        1.0 / (board_s + host_s),
+        config.baud,
+        1.0 / (slow_s + host_s)
+    );
+    Ok(())
+}
+
 fn main() -> Result<()> {
     let a = Args::parse();
+    if let Some(n) = a.track {
+        return track(n, a.seed);
+    }
     let id = ModelId::Model1;
     let truth = id.table1_truth();
     let spec = ScanSpec { sampling: Sampling::Independent { points: a.scan_points }, noise: 0.0, seed: a.seed };
