@@ -691,4 +691,24 @@ fn track_refuses_bad_frames_and_options() {
         child.stdin.take().unwrap().write_all(input.as_bytes()).unwrap();
         assert_error(&child.wait_with_output().unwrap(), words);
     }
+    // A stream that never ends its frame is refused at the points limit, not read on.
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_pficp"))
+        .args(["track", "--model", m, "--scans", "-"])
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stdin = child.stdin.take().unwrap();
+    let writer = std::thread::spawn(move || {
+        let chunk = "0 0 0\n".repeat(100_000);
+        // (The reader stops early: a broken pipe ends the writing.)
+        for _ in 0..=pficp::cloud::MAX_CLOUD_POINTS / 100_000 {
+            if stdin.write_all(chunk.as_bytes()).is_err() {
+                return;
+            }
+        }
+    });
+    assert_error(&child.wait_with_output().unwrap(), &["frame 0", "without an empty line"]);
+    writer.join().unwrap();
 }

@@ -71,6 +71,7 @@ pub(crate) fn track(a: &TrackArgs) -> Result<()> {
         let mut block = Vec::new();
         let mut line = String::new();
         let mut index = 0usize;
+        let mut lines_in_block = 0usize;
         loop {
             line.clear();
             let n = lines.read_line(&mut line).context("cannot read standard input")?;
@@ -81,11 +82,20 @@ pub(crate) fn track(a: &TrackArgs) -> Result<()> {
                     emit("-", &scan, &mut tracker)?;
                     index += 1;
                     block.clear();
+                    lines_in_block = 0;
                 }
                 if end {
                     break;
                 }
             } else {
+                lines_in_block += 1;
+                if lines_in_block > pficp::cloud::MAX_CLOUD_POINTS {
+                    bail!(
+                        "standard input, frame {index}: more than {} lines without an empty line (a frame holds at most \
+                         that many points)",
+                        pficp::cloud::MAX_CLOUD_POINTS
+                    );
+                }
                 block.extend_from_slice(line.as_bytes());
             }
         }
