@@ -10,6 +10,17 @@ fn pficp(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_pficp")).args(args).output().expect("run pficp")
 }
 
+/// `pficp ARGS` with its standard input, output and error piped.
+fn pficp_piped(args: &[&str]) -> std::process::Child {
+    Command::new(env!("CARGO_BIN_EXE_pficp"))
+        .args(args)
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("run pficp")
+}
+
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
@@ -631,13 +642,7 @@ fn track_prints_one_json_line_a_frame_from_a_folder_and_from_standard_input() {
         }
     }
     // The same frames on standard input.
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_pficp"))
-        .args([&args[..], &["-"]].concat())
-        .stdin(std::process::Stdio::piped())
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
+    let mut child = pficp_piped(&[&args[..], &["-"]].concat());
     child.stdin.take().unwrap().write_all(stream.as_bytes()).unwrap();
     let o = child.wait_with_output().unwrap();
     assert!(o.status.success(), "{}", stderr(&o));
@@ -681,24 +686,12 @@ fn track_refuses_bad_frames_and_options() {
     for (input, words) in
         [("1 2 3\n1 2 x\n", &["frame 0"][..]), ("", &["no frame"][..]), ("1 2 3\n\n", &["frame 0", "at least"][..])]
     {
-        let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_pficp"))
-            .args(["track", "--model", m, "--scans", "-"])
-            .stdin(std::process::Stdio::piped())
-            .stdout(std::process::Stdio::piped())
-            .stderr(std::process::Stdio::piped())
-            .spawn()
-            .unwrap();
+        let mut child = pficp_piped(&["track", "--model", m, "--scans", "-"]);
         child.stdin.take().unwrap().write_all(input.as_bytes()).unwrap();
         assert_error(&child.wait_with_output().unwrap(), words);
     }
     // A stream that never ends its frame is refused at the points limit, not read on.
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_pficp"))
-        .args(["track", "--model", m, "--scans", "-"])
-        .stdin(std::process::Stdio::piped())
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
+    let mut child = pficp_piped(&["track", "--model", m, "--scans", "-"]);
     let mut stdin = child.stdin.take().unwrap();
     let writer = std::thread::spawn(move || {
         let chunk = "0 0 0\n".repeat(100_000);

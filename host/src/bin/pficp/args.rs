@@ -84,6 +84,18 @@ impl LinkArgs {
         }
         Ok(BoardClient::connect(port, self.baud, Duration::from_millis(self.timeout_ms))?)
     }
+
+    /// [`Self::connect`], saying on stderr what answered (the commands that work with the
+    /// board open its port before their work starts: a missing or silent board fails at
+    /// once).
+    pub(crate) fn open(&self, port: &str) -> Result<BoardClient> {
+        let (client, id) = self.connect(port)?;
+        pficp::progress::note(format_args!(
+            "board on {port}: protocol {}, {} lanes at {} Hz, {} baud",
+            id.version, id.lanes, id.clock_hz, id.baud
+        ));
+        Ok(client)
+    }
 }
 
 #[derive(clap::Args)]

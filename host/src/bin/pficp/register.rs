@@ -35,17 +35,7 @@ pub(crate) fn register(a: &RegisterArgs) -> Result<()> {
     let request = Request { method, engine, settings };
     request.check(&model, &scan)?;
     // Open the port before the work starts: a missing or silent board fails at once.
-    let mut client = match &a.board {
-        Some(port) => {
-            let (c, id) = a.link.connect(port)?;
-            note(format_args!(
-                "board on {port}: protocol {}, {} lanes at {} Hz, {} baud",
-                id.version, id.lanes, id.clock_hz, id.baud
-            ));
-            Some(c)
-        }
-        None => None,
-    };
+    let mut client = a.board.as_deref().map(|port| a.link.open(port)).transpose()?;
     note(format_args!("registering {} scan points to {} model points with {}", scan.len(), model.len(), method.name()));
     let progress = BoardProgress { on_board: &mut on_board_progress() };
     let Registered { outcome, board } = request.run(&model, &scan, client.as_mut(), progress)?;

@@ -26,17 +26,7 @@ pub(crate) fn track(a: &TrackArgs) -> Result<()> {
     let nn = NearestNeighbours::new(model.points());
     let settings = TrackSettings { registration, fps: a.fps, ..Default::default() };
     // Open the port before the work starts: a missing or silent board fails at once.
-    let mut client = match &a.board {
-        Some(port) => {
-            let (c, id) = a.link.connect(port)?;
-            note(format_args!(
-                "board on {port}: protocol {}, {} lanes at {} Hz, {} baud",
-                id.version, id.lanes, id.clock_hz, id.baud
-            ));
-            Some(c)
-        }
-        None => None,
-    };
+    let mut client = a.board.as_deref().map(|port| a.link.open(port)).transpose()?;
     let mut tracker = match client.as_mut() {
         Some(c) => {
             let (t, uploaded) = Tracker::on_board(&nn, settings, c)?;
