@@ -91,6 +91,27 @@ pub struct Settings {
     pub board_points: Option<usize>,
 }
 
+impl Settings {
+    /// What `request` ran with.
+    pub fn of(request: &crate::request::Request) -> Settings {
+        let s = &request.settings;
+        Settings {
+            seed: s.seed,
+            clusters: s.clusters,
+            particles: s.particles,
+            iterations: s.iterations,
+            init: s.init.name().to_string(),
+            scale: s.scale.fixed_value(),
+            scale_range: (!s.scale.is_free() && s.scale.fixed_value().is_none()).then_some([s.scale.lo, s.scale.hi]),
+            viewpoint: s.viewpoint.map(|v| [v.x, v.y, v.z]),
+            board_points: match request.engine {
+                crate::request::Engine::OnBoard { board_points, .. } => Some(board_points),
+                _ => None,
+            },
+        }
+    }
+}
+
 impl Provenance {
     /// From the inputs and settings; `command` is built from them (`port` for a board run,
     /// `host_driven` for its host-driven mode).
@@ -284,6 +305,23 @@ impl RegisterReport {
             assessment: None,
             provenance: None,
         }
+    }
+
+    /// The report of a request's result (the board's `port` when one ran).
+    pub fn of(request: &crate::request::Request, registered: &crate::request::Registered, port: Option<&str>) -> Self {
+        let outcome = &registered.outcome;
+        let mut report =
+            RegisterReport::new(request.method.name(), &outcome.registration, outcome.elapsed.as_secs_f64());
+        if let Some(pf) = &outcome.pf {
+            report = report.assessed(&pf.conclusion);
+        }
+        if let (Some(port), Some(run)) = (port, &registered.board) {
+            report = report.on_board(port);
+            if matches!(run, crate::request::BoardRun::HostDriven(_)) {
+                report = report.host_driven();
+            }
+        }
+        report
     }
 
     /// With what produced it.

@@ -8,8 +8,10 @@ use crate::board::host_driven::{self, BoardReport};
 use crate::board::on_board::{self, OnBoardReport, OnBoardStep, DEFAULT_BOARD_POINTS};
 use crate::board::{BoardClient, DEFAULT_POLL};
 use crate::cloud::Cloud;
+use crate::geometry::ScaleBounds;
 use crate::nn::NearestNeighbours;
-use crate::pf_icp::PfIcpSettings;
+use crate::pf_icp::init::InitMode;
+use crate::pf_icp::{PfIcpSettings, MAX_CLUSTERS, MAX_FILTER_PARTICLES, MAX_ITERATIONS};
 use crate::registration::methods::{self, Method, MethodSettings, Outcome};
 use anyhow::{bail, Result};
 use std::time::{Duration, Instant};
@@ -17,6 +19,103 @@ use std::time::{Duration, Instant};
 /// The scan's bounding-box diagonal may be this many times the model's at least (and its
 /// inverse at most): beyond it the clouds are in different units, or one is a point.
 pub const MIN_EXTENT_RATIO: f64 = 1e-6;
+
+/// PF-ICP's settings as a caller gives them (the CLI's flags, the Python package's
+/// keywords), before they are checked: [`PfIcpOptions::settings`] refuses what cannot run,
+/// with one line naming the CLI's flag.
+#[derive(Clone, Debug)]
+pub struct PfIcpOptions {
+    /// Clusters K per cloud (`--clusters`).
+    pub clusters: usize,
+    /// Particles (`--particles`).
+    pub particles: usize,
+    /// Iteration cap (`--iterations`).
+    pub iterations: usize,
+    /// Seed of every random choice (`--seed`).
+    pub seed: u64,
+    /// Cluster pairing (`--init`).
+    pub init: InitMode,
+    /// The known scale (`--scale`).
+    pub scale: Option<f64>,
+    /// The scale's bounds `LO,HI` (`--scale-range`; any other count of numbers is refused).
+    pub scale_range: Option<Vec<f64>>,
+    /// The sensor's position in the scan's frame `X,Y,Z` (`--viewpoint`).
+    pub viewpoint: Option<Vec<f64>>,
+}
+
+impl Default for PfIcpOptions {
+    fn default() -> Self {
+        let d = PfIcpSettings::default();
+        PfIcpOptions {
+            clusters: d.clusters,
+            particles: d.particles,
+            iterations: d.iterations,
+            seed: d.seed,
+            init: d.init,
+            scale: None,
+            scale_range: None,
+            viewpoint: None,
+        }
+    }
+}
+
+impl PfIcpOptions {
+    /// The settings, or one line on the first option that cannot run.
+    pub fn settings(&self) -> Result<PfIcpSettings> {
+        for (flag, value, limit) in [
+            ("--particles", self.particles, MAX_FILTER_PARTICLES),
+            ("--iterations", self.iterations, MAX_ITERATIONS),
+            ("--clusters", self.clusters, MAX_CLUSTERS),
+        ] {
+            if value == 0 {
+                bail!("{flag} must be at least 1");
+            }
+            if value > limit {
+                bail!("{flag} must be at most {limit} (got {value})");
+            }
+        }
+        let scale = match (self.scale, self.scale_range.as_deref()) {
+            (Some(_), Some(_)) => bail!("--scale and --scale-range cannot both be given (--scale fixes the scale)"),
+            (Some(s), None) => {
+                if !(s.is_finite() && s > 0.0) {
+                    bail!("--scale must be a positive finite number (got {s})");
+                }
+                ScaleBounds::fixed(s)
+            }
+            (None, None) => ScaleBounds::FREE,
+            (None, Some(&[lo, hi])) => {
+                if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && hi > 0.0) {
+                    bail!("--scale-range takes two positive finite numbers LO,HI (got {lo},{hi})");
+                }
+                if lo > hi {
+                    bail!("--scale-range LO,HI needs LO <= HI (got {lo},{hi})");
+                }
+                ScaleBounds::range(lo, hi)
+            }
+            (None, Some(v)) => bail!("--scale-range takes two numbers LO,HI (got {})", v.len()),
+        };
+        let viewpoint = match self.viewpoint.as_deref() {
+            None => None,
+            Some(&[x, y, z]) => {
+                if ![x, y, z].iter().all(|v| v.is_finite()) {
+                    bail!("--viewpoint takes three finite numbers X,Y,Z (got {x},{y},{z})");
+                }
+                Some(nalgebra::Point3::new(x, y, z))
+            }
+            Some(v) => bail!("--viewpoint takes three numbers X,Y,Z (got {})", v.len()),
+        };
+        Ok(PfIcpSettings {
+            clusters: self.clusters,
+            particles: self.particles,
+            iterations: self.iterations,
+            seed: self.seed,
+            init: self.init,
+            scale,
+            viewpoint,
+            ..Default::default()
+        })
+    }
+}
 
 /// Where the registration runs.
 #[derive(Clone, Debug, PartialEq)]

@@ -190,6 +190,19 @@ impl BoardClient {
         Ok(client)
     }
 
+    /// [`Self::connect`] with a caller's link options as given (`--baud`, `--timeout-ms`):
+    /// options out of range are refused with one line naming the CLI's flag, before the
+    /// port is opened.
+    pub fn connect_with(path: &str, baud: Option<u32>, timeout_ms: u64) -> anyhow::Result<(Self, Identity)> {
+        if timeout_ms == 0 || timeout_ms > MAX_TIMEOUT.as_millis() as u64 {
+            anyhow::bail!("--timeout-ms {timeout_ms}: must be 1 to {}", MAX_TIMEOUT.as_millis());
+        }
+        if let Some(baud) = baud.filter(|b| !(MIN_BAUD..=MAX_BAUD).contains(b)) {
+            anyhow::bail!("--baud {baud}: the client runs {MIN_BAUD} to {MAX_BAUD} baud");
+        }
+        Ok(Self::connect(path, baud, Duration::from_millis(timeout_ms))?)
+    }
+
     /// Open `path` and identify the board. With `baud`, at that rate only. Without, at each
     /// rate of [`PROBE_BAUDS`] in turn (the port opened again each time) until Identify gets
     /// a valid reply, which must report that rate; if none answers,

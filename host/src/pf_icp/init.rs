@@ -33,6 +33,25 @@ pub enum InitMode {
     Nearest,
 }
 
+impl InitMode {
+    /// Every mode.
+    pub const ALL: [InitMode; 3] = [InitMode::Auto, InitMode::Index, InitMode::Nearest];
+
+    /// The CLI's name (`auto`, `index`, `nearest`).
+    pub fn name(self) -> &'static str {
+        match self {
+            InitMode::Auto => "auto",
+            InitMode::Index => "index",
+            InitMode::Nearest => "nearest",
+        }
+    }
+
+    /// Parse a CLI name.
+    pub fn parse(s: &str) -> Option<InitMode> {
+        InitMode::ALL.into_iter().find(|m| m.name() == s)
+    }
+}
+
 /// The result of the initialisation.
 #[derive(Clone, Debug)]
 pub struct InitialPose {

@@ -64,6 +64,10 @@ pub const SCALE_SETTLING: f64 = 0.05;
 pub const HOLD_SIGMA_FACTOR: f64 = 3.0;
 /// Default frame rate [Hz].
 pub const DEFAULT_FPS: f64 = 30.0;
+/// Most frames a second a tracker takes (`--fps`).
+pub const MAX_FPS: f64 = 10_000.0;
+/// Fewest points a frame needs.
+pub const MIN_FRAME_POINTS: usize = 10;
 
 /// The track's state after a frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]

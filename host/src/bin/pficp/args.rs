@@ -1,16 +1,15 @@
 //! The command line: subcommands and their flags (clap).
 
-use anyhow::{bail, Result};
+use anyhow::Result;
 use clap::{Parser, Subcommand, ValueEnum};
 use pficp::board::BoardClient;
 use pficp::datasets::ModelId;
-use pficp::geometry::ScaleBounds;
 use pficp::pf_icp::init::InitMode;
 use pficp::pf_icp::PfIcpSettings;
 use pficp::registration::methods::Method;
+use pficp::request::PfIcpOptions;
 use pficp_fpga::protocol::messages::Identity;
 use std::path::PathBuf;
-use std::time::Duration;
 
 #[derive(Parser)]
 #[command(name = "pficp", version, about = "PF-ICP point-cloud registration (particle filter + ICP + k-means)")]
@@ -75,14 +74,7 @@ pub(crate) struct LinkArgs {
 impl LinkArgs {
     /// Open the port and identify the board (at --baud, or at the rate it answers).
     pub(crate) fn connect(&self, port: &str) -> Result<(BoardClient, Identity)> {
-        use pficp::board::{MAX_BAUD, MAX_TIMEOUT, MIN_BAUD};
-        if self.timeout_ms == 0 || self.timeout_ms > MAX_TIMEOUT.as_millis() as u64 {
-            bail!("--timeout-ms {}: must be 1 to {}", self.timeout_ms, MAX_TIMEOUT.as_millis());
-        }
-        if let Some(baud) = self.baud.filter(|b| !(MIN_BAUD..=MAX_BAUD).contains(b)) {
-            bail!("--baud {baud}: the client runs {MIN_BAUD} to {MAX_BAUD} baud");
-        }
-        Ok(BoardClient::connect(port, self.baud, Duration::from_millis(self.timeout_ms))?)
+        BoardClient::connect_with(port, self.baud, self.timeout_ms)
     }
 
     /// [`Self::connect`], saying on stderr what answered (the commands that work with the
@@ -137,6 +129,16 @@ pub(crate) enum InitArg {
     Nearest,
 }
 
+impl From<InitArg> for InitMode {
+    fn from(m: InitArg) -> InitMode {
+        match m {
+            InitArg::Auto => InitMode::Auto,
+            InitArg::Index => InitMode::Index,
+            InitArg::Nearest => InitMode::Nearest,
+        }
+    }
+}
+
 impl From<InitMode> for InitArg {
     fn from(m: InitMode) -> InitArg {
         match m {
@@ -181,68 +183,17 @@ pub(crate) struct PfArgs {
 
 impl PfArgs {
     pub(crate) fn settings(&self) -> Result<PfIcpSettings> {
-        if self.particles == 0 {
-            bail!("--particles must be at least 1");
-        }
-        if self.iterations == 0 {
-            bail!("--iterations must be at least 1");
-        }
-        if self.clusters == 0 {
-            bail!("--clusters must be at least 1");
-        }
-        use pficp::pf_icp::{MAX_CLUSTERS, MAX_FILTER_PARTICLES, MAX_ITERATIONS};
-        for (flag, value, limit) in [
-            ("--particles", self.particles, MAX_FILTER_PARTICLES),
-            ("--iterations", self.iterations, MAX_ITERATIONS),
-            ("--clusters", self.clusters, MAX_CLUSTERS),
-        ] {
-            if value > limit {
-                bail!("{flag} must be at most {limit} (got {value})");
-            }
-        }
-        let scale = match (self.scale, self.scale_range.as_slice()) {
-            (Some(s), _) => {
-                if !(s.is_finite() && s > 0.0) {
-                    bail!("--scale must be a positive finite number (got {s})");
-                }
-                ScaleBounds::fixed(s)
-            }
-            (None, []) => ScaleBounds::FREE,
-            (None, &[lo, hi]) => {
-                if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && hi > 0.0) {
-                    bail!("--scale-range takes two positive finite numbers LO,HI (got {lo},{hi})");
-                }
-                if lo > hi {
-                    bail!("--scale-range LO,HI needs LO <= HI (got {lo},{hi})");
-                }
-                ScaleBounds::range(lo, hi)
-            }
-            (None, v) => bail!("--scale-range takes two numbers LO,HI (got {})", v.len()),
-        };
-        let viewpoint = match self.viewpoint.as_slice() {
-            [] => None,
-            &[x, y, z] => {
-                if ![x, y, z].iter().all(|v| v.is_finite()) {
-                    bail!("--viewpoint takes three finite numbers X,Y,Z (got {x},{y},{z})");
-                }
-                Some(nalgebra::Point3::new(x, y, z))
-            }
-            v => bail!("--viewpoint takes three numbers X,Y,Z (got {})", v.len()),
-        };
-        Ok(PfIcpSettings {
+        PfIcpOptions {
             clusters: self.clusters,
             particles: self.particles,
             iterations: self.iterations,
             seed: self.seed,
-            init: match self.init {
-                InitArg::Auto => InitMode::Auto,
-                InitArg::Index => InitMode::Index,
-                InitArg::Nearest => InitMode::Nearest,
-            },
-            scale,
-            viewpoint,
-            ..Default::default()
-        })
+            init: self.init.into(),
+            scale: self.scale,
+            scale_range: (!self.scale_range.is_empty()).then(|| self.scale_range.clone()),
+            viewpoint: (!self.viewpoint.is_empty()).then(|| self.viewpoint.clone()),
+        }
+        .settings()
     }
 }
 

@@ -3,7 +3,6 @@
 use crate::args::*;
 use crate::load;
 use anyhow::{bail, Result};
-use clap::ValueEnum;
 use pficp::cli::{Inputs, Provenance, RegisterReport, Settings};
 use pficp::io::{format_from_path, write_cloud};
 use pficp::progress::{note, Progress};
@@ -74,37 +73,15 @@ pub(crate) fn register(a: &RegisterArgs) -> Result<()> {
             t.polish.as_secs_f64()
         ));
     }
-    let mut report = RegisterReport::new(method.name(), &outcome.registration, outcome.elapsed.as_secs_f64());
-    if let Some(pf) = &outcome.pf {
-        report = report.assessed(&pf.conclusion);
-    }
-    if let (Some(port), Some(run)) = (&a.board, &board) {
-        report = report.on_board(port);
-        if matches!(run, BoardRun::HostDriven(_)) {
-            report = report.host_driven();
-        }
-    }
+    let registered = Registered { outcome, board };
+    let mut report = RegisterReport::of(&request, &registered, a.board.as_deref());
     let inputs = Inputs {
         model: a.model.display().to_string(),
         scan: a.scan.display().to_string(),
         model_points: model.len(),
         scan_points: scan.len(),
     };
-    let recorded = Settings {
-        seed: a.pf.seed,
-        clusters: a.pf.clusters,
-        particles: a.pf.particles,
-        iterations: a.pf.iterations,
-        init: a.pf.init.to_possible_value().map_or_else(String::new, |v| v.get_name().to_string()),
-        scale: request.settings.scale.fixed_value(),
-        scale_range: (!request.settings.scale.is_free() && request.settings.scale.fixed_value().is_none())
-            .then_some([request.settings.scale.lo, request.settings.scale.hi]),
-        viewpoint: request.settings.viewpoint.map(|v| [v.x, v.y, v.z]),
-        board_points: match request.engine {
-            Engine::OnBoard { board_points, .. } => Some(board_points),
-            _ => None,
-        },
-    };
+    let recorded = Settings::of(&request);
     report = report.produced_by(Provenance::new(method.name(), inputs, recorded, a.board.as_deref(), a.host_driven));
     if a.json {
         println!("{}", serde_json::to_string(&report)?);
@@ -112,7 +89,7 @@ pub(crate) fn register(a: &RegisterArgs) -> Result<()> {
         print!("{}", report.text());
     }
     if let Some(out) = &a.out_aligned {
-        let aligned = outcome.registration.pose.apply_all(scan.points());
+        let aligned = registered.outcome.registration.pose.apply_all(scan.points());
         write_cloud(out, &aligned, format_from_path(out)?)?;
         note(format_args!("wrote the aligned scan to {}", out.display()));
     }

@@ -8,14 +8,9 @@ use pficp::cloud::Cloud;
 use pficp::io::{format_from_path, read_points_from_bytes, Format};
 use pficp::nn::NearestNeighbours;
 use pficp::progress::note;
-use pficp::tracking::{TrackSettings, Tracker};
+use pficp::tracking::{TrackSettings, Tracker, MAX_FPS, MIN_FRAME_POINTS};
 use std::io::{BufRead, Write};
 use std::path::PathBuf;
-
-/// Fewest points a frame needs.
-const MIN_FRAME_POINTS: usize = 10;
-/// Most frames a second `--fps` takes.
-const MAX_FPS: f64 = 10_000.0;
 
 pub(crate) fn track(a: &TrackArgs) -> Result<()> {
     if !(a.fps.is_finite() && a.fps > 0.0 && a.fps <= MAX_FPS) {
