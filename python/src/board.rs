@@ -1,0 +1,106 @@
+//! `pficp.Board`: a board on a serial port, opened and identified once, then used by
+//! `register(..., board=...)` and `Tracker(..., board=...)`.
+
+use crate::errors::{board_error, request_error};
+use pficp::board::BoardClient;
+use pficp_fpga::protocol::messages::Identity;
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::sync::{Mutex, MutexGuard};
+
+/// A PF-ICP board on a serial port (a USB-serial bridge, or `pficp-sim-board`'s
+/// pseudo-terminal). Opening it identifies it: a missing, silent or echoing board raises
+/// `pficp.BoardError` at once. `baud=None` tries the board's rates in turn (3,000,000,
+/// 921,600, 115,200); `timeout_ms` is the time allowed per reply, as the CLI's flags.
+///
+/// A `Tracker` given the board holds it until the tracker is closed (`tracker.close()`, or
+/// when it is garbage-collected); use as a context manager to close the port.
+#[pyclass(module = "pficp", frozen, name = "Board")]
+pub struct Board {
+    port: String,
+    /// The open link; `None` once closed or while a tracker holds it.
+    pub client: Mutex<Option<BoardClient>>,
+    /// What holds the link when it is not here.
+    pub lent: Mutex<Option<&'static str>>,
+}
+
+impl Board {
+    /// The open link, or a `ValueError` saying where it is.
+    pub fn link(&self) -> PyResult<MutexGuard<'_, Option<BoardClient>>> {
+        let guard = self.client.lock().map_err(|_| PyValueError::new_err("the board's link was poisoned"))?;
+        if guard.is_none() {
+            let holder = self.lent.lock().ok().and_then(|l| *l);
+            return Err(PyValueError::new_err(match holder {
+                Some(h) => format!("board {}: held by {h} (close it first)", self.port),
+                None => format!("board {}: closed", self.port),
+            }));
+        }
+        Ok(guard)
+    }
+
+    /// The board's serial port.
+    pub fn port_name(&self) -> &str {
+        &self.port
+    }
+}
+
+fn identity_dict<'py>(py: Python<'py>, id: &Identity) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("version", id.version)?;
+    d.set_item("lanes", id.lanes)?;
+    d.set_item("clock_hz", id.clock_hz)?;
+    d.set_item("baud", id.baud)?;
+    d.set_item("max_model", id.max_model)?;
+    d.set_item("max_scan", id.max_scan)?;
+    d.set_item("max_particles", id.max_particles)?;
+    d.set_item("model_count", id.model_count)?;
+    d.set_item("scan_count", id.scan_count)?;
+    d.set_item("model_digest", id.model_digest)?;
+    Ok(d)
+}
+
+#[pymethods]
+impl Board {
+    #[new]
+    #[pyo3(signature = (port, *, baud = None, timeout_ms = pficp::board::DEFAULT_TIMEOUT.as_millis() as u64))]
+    fn new(py: Python<'_>, port: String, baud: Option<u32>, timeout_ms: u64) -> PyResult<Self> {
+        let (client, _) = py.detach(|| BoardClient::connect_with(&port, baud, timeout_ms)).map_err(request_error)?;
+        Ok(Board { port, client: Mutex::new(Some(client)), lent: Mutex::new(None) })
+    }
+
+    /// The serial port.
+    #[getter]
+    fn port(&self) -> &str {
+        &self.port
+    }
+
+    /// Ask the board who it is: protocol `version`, `lanes`, `clock_hz`, `baud`, its
+    /// limits and what it holds (`model_count`, `model_digest`, ...).
+    fn identify<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let mut link = self.link()?;
+        let client = link.as_mut().expect("link() checked it");
+        let id = py.detach(|| client.identify()).map_err(board_error)?;
+        identity_dict(py, &id)
+    }
+
+    /// Close the port (a tracker holding the board keeps it until it is closed).
+    fn close(&self) {
+        if let Ok(mut c) = self.client.lock() {
+            *c = None;
+        }
+    }
+
+    fn __enter__(slf: Py<Self>) -> Py<Self> {
+        slf
+    }
+
+    fn __exit__(&self, _t: Option<Bound<'_, PyAny>>, _v: Option<Bound<'_, PyAny>>, _tb: Option<Bound<'_, PyAny>>) {
+        self.close();
+    }
+
+    fn __repr__(&self) -> String {
+        let open = self.client.lock().map(|c| c.is_some()).unwrap_or(false);
+        format!("Board(port={:?}, open={open})", self.port)
+    }
+}
