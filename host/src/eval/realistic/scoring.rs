@@ -100,11 +100,21 @@ pub fn inside_95(d2: f64, dof: usize) -> bool {
 /// over the determined parameters, and their number (`None` if the covariance is not
 /// positive definite).
 pub fn mahalanobis2(c: &crate::pf_icp::conclusion::Conclusion, truth: &Pose, at: &Point3<f64>) -> Option<(f64, usize)> {
-    let e = c.pose.local_error(truth, at);
+    mahalanobis2_of(&c.pose, &c.uncertainty, truth, at)
+}
+
+/// [`mahalanobis2`] of any pose and its uncertainty (a tracked frame's).
+pub fn mahalanobis2_of(
+    pose: &Pose,
+    u: &crate::pf_icp::conclusion::Uncertainty,
+    truth: &Pose,
+    at: &Point3<f64>,
+) -> Option<(f64, usize)> {
+    let e = pose.local_error(truth, at);
     // A parameter the user fixed (sigma 0, the scale under `--scale`) has no error to weigh.
-    let k: Vec<usize> = (0..7).filter(|&i| c.uncertainty.sigma[i].is_some_and(|s| s > 0.0)).collect();
+    let k: Vec<usize> = (0..7).filter(|&i| u.sigma[i].is_some_and(|s| s > 0.0)).collect();
     let n = k.len();
-    let m = nalgebra::DMatrix::from_fn(n, n, |a, b| c.uncertainty.covariance[k[a]][k[b]].unwrap_or(0.0));
+    let m = nalgebra::DMatrix::from_fn(n, n, |a, b| u.covariance[k[a]][k[b]].unwrap_or(0.0));
     let v = nalgebra::DVector::from_fn(n, |a, _| e[k[a]]);
     let inv = m.cholesky()?.inverse();
     Some(((v.transpose() * inv * v)[(0, 0)], n))

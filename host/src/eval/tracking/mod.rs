@@ -23,8 +23,13 @@ use crate::tracking::{TrackSettings, TrackState, Tracker};
 use serde::Serialize;
 use std::path::PathBuf;
 
-/// A frame is right within 1 deg, 1% of the diagonal and 1% of scale.
-pub const TOLERANCE: Tolerance = Tolerance { rotation_deg: 1.0, translation_frac: 0.01, scale_frac: 0.01 };
+/// A frame is right within 1 deg, 1% of the diagonal and 1% of scale (the tolerance a
+/// frame's 95% region must lie within for it to be `confident`:
+/// [`crate::tracking::verdict::TOLERANCE`]).
+pub const TOLERANCE: Tolerance = {
+    let [rotation_deg, translation_frac, scale_frac] = crate::tracking::verdict::TOLERANCE;
+    Tolerance { rotation_deg, translation_frac, scale_frac }
+};
 /// Frames after the hidden stretch allowed for re-acquisition (not counted in the share
 /// right).
 pub const REACQUIRE_WINDOW: usize = 10;
@@ -99,6 +104,12 @@ pub struct FrameRecord {
     pub verdict: Verdict,
     /// Its reasons.
     pub reasons: Vec<String>,
+    /// The widest one-sigma rotation [deg], translation [fraction of the diagonal] and
+    /// relative scale the verdict judged.
+    pub widest_sigma: [f64; 3],
+    /// The truth (its nearest symmetric pose) lies inside the frame's 95% region (`None`:
+    /// no covariance to weigh it by).
+    pub inside_95: Option<bool>,
     /// The track's state.
     pub state: TrackState,
     /// A global registration ran.
@@ -214,11 +225,16 @@ fn score(seq: &sequence::Sequence, frames: &[crate::tracking::TrackFrame]) -> Se
         .zip(&seq.frames)
         .map(|(f, truth)| {
             let at = crate::cloud::centroid(&truth.scan);
-            let errors = symmetries
+            let (errors, nearest) = symmetries
                 .iter()
-                .map(|g| pose_errors(&f.pose, &symmetric_truth(&truth.truth, g, &seq.shape.centre()), &at, seq.diag))
-                .min_by(|a, b| a.0.total_cmp(&b.0))
+                .map(|g| {
+                    let t = symmetric_truth(&truth.truth, g, &seq.shape.centre());
+                    (pose_errors(&f.pose, &t, &at, seq.diag), t)
+                })
+                .min_by(|a, b| a.0 .0.total_cmp(&b.0 .0))
                 .expect("the identity");
+            let inside_95 = crate::eval::realistic::mahalanobis2_of(&f.pose, &f.uncertainty, &nearest, &at)
+                .map(|(d2, dof)| crate::eval::realistic::inside_95(d2, dof));
             let board_errors = f.board.as_ref().map(|b| {
                 let e = symmetries
                     .iter()
@@ -237,6 +253,8 @@ fn score(seq: &sequence::Sequence, frames: &[crate::tracking::TrackFrame]) -> Se
                 right: TOLERANCE.accepts(errors),
                 verdict: f.verdict,
                 reasons: f.reasons.clone(),
+                widest_sigma: f.checks.widest_sigma,
+                inside_95,
                 state: f.state,
                 global: f.global,
                 seconds: f.seconds,
