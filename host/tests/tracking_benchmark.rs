@@ -38,4 +38,13 @@ fn the_quick_tracking_benchmark_keeps_its_floors() {
     assert_eq!(json["sequences"][0]["frames"].as_array().unwrap().len(), 200);
     let svg = std::fs::read_to_string(dir.path().join("tracking.svg")).unwrap();
     assert!(svg.contains("<svg") && svg.contains("rotation error"));
+    // The same figure as PNG: a PNG file of the SVG's size, not one colour.
+    let png = std::fs::read(dir.path().join("tracking.png")).unwrap();
+    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+    let pixmap = resvg::tiny_skia::Pixmap::decode_png(&png).unwrap();
+    let (w, h) = (pixmap.width(), pixmap.height());
+    assert!(svg.contains(&format!("width=\"{w}\"")) && svg.contains(&format!("height=\"{h}\"")), "{w} x {h}");
+    let background = pixmap.pixels()[0];
+    let drawn = pixmap.pixels().iter().filter(|p| **p != background).count();
+    assert!(drawn * 50 > pixmap.pixels().len(), "only {drawn} pixels drawn");
 }

@@ -462,7 +462,46 @@ fn line_chart(path: &Path, chart_spec: &Chart, series: &[Series]) -> anyhow::Res
     Ok(())
 }
 
-#[cfg(test)]
+/// The system's fonts, with `sans-serif` (what plotters asks for) mapped to a common
+/// family that is there (`None`: none of DejaVu, Liberation, Noto or Free Sans).
+#[cfg(feature = "png")]
+pub fn fonts() -> Option<std::sync::Arc<resvg::usvg::fontdb::Database>> {
+    let mut db = resvg::usvg::fontdb::Database::new();
+    db.load_system_fonts();
+    let families: Vec<String> = db.faces().flat_map(|f| f.families.iter().map(|(n, _)| n.clone())).collect();
+    let sans = ["DejaVu Sans", "Liberation Sans", "Noto Sans", "FreeSans"]
+        .iter()
+        .map(|s| s.to_string())
+        .find(|s| families.contains(s))?;
+    db.set_sans_serif_family(sans);
+    Some(std::sync::Arc::new(db))
+}
+
+/// Render the SVG file `svg` to the PNG file `png` (without a common sans-serif font the
+/// figure's text is left out, and a note says so).
+#[cfg(feature = "png")]
+pub fn render_png(svg: &Path, png: &Path) -> anyhow::Result<()> {
+    use anyhow::Context;
+    use resvg::tiny_skia::{Pixmap, Transform};
+    use resvg::usvg::{Options, Tree};
+    let text = std::fs::read_to_string(svg).with_context(|| format!("cannot read {}", svg.display()))?;
+    let mut opt = Options::default();
+    match fonts() {
+        Some(db) => opt.fontdb = db,
+        None => crate::progress::note(format_args!(
+            "{}: no DejaVu, Liberation, Noto or Free Sans font: the PNG has no text",
+            png.display()
+        )),
+    }
+    let tree = Tree::from_str(&text, &opt).with_context(|| format!("{}", svg.display()))?;
+    let size = tree.size().to_int_size();
+    let mut pixmap = Pixmap::new(size.width(), size.height()).context("an empty figure")?;
+    pixmap.fill(resvg::tiny_skia::Color::WHITE);
+    resvg::render(&tree, Transform::default(), &mut pixmap.as_mut());
+    pixmap.save_png(png).with_context(|| format!("cannot write {}", png.display()))
+}
+
+#[cfg(all(test, feature = "png"))]
 mod tests {
     //! Every figure [`run`] writes is rendered to PNG (resvg, with the system's fonts: the
     //! test fails when there are none; `tests/run-all` installs Debian's
@@ -476,21 +515,11 @@ mod tests {
     use std::collections::HashSet;
     use std::sync::Arc;
 
-    /// The system's fonts, with `sans-serif` (what plotters asks for) mapped to a family
-    /// that is there.
+    /// The system's fonts ([`super::fonts`]; the tests need one).
     fn fonts() -> Arc<fontdb::Database> {
-        let mut db = fontdb::Database::new();
-        db.load_system_fonts();
-        let families: Vec<String> = db.faces().flat_map(|f| f.families.iter().map(|(n, _)| n.clone())).collect();
-        let sans = ["DejaVu Sans", "Liberation Sans", "Noto Sans", "FreeSans"]
-            .iter()
-            .map(|s| s.to_string())
-            .find(|s| families.contains(s))
-            .unwrap_or_else(|| {
-                panic!("no DejaVu, Liberation, Noto or Free Sans font: install fonts-dejavu-core (tests/run-all does)")
-            });
-        db.set_sans_serif_family(sans);
-        Arc::new(db)
+        super::fonts().unwrap_or_else(|| {
+            panic!("no DejaVu, Liberation, Noto or Free Sans font: install fonts-dejavu-core (tests/run-all does)")
+        })
     }
 
     /// A text element as laid out: its string, its anchor and its box on the canvas.

@@ -54,7 +54,12 @@ pub(crate) fn eval_tracking(a: &EvalArgs) -> Result<()> {
     };
     let report = tracking::run(&opts)?;
     print!("{}", report.text());
-    note(format_args!("wrote {} and {}", a.out.join("tracking.json").display(), a.out.join("tracking.svg").display()));
+    note(format_args!(
+        "wrote {}, {} and {}",
+        a.out.join("tracking.json").display(),
+        a.out.join("tracking.svg").display(),
+        a.out.join("tracking.png").display()
+    ));
     Ok(())
 }
 

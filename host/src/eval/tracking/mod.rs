@@ -63,7 +63,7 @@ pub struct TrackingOptions {
     pub board: bool,
     /// The tracker's settings (the seed is replaced by each sequence's).
     pub settings: TrackSettings,
-    /// Write `tracking.json` and `tracking.svg` here.
+    /// Write `tracking.json`, `tracking.svg` and (feature `png`, on by default) `tracking.png` here.
     pub out_dir: Option<PathBuf>,
     /// Progress on stderr.
     pub progress: bool,
@@ -370,6 +370,8 @@ pub fn run(opts: &TrackingOptions) -> anyhow::Result<TrackingReport> {
             sequence::JUMP_DEG
         );
         super::plots::tracking_figure(&dir.join("tracking.svg"), &subtitle, &series, TOLERANCE.rotation_deg)?;
+        #[cfg(feature = "png")]
+        super::plots::render_png(&dir.join("tracking.svg"), &dir.join("tracking.png"))?;
     }
     Ok(report)
 }
