@@ -101,7 +101,7 @@ class TrackFrame:
 class Board:
     """A PF-ICP board on a serial port; opening it identifies it (BoardError if it does not answer)."""
 
-    def __init__(self, port: str, *, baud: Optional[int] = None, timeout_ms: int = 2000) -> None: ...
+    def __init__(self, port: str, *, baud: Optional[int] = None, timeout_ms: Optional[int] = None) -> None: ...
     @property
     def port(self) -> str: ...
     def identify(self) -> Dict[str, int]: ...
@@ -116,7 +116,7 @@ class Tracker:
         self,
         model: Points,
         *,
-        fps: float = 30.0,
+        fps: Optional[float] = None,
         scale: Optional[float] = None,
         scale_range: Optional[Sequence[float]] = None,
         viewpoint: Optional[Sequence[float]] = None,

@@ -12,7 +12,8 @@ use std::sync::{Mutex, MutexGuard};
 /// A PF-ICP board on a serial port (a USB-serial bridge, or `pficp-sim-board`'s
 /// pseudo-terminal). Opening it identifies it: a missing, silent or echoing board raises
 /// `pficp.BoardError` at once. `baud=None` tries the board's rates in turn (3,000,000,
-/// 921,600, 115,200); `timeout_ms` is the time allowed per reply, as the CLI's flags.
+/// 921,600, 115,200); `timeout_ms` is the time allowed per reply (`None`: 2,000 ms), as
+/// the CLI's flags.
 ///
 /// A `Tracker` given the board holds it until the tracker is closed (`tracker.close()`, or
 /// when it is garbage-collected); use as a context manager to close the port.
@@ -63,8 +64,9 @@ fn identity_dict<'py>(py: Python<'py>, id: &Identity) -> PyResult<Bound<'py, PyD
 #[pymethods]
 impl Board {
     #[new]
-    #[pyo3(signature = (port, *, baud = None, timeout_ms = pficp::board::DEFAULT_TIMEOUT.as_millis() as u64))]
-    fn new(py: Python<'_>, port: String, baud: Option<u32>, timeout_ms: u64) -> PyResult<Self> {
+    #[pyo3(signature = (port, *, baud = None, timeout_ms = None))]
+    fn new(py: Python<'_>, port: String, baud: Option<u32>, timeout_ms: Option<u64>) -> PyResult<Self> {
+        let timeout_ms = timeout_ms.unwrap_or(pficp::board::DEFAULT_TIMEOUT.as_millis() as u64);
         let (client, _) = py.detach(|| BoardClient::connect_with(&port, baud, timeout_ms)).map_err(request_error)?;
         Ok(Board { port, client: Mutex::new(Some(client)), lent: Mutex::new(None) })
     }

@@ -28,7 +28,7 @@ struct Owned {
 /// every frame after the track is lost, is a global registration; the others start from
 /// the previous pose moved by a constant-velocity motion model.
 ///
-/// `fps` is the time between frames; `scale`, `scale_range`, `viewpoint` and `seed` are as
+/// `fps` is the frame rate (`None`: 30 a second), the time between frames; `scale`, `scale_range`, `viewpoint` and `seed` are as
 /// `register` takes them. With `board=`, the tracked frames' filter runs on the board (the
 /// model is put on it now unless it holds it already); the tracker holds the board until
 /// `close()`. Each `update(scan)` returns a `TrackFrame`: act on its pose only when its
@@ -44,17 +44,18 @@ pub struct Tracker {
 impl Tracker {
     #[new]
     #[allow(clippy::too_many_arguments, clippy::result_large_err)]
-    #[pyo3(signature = (model, *, fps = tracking::DEFAULT_FPS, scale = None, scale_range = None, viewpoint = None, seed = None, board = None))]
+    #[pyo3(signature = (model, *, fps = None, scale = None, scale_range = None, viewpoint = None, seed = None, board = None))]
     fn new(
         py: Python<'_>,
         model: &Bound<'_, PyAny>,
-        fps: f64,
+        fps: Option<f64>,
         scale: Option<f64>,
         scale_range: Option<Vec<f64>>,
         viewpoint: Option<Vec<f64>>,
         seed: Option<u64>,
         board: Option<Py<Board>>,
     ) -> PyResult<Self> {
+        let fps = fps.unwrap_or(tracking::DEFAULT_FPS);
         if !(fps.is_finite() && fps > 0.0 && fps <= MAX_FPS) {
             return Err(PyValueError::new_err(format!(
                 "--fps must be a number above 0 and at most {MAX_FPS} (got {fps})"
