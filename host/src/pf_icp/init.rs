@@ -52,6 +52,12 @@ impl InitMode {
     }
 }
 
+impl std::fmt::Display for InitMode {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// The result of the initialisation.
 #[derive(Clone, Debug)]
 pub struct InitialPose {

@@ -56,6 +56,12 @@ impl Method {
     }
 }
 
+impl std::fmt::Display for Method {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// Settings shared by the methods.
 #[derive(Clone, Debug)]
 pub struct MethodSettings {

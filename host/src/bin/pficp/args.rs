@@ -99,54 +99,18 @@ pub(crate) struct BoardInfoArgs {
     pub(crate) link: LinkArgs,
 }
 
-#[derive(Clone, Copy, ValueEnum)]
-pub(crate) enum MethodArg {
-    PfIcp,
-    Icp,
-    Welsch,
-    Cauchy,
-    SparseIcp,
-    EmIcp,
+/// `--method`: the library's method names ([`Method::name`]), listed in the help.
+fn method_parser() -> impl clap::builder::TypedValueParser<Value = Method> {
+    use clap::builder::TypedValueParser;
+    clap::builder::PossibleValuesParser::new(Method::ALL.map(Method::name))
+        .map(|s| Method::parse(&s).expect("one of the listed names"))
 }
 
-impl From<MethodArg> for Method {
-    fn from(m: MethodArg) -> Method {
-        match m {
-            MethodArg::PfIcp => Method::PfIcp,
-            MethodArg::Icp => Method::Icp,
-            MethodArg::Welsch => Method::Welsch,
-            MethodArg::Cauchy => Method::Cauchy,
-            MethodArg::SparseIcp => Method::SparseIcp,
-            MethodArg::EmIcp => Method::EmIcp,
-        }
-    }
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-pub(crate) enum InitArg {
-    Auto,
-    Index,
-    Nearest,
-}
-
-impl From<InitArg> for InitMode {
-    fn from(m: InitArg) -> InitMode {
-        match m {
-            InitArg::Auto => InitMode::Auto,
-            InitArg::Index => InitMode::Index,
-            InitArg::Nearest => InitMode::Nearest,
-        }
-    }
-}
-
-impl From<InitMode> for InitArg {
-    fn from(m: InitMode) -> InitArg {
-        match m {
-            InitMode::Auto => InitArg::Auto,
-            InitMode::Index => InitArg::Index,
-            InitMode::Nearest => InitArg::Nearest,
-        }
-    }
+/// `--init`: the library's pairing names ([`InitMode::name`]).
+fn init_parser() -> impl clap::builder::TypedValueParser<Value = InitMode> {
+    use clap::builder::TypedValueParser;
+    clap::builder::PossibleValuesParser::new(InitMode::ALL.map(InitMode::name))
+        .map(|s| InitMode::parse(&s).expect("one of the listed names"))
 }
 
 #[derive(clap::Args)]
@@ -165,8 +129,8 @@ pub(crate) struct PfArgs {
     pub(crate) seed: u64,
     /// Cluster pairing for PF-ICP's start: index (scan = model's points in order),
     /// nearest (independent scan) or auto (try both).
-    #[arg(long, value_enum, default_value_t = InitArg::from(PfIcpSettings::default().init))]
-    pub(crate) init: InitArg,
+    #[arg(long, value_parser = init_parser(), default_value_t = PfIcpSettings::default().init)]
+    pub(crate) init: InitMode,
     /// The scale (scan to model) when it is known: 1 when model and scan share their units
     /// (a metric depth camera and a model in the same units). Nothing then changes it.
     #[arg(long, value_name = "S", conflicts_with = "scale_range", allow_hyphen_values = true)]
@@ -188,7 +152,7 @@ impl PfArgs {
             particles: self.particles,
             iterations: self.iterations,
             seed: self.seed,
-            init: self.init.into(),
+            init: self.init,
             scale: self.scale,
             scale_range: (!self.scale_range.is_empty()).then(|| self.scale_range.clone()),
             viewpoint: (!self.viewpoint.is_empty()).then(|| self.viewpoint.clone()),
@@ -206,8 +170,8 @@ pub(crate) struct RegisterArgs {
     #[arg(long)]
     pub(crate) scan: PathBuf,
     /// Registration method.
-    #[arg(long, value_enum, default_value_t = MethodArg::PfIcp)]
-    pub(crate) method: MethodArg,
+    #[arg(long, value_parser = method_parser(), default_value_t = Method::PfIcp)]
+    pub(crate) method: Method,
     #[command(flatten)]
     pub(crate) pf: PfArgs,
     /// Print one JSON object instead of text.
@@ -358,8 +322,8 @@ pub(crate) struct EvalArgs {
     #[arg(long, value_enum, value_delimiter = ',')]
     pub(crate) family: Vec<FamilyArg>,
     /// Realistic suite: also run these methods (comma-separated), beside pf-icp.
-    #[arg(long, value_enum, value_delimiter = ',')]
-    pub(crate) with: Vec<MethodArg>,
+    #[arg(long, value_parser = method_parser(), value_delimiter = ',')]
+    pub(crate) with: Vec<Method>,
     /// Also run PF-ICP with the filter and its polish on the board, the board's part by its
     /// bit-exact reference (what the board computes): columns pf-icp-board (then the
     /// host's polish) and pf-icp-board-filter (the board's pose alone), in the realistic

@@ -70,7 +70,7 @@ pub(crate) fn eval_realistic(a: &EvalArgs) -> Result<()> {
         bail!("--cases must be 1 to {} (got {cases})", realistic::MAX_CASES);
     }
     let mut methods = vec![Method::PfIcp];
-    methods.extend(a.with.iter().map(|&m| Method::from(m)).filter(|m| *m != Method::PfIcp));
+    methods.extend(a.with.iter().copied().filter(|m| *m != Method::PfIcp));
     let opts = RealisticOptions {
         cases,
         seed: a.seed,

@@ -6,12 +6,11 @@ use anyhow::{bail, Result};
 use pficp::cli::{Inputs, Provenance, RegisterReport, Settings};
 use pficp::io::{format_from_path, write_cloud};
 use pficp::progress::{note, Progress};
-use pficp::registration::methods::Method;
 use pficp::request::{BoardProgress, BoardRun, Engine, Registered, Request};
 
 pub(crate) fn register(a: &RegisterArgs) -> Result<()> {
     let settings = a.pf.settings()?;
-    let method: Method = a.method.into();
+    let method = a.method;
     let model = load(&a.model, "model")?;
     let scan = load(&a.scan, "scan")?;
     if let Some(out) = &a.out_aligned {
