@@ -7,7 +7,7 @@ use pficp_fpga::protocol::messages::Identity;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use std::sync::{Mutex, MutexGuard};
+use std::sync::Mutex;
 
 /// A PF-ICP board on a serial port (a USB-serial bridge, or `pficp-sim-board`'s
 /// pseudo-terminal). Opening it identifies it: a missing, silent or echoing board raises
@@ -21,23 +21,64 @@ use std::sync::{Mutex, MutexGuard};
 pub struct Board {
     port: String,
     /// The open link; `None` once closed or while a tracker holds it.
-    pub client: Mutex<Option<BoardClient>>,
+    client: Mutex<Option<BoardClient>>,
     /// What holds the link when it is not here.
-    pub lent: Mutex<Option<&'static str>>,
+    lent: Mutex<Option<&'static str>>,
+}
+
+/// Why the link is not at hand.
+pub enum Unavailable {
+    /// Closed, or held by this.
+    Lent(Option<&'static str>),
+    /// A call panicked while it held the link.
+    Poisoned,
 }
 
 impl Board {
-    /// The open link, or a `ValueError` saying where it is.
-    pub fn link(&self) -> PyResult<MutexGuard<'_, Option<BoardClient>>> {
-        let guard = self.client.lock().map_err(|_| PyValueError::new_err("the board's link was poisoned"))?;
-        if guard.is_none() {
-            let holder = self.lent.lock().ok().and_then(|l| *l);
-            return Err(PyValueError::new_err(match holder {
-                Some(h) => format!("board {}: held by {h} (close it first)", self.port),
-                None => format!("board {}: closed", self.port),
-            }));
+    /// Run `f` on the open link with the GIL released, waiting for another thread's call
+    /// to finish first (without the GIL, so that the waiting thread cannot hold up the
+    /// one that holds the link).
+    pub fn with_link<R: Send>(&self, py: Python<'_>, f: impl FnOnce(&mut BoardClient) -> R + Send) -> PyResult<R> {
+        py.detach(|| {
+            let mut guard = self.client.lock().map_err(|_| Unavailable::Poisoned)?;
+            match guard.as_mut() {
+                Some(client) => Ok(f(client)),
+                None => Err(Unavailable::Lent(self.lent.lock().ok().and_then(|l| *l))),
+            }
+        })
+        .map_err(|e| self.unavailable(e))
+    }
+
+    /// Take the link out of the board (a tracker's), waiting as [`Self::with_link`] does.
+    pub fn take_link(&self, py: Python<'_>, holder: &'static str) -> PyResult<BoardClient> {
+        py.detach(|| {
+            let mut guard = self.client.lock().map_err(|_| Unavailable::Poisoned)?;
+            let lent = self.lent.lock().ok().and_then(|l| *l);
+            let client = guard.take().ok_or(Unavailable::Lent(lent))?;
+            if let Ok(mut l) = self.lent.lock() {
+                *l = Some(holder);
+            }
+            Ok(client)
+        })
+        .map_err(|e| self.unavailable(e))
+    }
+
+    /// Give a taken link back.
+    pub fn give_back(&self, client: BoardClient) {
+        if let Ok(mut link) = self.client.lock() {
+            *link = Some(client);
         }
-        Ok(guard)
+        if let Ok(mut lent) = self.lent.lock() {
+            *lent = None;
+        }
+    }
+
+    fn unavailable(&self, e: Unavailable) -> PyErr {
+        PyValueError::new_err(match e {
+            Unavailable::Lent(Some(h)) => format!("board {}: held by {h} (close it first)", self.port),
+            Unavailable::Lent(None) => format!("board {}: closed", self.port),
+            Unavailable::Poisoned => format!("board {}: a call failed while it held the link", self.port),
+        })
     }
 
     /// The board's serial port.
@@ -80,25 +121,31 @@ impl Board {
     /// Ask the board who it is: protocol `version`, `lanes`, `clock_hz`, `baud`, its
     /// limits and what it holds (`model_count`, `model_digest`, ...).
     fn identify<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let mut link = self.link()?;
-        let client = link.as_mut().expect("link() checked it");
-        let id = py.detach(|| client.identify()).map_err(board_error)?;
+        let id = self.with_link(py, |client| client.identify())?.map_err(board_error)?;
         identity_dict(py, &id)
     }
 
     /// Close the port (a tracker holding the board keeps it until it is closed).
-    fn close(&self) {
-        if let Ok(mut c) = self.client.lock() {
-            *c = None;
-        }
+    fn close(&self, py: Python<'_>) {
+        py.detach(|| {
+            if let Ok(mut c) = self.client.lock() {
+                *c = None;
+            }
+        })
     }
 
     fn __enter__(slf: Py<Self>) -> Py<Self> {
         slf
     }
 
-    fn __exit__(&self, _t: Option<Bound<'_, PyAny>>, _v: Option<Bound<'_, PyAny>>, _tb: Option<Bound<'_, PyAny>>) {
-        self.close();
+    fn __exit__(
+        &self,
+        py: Python<'_>,
+        _t: Option<Bound<'_, PyAny>>,
+        _v: Option<Bound<'_, PyAny>>,
+        _tb: Option<Bound<'_, PyAny>>,
+    ) {
+        self.close(py);
     }
 
     fn __repr__(&self) -> String {

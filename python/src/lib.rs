@@ -100,14 +100,15 @@ fn register(
     let request = Request { method, engine, settings };
     request.check(&model, &scan).map_err(request_error)?;
     let board = board.as_ref().map(|b| b.get());
-    let mut link = board.map(|b| b.link()).transpose()?;
-    let client = link.as_mut().map(|l| l.as_mut().expect("link() checked it"));
-    let registered = py
-        .detach(|| {
-            let progress = BoardProgress { on_board: &mut |_, _, _| {} };
-            request.run(&model, &scan, client, progress)
-        })
-        .map_err(request_error)?;
+    let run = |client: Option<&mut pficp::board::BoardClient>| {
+        let progress = BoardProgress { on_board: &mut |_, _, _| {} };
+        request.run(&model, &scan, client, progress)
+    };
+    let registered = match board {
+        Some(b) => b.with_link(py, |client| run(Some(client)))?,
+        None => py.detach(|| run(None)),
+    }
+    .map_err(request_error)?;
     let report = RegisterReport::of(&request, &registered, board.map(|b| b.port_name()));
     let inputs = Inputs {
         model: "<array>".to_string(),

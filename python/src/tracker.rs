@@ -72,15 +72,7 @@ impl Tracker {
         let registration = options.settings().map_err(request_error)?;
         let model = cloud_from(model, "model")?;
         let settings = TrackSettings { registration, fps, ..Default::default() };
-        let client = match &board {
-            Some(b) => {
-                let b = b.get();
-                let taken = b.link()?.take();
-                *b.lent.lock().expect("not poisoned") = Some("a Tracker");
-                taken
-            }
-            None => None,
-        };
+        let client = board.as_ref().map(|b| b.get().take_link(py, "a Tracker")).transpose()?;
         let built = py.detach(move || {
             let nn = NearestNeighbours::new(model.points());
             OwnedTryBuilder {
@@ -117,43 +109,59 @@ impl Tracker {
                 scan.len()
             )));
         }
-        let mut guard = self.inner.lock().map_err(|_| PyValueError::new_err("the tracker was poisoned"))?;
-        let owned = guard.as_mut().ok_or_else(|| PyValueError::new_err("the tracker is closed"))?;
-        let frame = py.detach(|| owned.with_tracker_mut(|t| t.update(scan.points()))).map_err(board_error)?;
+        let frame = self
+            .locked(py, |inner| inner.as_mut().map(|o| o.with_tracker_mut(|t| t.update(scan.points()))))?
+            .ok_or_else(|| PyValueError::new_err("the tracker is closed"))?
+            .map_err(board_error)?;
         let port = self.board.as_ref().map(|b| b.get().port_name().to_string());
         Ok(TrackFrame { report: TrackFrameReport::new("<array>", &frame, self.engine, port.as_deref()) })
     }
 
     /// Frames seen so far.
     #[getter]
-    fn frames(&self) -> PyResult<usize> {
-        let guard = self.inner.lock().map_err(|_| PyValueError::new_err("the tracker was poisoned"))?;
-        Ok(guard.as_ref().map_or(0, |o| o.with_tracker(|t| t.frames())))
+    fn frames(&self, py: Python<'_>) -> PyResult<usize> {
+        self.locked(py, |inner| inner.as_ref().map_or(0, |o| o.with_tracker(|t| t.frames())))
     }
 
     /// The scale the track holds fixed once it has settled (or as given), else `None`.
     #[getter]
-    fn fixed_scale(&self) -> PyResult<Option<f64>> {
-        let guard = self.inner.lock().map_err(|_| PyValueError::new_err("the tracker was poisoned"))?;
-        Ok(guard.as_ref().and_then(|o| o.with_tracker(|t| t.fixed_scale())))
+    fn fixed_scale(&self, py: Python<'_>) -> PyResult<Option<f64>> {
+        self.locked(py, |inner| inner.as_ref().and_then(|o| o.with_tracker(|t| t.fixed_scale())))
     }
 
     /// Stop tracking and give the board back.
-    fn close(&self) {
-        close(self);
+    fn close(&self, py: Python<'_>) {
+        py.detach(|| close(self));
     }
 
     fn __enter__(slf: Py<Self>) -> Py<Self> {
         slf
     }
 
-    fn __exit__(&self, _t: Option<Bound<'_, PyAny>>, _v: Option<Bound<'_, PyAny>>, _tb: Option<Bound<'_, PyAny>>) {
-        close(self);
+    fn __exit__(
+        &self,
+        py: Python<'_>,
+        _t: Option<Bound<'_, PyAny>>,
+        _v: Option<Bound<'_, PyAny>>,
+        _tb: Option<Bound<'_, PyAny>>,
+    ) {
+        py.detach(|| close(self));
+    }
+}
+
+impl Tracker {
+    /// Run `f` on the tracker with the GIL released, waiting for another thread's call to
+    /// finish first (without the GIL: a thread waiting with it would hold up the other's
+    /// return for ever).
+    fn locked<R: Send>(&self, py: Python<'_>, f: impl FnOnce(&mut Option<Owned>) -> R + Send) -> PyResult<R> {
+        py.detach(|| self.inner.lock().map(|mut inner| f(&mut inner)).map_err(|_| ()))
+            .map_err(|_| PyValueError::new_err("a call failed while it held the tracker"))
     }
 }
 
 impl Drop for Tracker {
     fn drop(&mut self) {
+        // (No other call can hold the tracker: it is being dropped.)
         close(self);
     }
 }
@@ -168,12 +176,6 @@ fn close(t: &Tracker) {
 
 fn give_back(board: Option<&Py<Board>>, client: Option<BoardClient>) {
     if let (Some(b), Some(c)) = (board, client) {
-        let b = b.get();
-        if let Ok(mut link) = b.client.lock() {
-            *link = Some(c);
-        }
-        if let Ok(mut lent) = b.lent.lock() {
-            *lent = None;
-        }
+        b.get().give_back(c);
     }
 }

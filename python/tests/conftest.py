@@ -55,6 +55,18 @@ def model1(cli, tmp_path_factory):
     return d / "model-1.ply", d / "model-1-scan.ply", truth
 
 
+def run_child(code, timeout):
+    """Run `code` in a child Python; fail if it fails or is still running after `timeout` s
+    (a deadlock fails the test instead of hanging the suite)."""
+    import sys
+
+    try:
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        pytest.fail(f"still running after {timeout} s: stuck")
+    assert out.returncode == 0, out.stderr
+
+
 def box_surface(n, sides, rng):
     """`n` points uniformly on the surface of a box with these side lengths (exactly D2
     symmetric when the sides differ)."""

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import pficp
-from conftest import diagonal, pose_error
+from conftest import diagonal, pose_error, run_child
 
 SETTINGS = dict(particles=16, iterations=4, clusters=20, board_points=100, seed=3)
 FLAGS = ["--particles", 16, "--iterations", 4, "--clusters", 20, "--board-points", 100, "--seed", 3]
@@ -58,6 +58,34 @@ def test_the_filter_on_the_board_gives_the_cli_s_pose(cli, sim_board, small, tmp
     assert line["engine"] == "board"
     assert np.array_equal(r.transformation, np.array(line["matrix"]))
     assert d["verdict"] == line["verdict"] and d["covariance"] == line["covariance"]
+
+
+def test_a_second_thread_waits_for_the_board(sim_board, small, tmp_path):
+    # A registration holds the link; identify from another thread waits for it, without
+    # the GIL, and then answers (with the GIL it would wait for ever). In a child process,
+    # so that a stuck pair fails the test instead of hanging it.
+    model, scan = small
+    np.save(tmp_path / "model.npy", model)
+    np.save(tmp_path / "scan.npy", scan)
+    run_child(f"""
+import threading, numpy as np, pficp
+model, scan = np.load({str(tmp_path / "model.npy")!r}), np.load({str(tmp_path / "scan.npy")!r})
+with pficp.Board({sim_board!r}) as board:
+    result, who = [], []
+    started = threading.Event()
+    def register():
+        started.set()
+        result.append(pficp.register(model, scan, board=board, **{SETTINGS!r}))
+    t = threading.Thread(target=register)
+    t.start()
+    started.wait()
+    u = threading.Thread(target=lambda: who.append(board.identify()))
+    u.start()
+    t.join()
+    u.join()
+    assert result and result[0].engine == "board"
+    assert who and who[0]["version"] >= 6
+""", timeout=300)
 
 
 def test_a_tracker_holds_the_board_until_it_is_closed(sim_board, sequence):

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import pficp
-from conftest import FRAMES, diagonal, pose_error
+from conftest import FRAMES, diagonal, pose_error, run_child
 
 
 def test_tracks_a_moving_part(sequence):
@@ -69,3 +69,28 @@ def test_bad_frames_and_options_are_value_errors(sequence):
     tracker.close()
     with pytest.raises(ValueError, match="closed"):
         tracker.update(frames[0])
+
+
+
+def test_threads_sharing_a_tracker_take_turns(sequence, tmp_path):
+    # Each call waits for the other without the GIL, so neither holds up the other's return
+    # (a thread waiting with the GIL would wait for ever for one that needs it to return).
+    # In a child process, so that a stuck pair fails the test instead of hanging it.
+    model, frames, _ = sequence
+    np.save(tmp_path / "model.npy", model)
+    np.save(tmp_path / "frames.npy", np.stack(frames))
+    run_child(f"""
+import threading, numpy as np, pficp
+model = np.load({str(tmp_path / "model.npy")!r})
+frames = list(np.load({str(tmp_path / "frames.npy")!r}))
+tracker = pficp.Tracker(model)
+done = []
+def work(scans):
+    for scan in scans:
+        done.append(tracker.update(np.ascontiguousarray(scan)).frame)
+        assert tracker.frames >= 1
+threads = [threading.Thread(target=work, args=(frames[k::2],)) for k in range(2)]
+for t in threads: t.start()
+for t in threads: t.join()
+assert sorted(done) == list(range(len(frames))), done
+""", timeout=120)
