@@ -29,6 +29,14 @@ pub fn cloud_from(array: &Bound<'_, PyAny>, name: &str) -> PyResult<Cloud> {
     if shape[0] == 0 {
         return Err(PyValueError::new_err(format!("{name} cloud is empty (shape {shown})")));
     }
+    if shape[0] > pficp::cloud::MAX_CLOUD_POINTS {
+        // (Refused before the copy.)
+        return Err(PyValueError::new_err(format!(
+            "{name} cloud has {} points, more than the limit of {}",
+            shape[0],
+            pficp::cloud::MAX_CLOUD_POINTS
+        )));
+    }
     if !untyped.is_c_contiguous() {
         return Err(PyValueError::new_err(format!(
             "{name}: the array is not C-contiguous (a slice or a transpose?); pass np.ascontiguousarray({name})"

@@ -80,6 +80,14 @@ def test_an_absurd_option_is_a_value_error(good, kwargs, words):
         assert w in message, message
 
 
+def test_a_cloud_beyond_the_point_limit_is_refused_before_it_is_copied(good):
+    # A broadcast view: 20 million rows of 3 floats that take no memory of their own.
+    huge = np.broadcast_to(good[:1], (20_000_000, 3))
+    with pytest.raises(ValueError) as e:
+        pficp.register(huge, good)
+    assert "20000000 points, more than the limit" in one_line(e)
+
+
 def test_wrong_types_are_type_errors(good):
     with pytest.raises(TypeError):
         pficp.register(good, good, seed="one")
