@@ -14,6 +14,7 @@ fn the_quick_tracking_benchmark_keeps_its_floors() {
         frames: 200,
         out_dir: Some(dir.path().to_path_buf()),
         progress: false,
+        compare_register: 40,
         ..Default::default()
     };
     let report = run(&opts).unwrap();
@@ -32,7 +33,23 @@ fn the_quick_tracking_benchmark_keeps_its_floors() {
         assert!(s.reacquire_frames.is_some_and(|n| n <= 10), "{}: re-acquired after {:?}", s.id, s.reacquire_frames);
         assert!(s.tracked_median_seconds.is_finite() && s.tracked_median_seconds > 0.0);
         assert!(s.frames.iter().skip(150).take(30).all(|f| f.hidden));
+        // Every 40th tracked frame registered from scratch too, its errors beside the
+        // tracked frame's and their medians in the report and its text.
+        let registered: Vec<_> = s.frames.iter().filter(|f| f.registered_errors.is_some()).collect();
+        assert!((3..=5).contains(&registered.len()), "{}: {} frames registered", s.id, registered.len());
+        assert!(registered.iter().all(|f| f.state == pficp::tracking::TrackState::Tracking && !f.hidden));
+        // (The library's median: the upper of the two middle values.)
+        let median = |mut v: Vec<f64>| {
+            v.sort_by(f64::total_cmp);
+            v[v.len() / 2]
+        };
+        let expected = [
+            median(registered.iter().map(|f| f.registered_errors.unwrap()[0]).collect()),
+            median(registered.iter().map(|f| f.errors[0]).collect()),
+        ];
+        assert_eq!(s.registered_median_rotation_deg, Some(expected), "{}", s.id);
     }
+    assert!(report.text().contains("tracked frames registered from scratch"));
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("tracking.json")).unwrap()).unwrap();
     assert_eq!(json["sequences"][0]["frames"].as_array().unwrap().len(), 200);

@@ -348,6 +348,11 @@ pub(crate) struct EvalArgs {
     /// scale 1, told as --scale 1].
     #[arg(long)]
     pub(crate) unknown_scale: bool,
+    /// Tracking suite: also register every Nth tracked frame's scan from scratch (the whole
+    /// PF-ICP), to compare the tracked frames' accuracy with a single registration's on the
+    /// same frames [default: 0, none].
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub(crate) compare_register: usize,
     /// Realistic suite: export every case (model, scan, truth, symmetries) to this folder
     /// for the peers' script (tests/peers).
     #[arg(long, value_name = "DIR")]

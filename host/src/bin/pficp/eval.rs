@@ -49,6 +49,7 @@ pub(crate) fn eval_tracking(a: &EvalArgs) -> Result<()> {
         frames: a.frames.unwrap_or(if a.quick { 200 } else { tracking::sequence::FRAMES }),
         metric: !a.unknown_scale,
         board: a.board_reference,
+        compare_register: a.compare_register,
         out_dir: Some(a.out.clone()),
         ..Default::default()
     };

@@ -61,6 +61,10 @@ pub struct TrackingOptions {
     /// Run each tracked frame's filter on the board (its bit-exact reference) and report
     /// the board's modelled frames a second ([`BOARD_BAUDS`]).
     pub board: bool,
+    /// Register every `compare_register`-th tracked frame's scan from scratch too (the
+    /// whole PF-ICP with the tracker's registration settings; 0: none), for
+    /// [`SequenceReport::registered_median_rotation_deg`].
+    pub compare_register: usize,
     /// The tracker's settings (the seed is replaced by each sequence's).
     pub settings: TrackSettings,
     /// Write `tracking.json`, `tracking.svg` and (feature `png`, on by default) `tracking.png` here.
@@ -78,6 +82,7 @@ impl Default for TrackingOptions {
             sequences: 4,
             metric: true,
             board: false,
+            compare_register: 0,
             settings: TrackSettings::default(),
             out_dir: None,
             progress: true,
@@ -114,6 +119,10 @@ pub struct FrameRecord {
     pub state: TrackState,
     /// A global registration ran.
     pub global: bool,
+    /// With [`TrackingOptions::compare_register`]: the errors of a registration from
+    /// scratch of this frame's scan, as `errors`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub registered_errors: Option<[f64; 3]>,
     /// Wall time [s].
     pub seconds: f64,
 }
@@ -157,6 +166,10 @@ pub struct SequenceReport {
     /// With the filter on the board: the median rotation error of the board's pose alone
     /// on the tracked frames [deg].
     pub board_median_rotation_deg: Option<f64>,
+    /// With [`TrackingOptions::compare_register`]: the median rotation error of the frames
+    /// registered from scratch, and of the same frames tracked [deg].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub registered_median_rotation_deg: Option<[f64; 2]>,
     /// Every frame.
     pub frames: Vec<FrameRecord>,
 }
@@ -257,6 +270,7 @@ fn score(seq: &sequence::Sequence, frames: &[crate::tracking::TrackFrame]) -> Se
                 inside_95,
                 state: f.state,
                 global: f.global,
+                registered_errors: None,
                 seconds: f.seconds,
             }
         })
@@ -297,7 +311,53 @@ fn score(seq: &sequence::Sequence, frames: &[crate::tracking::TrackFrame]) -> Se
             let e: Vec<f64> = tracked.iter().filter_map(|r| r.board_errors.map(|e| e[0])).collect();
             (!e.is_empty()).then(|| crate::registration::icp::median(&e))
         },
+        registered_median_rotation_deg: None,
         frames: records,
+    }
+}
+
+/// Register every `every`-th tracked frame's scan from scratch (the registration settings
+/// of `settings`, seeded by the sequence's `seed`, scale 1 fixed when `metric`) and record
+/// its errors beside the tracked frame's.
+fn compare_with_registration(
+    seq: &sequence::Sequence,
+    nn: &NearestNeighbours,
+    settings: &TrackSettings,
+    seed: u64,
+    metric: bool,
+    every: usize,
+    report: &mut SequenceReport,
+) {
+    let mut registration = settings.registration.clone();
+    registration.seed = seed;
+    if metric {
+        registration.scale = crate::geometry::ScaleBounds::fixed(1.0);
+    }
+    let symmetries = seq.shape.symmetries();
+    let chosen: Vec<usize> = report
+        .frames
+        .iter()
+        .filter(|r| r.state == TrackState::Tracking && !r.hidden)
+        .map(|r| r.frame)
+        .step_by(every)
+        .collect();
+    let mut pairs = Vec::new();
+    for k in chosen {
+        let frame = &seq.frames[k];
+        let pose = crate::pf_icp::register(nn, &frame.scan, &registration).registration.pose;
+        let at = crate::cloud::centroid(&frame.scan);
+        let e = symmetries
+            .iter()
+            .map(|g| pose_errors(&pose, &symmetric_truth(&frame.truth, g, &seq.shape.centre()), &at, seq.diag))
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .expect("the identity");
+        report.frames[k].registered_errors = Some([e.0, e.1, e.2]);
+        pairs.push((e.0, report.frames[k].errors[0]));
+    }
+    if !pairs.is_empty() {
+        let median = |v: Vec<f64>| crate::registration::icp::median(&v);
+        report.registered_median_rotation_deg =
+            Some([median(pairs.iter().map(|p| p.0).collect()), median(pairs.iter().map(|p| p.1).collect())]);
     }
 }
 
@@ -338,7 +398,10 @@ pub fn run(opts: &TrackingOptions) -> anyhow::Result<TrackingReport> {
                 b.set(k as u64 + 1);
             }
         }
-        let report = score(&seq, &frames);
+        let mut report = score(&seq, &frames);
+        if opts.compare_register > 0 {
+            compare_with_registration(&seq, &nn, &opts.settings, seed, opts.metric, opts.compare_register, &mut report);
+        }
         if let Some(b) = bar {
             b.finish(format_args!("tracked {}: {}/{} frames right", seq.id, report.right, report.scored));
         }
@@ -417,6 +480,16 @@ impl TrackingReport {
                 q.tracked_fps,
                 q.overall_fps
             );
+        }
+        for q in &self.sequences {
+            if let Some([registered, tracked]) = q.registered_median_rotation_deg {
+                let n = q.frames.iter().filter(|r| r.registered_errors.is_some()).count();
+                s += &format!(
+                    "{:<34} {n} tracked frames registered from scratch: median rotation error {registered:.3} deg \
+                     (tracked {tracked:.3})\n",
+                    q.id
+                );
+            }
         }
         for q in self.sequences.iter().filter(|q| q.board_fps.is_some()) {
             let [a, b] = q.board_fps.unwrap_or_default();
