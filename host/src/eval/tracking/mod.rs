@@ -123,6 +123,9 @@ pub struct FrameRecord {
     /// scratch of this frame's scan, as `errors`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub registered_errors: Option<[f64; 3]>,
+    /// That registration's verdict.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub registered_verdict: Option<Verdict>,
     /// Wall time [s].
     pub seconds: f64,
 }
@@ -271,6 +274,7 @@ fn score(seq: &sequence::Sequence, frames: &[crate::tracking::TrackFrame]) -> Se
                 state: f.state,
                 global: f.global,
                 registered_errors: None,
+                registered_verdict: None,
                 seconds: f.seconds,
             }
         })
@@ -344,7 +348,9 @@ fn compare_with_registration(
     let mut pairs = Vec::new();
     for k in chosen {
         let frame = &seq.frames[k];
-        let pose = crate::pf_icp::register(nn, &frame.scan, &registration).registration.pose;
+        let r = crate::pf_icp::register(nn, &frame.scan, &registration);
+        let pose = r.registration.pose;
+        report.frames[k].registered_verdict = Some(r.conclusion.verdict);
         let at = crate::cloud::centroid(&frame.scan);
         let e = symmetries
             .iter()
@@ -483,11 +489,20 @@ impl TrackingReport {
         }
         for q in &self.sequences {
             if let Some([registered, tracked]) = q.registered_median_rotation_deg {
-                let n = q.frames.iter().filter(|r| r.registered_errors.is_some()).count();
+                let from_scratch: Vec<&FrameRecord> =
+                    q.frames.iter().filter(|r| r.registered_errors.is_some()).collect();
+                let confident_wrong = from_scratch
+                    .iter()
+                    .filter(|r| {
+                        r.registered_verdict == Some(Verdict::Confident)
+                            && !r.registered_errors.is_some_and(|e| TOLERANCE.accepts((e[0], e[1], e[2])))
+                    })
+                    .count();
                 s += &format!(
-                    "{:<34} {n} tracked frames registered from scratch: median rotation error {registered:.3} deg \
-                     (tracked {tracked:.3})\n",
-                    q.id
+                    "{:<34} {} tracked frames registered from scratch: median rotation error {registered:.3} deg \
+                     (tracked {tracked:.3}), {confident_wrong} of them confident beyond the tracking tolerance\n",
+                    q.id,
+                    from_scratch.len()
                 );
             }
         }
