@@ -137,6 +137,26 @@ pub enum Engine {
 }
 
 impl Engine {
+    /// The engine a caller's options ask for: none without a board; with one, the
+    /// host-driven mode or the on-board filter (over `board_points` scan points a particle,
+    /// [`DEFAULT_BOARD_POINTS`] when not given). Options that do not go together are
+    /// refused with one line naming the CLI's flags.
+    pub fn from_options(board: bool, host_driven: bool, board_points: Option<usize>) -> Result<Engine> {
+        if !board && (host_driven || board_points.is_some()) {
+            bail!("--host-driven and --board-points need --board PORT");
+        }
+        if host_driven && board_points.is_some() {
+            bail!("--board-points sets the on-board filter's scan sample; --host-driven weighs the host's sample");
+        }
+        Ok(match (board, host_driven) {
+            (false, _) => Engine::Software,
+            (true, true) => Engine::HostDriven,
+            (true, false) => {
+                Engine::OnBoard { board_points: board_points.unwrap_or(DEFAULT_BOARD_POINTS), poll: DEFAULT_POLL }
+            }
+        })
+    }
+
     /// The on-board filter with its defaults.
     pub fn on_board() -> Engine {
         Engine::OnBoard { board_points: DEFAULT_BOARD_POINTS, poll: DEFAULT_POLL }

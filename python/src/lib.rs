@@ -79,22 +79,7 @@ fn register(
         viewpoint,
     };
     let settings = options.settings().map_err(request_error)?;
-    if board.is_none() && (host_driven || board_points.is_some()) {
-        return Err(PyValueError::new_err("host_driven and board_points need board=pficp.Board(port)"));
-    }
-    if host_driven && board_points.is_some() {
-        return Err(PyValueError::new_err(
-            "board_points sets the on-board filter's scan sample; host_driven weighs the host's sample",
-        ));
-    }
-    let engine = match (&board, host_driven) {
-        (None, _) => Engine::Software,
-        (Some(_), true) => Engine::HostDriven,
-        (Some(_), false) => Engine::OnBoard {
-            board_points: board_points.unwrap_or(pficp::board::on_board::DEFAULT_BOARD_POINTS),
-            poll: pficp::board::DEFAULT_POLL,
-        },
-    };
+    let engine = Engine::from_options(board.is_some(), host_driven, board_points).map_err(request_error)?;
     let model = cloud_from(model, "model")?;
     let scan = cloud_from(scan, "scan")?;
     let request = Request { method, engine, settings };

@@ -8,7 +8,7 @@ use crate::result::TrackFrame;
 use pficp::board::BoardClient;
 use pficp::cli::TrackFrameReport;
 use pficp::nn::NearestNeighbours;
-use pficp::tracking::{self, TrackSettings, MAX_FPS, MIN_FRAME_POINTS};
+use pficp::tracking::{self, TrackSettings, MIN_FRAME_POINTS};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use std::sync::Mutex;
@@ -56,11 +56,7 @@ impl Tracker {
         board: Option<Py<Board>>,
     ) -> PyResult<Self> {
         let fps = fps.unwrap_or(tracking::DEFAULT_FPS);
-        if !(fps.is_finite() && fps > 0.0 && fps <= MAX_FPS) {
-            return Err(PyValueError::new_err(format!(
-                "--fps must be a number above 0 and at most {MAX_FPS} (got {fps})"
-            )));
-        }
+        tracking::check_fps(fps).map_err(request_error)?;
         let defaults = pficp::request::PfIcpOptions::default();
         let options = pficp::request::PfIcpOptions {
             seed: seed.unwrap_or(defaults.seed),

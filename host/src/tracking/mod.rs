@@ -73,6 +73,15 @@ pub const MAX_FPS: f64 = 10_000.0;
 /// Fewest points a frame needs.
 pub const MIN_FRAME_POINTS: usize = 10;
 
+/// Refuse a frame rate the tracker cannot take (`--fps`), with one line naming the flag.
+pub fn check_fps(fps: f64) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        fps.is_finite() && fps > 0.0 && fps <= MAX_FPS,
+        "--fps must be a number above 0 and at most {MAX_FPS} (got {fps})"
+    );
+    Ok(())
+}
+
 /// The track's state after a frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]

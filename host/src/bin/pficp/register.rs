@@ -2,7 +2,7 @@
 
 use crate::args::*;
 use crate::load;
-use anyhow::{bail, Result};
+use anyhow::Result;
 use pficp::cli::{Inputs, Provenance, RegisterReport, Settings};
 use pficp::io::{format_from_path, write_cloud};
 use pficp::progress::{note, Progress};
@@ -16,20 +16,7 @@ pub(crate) fn register(a: &RegisterArgs) -> Result<()> {
     if let Some(out) = &a.out_aligned {
         format_from_path(out)?;
     }
-    if a.board.is_none() && (a.host_driven || a.board_points.is_some()) {
-        bail!("--host-driven and --board-points need --board PORT");
-    }
-    if a.host_driven && a.board_points.is_some() {
-        bail!("--board-points sets the on-board filter's scan sample; --host-driven weighs the host's sample");
-    }
-    let engine = match (&a.board, a.host_driven) {
-        (None, _) => Engine::Software,
-        (Some(_), true) => Engine::HostDriven,
-        (Some(_), false) => Engine::OnBoard {
-            board_points: a.board_points.unwrap_or(pficp::board::on_board::DEFAULT_BOARD_POINTS),
-            poll: pficp::board::DEFAULT_POLL,
-        },
-    };
+    let engine = Engine::from_options(a.board.is_some(), a.host_driven, a.board_points)?;
     let request = Request { method, engine, settings };
     request.check(&model, &scan)?;
     // Open the port before the work starts: a missing or silent board fails at once.

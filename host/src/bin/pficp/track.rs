@@ -8,14 +8,12 @@ use pficp::cloud::Cloud;
 use pficp::io::{format_from_path, read_points_from_bytes, Format};
 use pficp::nn::NearestNeighbours;
 use pficp::progress::note;
-use pficp::tracking::{TrackSettings, Tracker, MAX_FPS, MIN_FRAME_POINTS};
+use pficp::tracking::{TrackSettings, Tracker, MIN_FRAME_POINTS};
 use std::io::{BufRead, Write};
 use std::path::PathBuf;
 
 pub(crate) fn track(a: &TrackArgs) -> Result<()> {
-    if !(a.fps.is_finite() && a.fps > 0.0 && a.fps <= MAX_FPS) {
-        bail!("--fps must be a number above 0 and at most {MAX_FPS} (got {})", a.fps);
-    }
+    pficp::tracking::check_fps(a.fps)?;
     let registration = a.pf.settings()?;
     let model = load(&a.model, "model")?;
     let nn = NearestNeighbours::new(model.points());

@@ -16,6 +16,7 @@
 pub mod sequence;
 
 use crate::eval::realistic::{pose_errors, symmetric_truth, Shape, Split, Tolerance};
+use crate::geometry::Pose;
 use crate::nn::NearestNeighbours;
 use crate::pf_icp::verdict::Verdict;
 use crate::progress::Progress;
@@ -220,6 +221,22 @@ pub fn sequence_seed(seed: u64, split: Split, index: usize) -> u64 {
     super::mix(super::mix(super::mix(seed, 0x0074_7261_636b), split_code), index as u64 + 1)
 }
 
+/// The errors of `pose` against the frame's truth modulo the shape's symmetries (the
+/// nearest symmetric truth, returned with them), at the scan's centroid.
+fn errors_of(seq: &sequence::Sequence, frame: &sequence::Frame, pose: &Pose) -> ([f64; 3], Pose) {
+    let at = crate::cloud::centroid(&frame.scan);
+    seq.shape
+        .symmetries()
+        .iter()
+        .map(|g| {
+            let t = symmetric_truth(&frame.truth, g, &seq.shape.centre());
+            let e = pose_errors(pose, &t, &at, seq.diag);
+            ([e.0, e.1, e.2], t)
+        })
+        .min_by(|a, b| a.0[0].total_cmp(&b.0[0]))
+        .expect("the identity")
+}
+
 /// Score one sequence's frames.
 fn score(seq: &sequence::Sequence, frames: &[crate::tracking::TrackFrame]) -> SequenceReport {
     let board_fps = {
@@ -235,38 +252,21 @@ fn score(seq: &sequence::Sequence, frames: &[crate::tracking::TrackFrame]) -> Se
             })
         })
     };
-    let symmetries = seq.shape.symmetries();
     let records: Vec<FrameRecord> = frames
         .iter()
         .zip(&seq.frames)
         .map(|(f, truth)| {
             let at = crate::cloud::centroid(&truth.scan);
-            let (errors, nearest) = symmetries
-                .iter()
-                .map(|g| {
-                    let t = symmetric_truth(&truth.truth, g, &seq.shape.centre());
-                    (pose_errors(&f.pose, &t, &at, seq.diag), t)
-                })
-                .min_by(|a, b| a.0 .0.total_cmp(&b.0 .0))
-                .expect("the identity");
+            let (errors, nearest) = errors_of(seq, truth, &f.pose);
             let inside_95 = crate::eval::realistic::mahalanobis2_of(&f.pose, &f.uncertainty, &nearest, &at)
                 .map(|(d2, dof)| crate::eval::realistic::inside_95(d2, dof));
-            let board_errors = f.board.as_ref().map(|b| {
-                let e = symmetries
-                    .iter()
-                    .map(|g| {
-                        pose_errors(&b.pose, &symmetric_truth(&truth.truth, g, &seq.shape.centre()), &at, seq.diag)
-                    })
-                    .min_by(|a, b| a.0.total_cmp(&b.0))
-                    .expect("the identity");
-                [e.0, e.1, e.2]
-            });
+            let board_errors = f.board.as_ref().map(|b| errors_of(seq, truth, &b.pose).0);
             FrameRecord {
                 frame: f.frame,
                 board_errors,
                 hidden: truth.hidden,
-                errors: [errors.0, errors.1, errors.2],
-                right: TOLERANCE.accepts(errors),
+                errors,
+                right: TOLERANCE.accepts((errors[0], errors[1], errors[2])),
                 verdict: f.verdict,
                 reasons: f.reasons.clone(),
                 widest_sigma: f.checks.widest_sigma,
@@ -337,7 +337,6 @@ fn compare_with_registration(
     if metric {
         registration.scale = crate::geometry::ScaleBounds::fixed(1.0);
     }
-    let symmetries = seq.shape.symmetries();
     let chosen: Vec<usize> = report
         .frames
         .iter()
@@ -349,16 +348,10 @@ fn compare_with_registration(
     for k in chosen {
         let frame = &seq.frames[k];
         let r = crate::pf_icp::register(nn, &frame.scan, &registration);
-        let pose = r.registration.pose;
         report.frames[k].registered_verdict = Some(r.conclusion.verdict);
-        let at = crate::cloud::centroid(&frame.scan);
-        let e = symmetries
-            .iter()
-            .map(|g| pose_errors(&pose, &symmetric_truth(&frame.truth, g, &seq.shape.centre()), &at, seq.diag))
-            .min_by(|a, b| a.0.total_cmp(&b.0))
-            .expect("the identity");
-        report.frames[k].registered_errors = Some([e.0, e.1, e.2]);
-        pairs.push((e.0, report.frames[k].errors[0]));
+        let e = errors_of(seq, frame, &r.registration.pose).0;
+        report.frames[k].registered_errors = Some(e);
+        pairs.push((e[0], report.frames[k].errors[0]));
     }
     if !pairs.is_empty() {
         let median = |v: Vec<f64>| crate::registration::icp::median(&v);
