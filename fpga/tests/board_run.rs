@@ -28,7 +28,13 @@ fn run_cfg(particles: u16, iterations: u16, seed: u32) -> PfConfig {
 fn request(cfg: PfConfig) -> RunRequest {
     RunRequest {
         filter: cfg,
-        polish: PolishRequest { points: 16, steps: 2, winner_steps: 1, hypotheses: vec![shift([40, 0, -40])] },
+        polish: PolishRequest {
+            points: 16,
+            steps: 2,
+            winner_steps: 1,
+            scale: pficp_fpga::polish::ScaleStep::Solved,
+            hypotheses: vec![shift([40, 0, -40])],
+        },
     }
 }
 

@@ -11,7 +11,7 @@ use pficp_fpga::common::format::{pack_point, transform, FxPoint, FxPose};
 use pficp_fpga::common::rtl::{pose_word as word, word_pose as unword};
 use pficp_fpga::polish::bench_rtl::PolishUnitBench;
 use pficp_fpga::polish::cases::{pose, surface, window_scan};
-use pficp_fpga::polish::{gate, pass, polish, polish_best, solve, update, within_drift};
+use pficp_fpga::polish::{gate, pass, polish, polish_best, solve, update, within_drift, ScaleStep};
 use pficp_fpga::search::grid::{Grid, NONE};
 use pficp_fpga::surface::{evaluate, signed_residual, FxNormal};
 use rust_hdl::prelude::*;
@@ -39,15 +39,15 @@ fn model_passes(grid: &Grid, normals: &[FxNormal], scan: &[FxPoint], starts: &[F
     for (i, start) in starts.iter().enumerate() {
         let mut pose = *start;
         poses.push(pose);
-        let mut last = pass(grid, normals, scan, &pose, None);
+        let mut last = pass(grid, normals, scan, &pose, None, ScaleStep::Solved);
         for _ in 0..steps {
             let Some(tau2) = gate(&last) else { break };
             poses.push(pose);
-            last = pass(grid, normals, scan, &pose, Some(tau2));
+            last = pass(grid, normals, scan, &pose, Some(tau2), ScaleStep::Solved);
             let Some(step) = solve(&last) else { break };
             pose = update(&pose, &step);
         }
-        assert_eq!(pose, polish(grid, normals, scan, start, steps).pose, "the loop is the model's");
+        assert_eq!(pose, polish(grid, normals, scan, start, steps, ScaleStep::Solved).pose, "the loop is the model's");
         if within_drift(start, &pose) {
             poses.push(pose);
         } else if i == 0 {
@@ -138,9 +138,9 @@ fn the_unit_chooses_and_polishes_as_the_model() {
     let starts = vec![pose(1.0, 1.5, [0.0; 3]), pose(0.9, 0.2, [0.05, 0.0, 0.0]), pose(1.6, 0.1, [0.0; 3])];
     let steps = 2;
     let drifts: Vec<bool> =
-        starts.iter().map(|s| within_drift(s, &polish(&grid, &normals, &scan, s, steps).pose)).collect();
+        starts.iter().map(|s| within_drift(s, &polish(&grid, &normals, &scan, s, steps, ScaleStep::Solved).pose)).collect();
     assert_eq!(drifts, [false, true, false], "the case covers a kept and a dropped start beyond the bounds");
-    let (best, p, cost) = polish_best(&grid, &normals, &scan, &starts, steps, 0).expect("a winner");
+    let (best, p, cost) = polish_best(&grid, &normals, &scan, &starts, steps, 0, ScaleStep::Solved).expect("a winner");
     assert_eq!((best, p.steps), (1, steps), "a later start wins after its steps");
     let want_passes = model_passes(&grid, &normals, &scan, &starts, steps);
     let ((i, rtl_pose, rtl_cost), passes) =
@@ -159,12 +159,12 @@ fn a_failed_gate_and_a_failed_solve_end_the_steps_as_in_the_model() {
     // A first start far off (nothing found: the gate fails), one near the truth (the
     // solve fails).
     let starts = vec![pose(1.0, 0.0, [3.0, 3.0, 0.0]), pose(1.01, 0.02, [0.0; 3])];
-    let stats: Vec<Option<u64>> = starts.iter().map(|s| gate(&pass(&grid, &normals, &scan, s, None))).collect();
+    let stats: Vec<Option<u64>> = starts.iter().map(|s| gate(&pass(&grid, &normals, &scan, s, None, ScaleStep::Solved))).collect();
     assert!(stats[0].is_none() && stats[1].is_some(), "the first start finds nothing, the second some");
     for s in &starts {
-        assert_eq!(polish(&grid, &normals, &scan, s, 3).steps, 0, "no step taken");
+        assert_eq!(polish(&grid, &normals, &scan, s, 3, ScaleStep::Solved).steps, 0, "no step taken");
     }
-    let (best, p, cost) = polish_best(&grid, &normals, &scan, &starts, 3, 0).expect("a winner");
+    let (best, p, cost) = polish_best(&grid, &normals, &scan, &starts, 3, 0, ScaleStep::Solved).expect("a winner");
     let want_passes = model_passes(&grid, &normals, &scan, &starts, 3);
     let ((i, rtl_pose, rtl_cost), passes) =
         run_unit(Arc::new(grid), Arc::new(normals), Arc::new(scan), starts.clone(), 3);

@@ -50,6 +50,7 @@ fn a_pass_adds_the_models_sums_and_the_solve_takes_them() {
             x.load.next = false;
             x.gated.next = pass.tau2.is_some();
             x.tau2.next = Bits::<32>::from(pass.tau2.unwrap_or(0).min(u32::MAX as u64));
+            x.scale_held.next = pass.scale == pficp_fpga::polish::ScaleStep::Held;
             x.t.next = Bits::<54>::from(pack_translation(pass.t));
             for (i, &(q, n, s)) in pass.points.iter().enumerate() {
                 while !x.ready.val() {

@@ -44,7 +44,16 @@ fn run_config(particles: u16, iterations: u16, seed: u32) -> RunRequest {
         thr_cost: 0,
         thr_max: 0,
     };
-    RunRequest { filter, polish: PolishRequest { points: 30, steps: 2, winner_steps: 1, hypotheses: vec![] } }
+    RunRequest {
+        filter,
+        polish: PolishRequest {
+            points: 30,
+            steps: 2,
+            winner_steps: 1,
+            scale: pficp_fpga::polish::ScaleStep::Solved,
+            hypotheses: vec![],
+        },
+    }
 }
 
 #[test]
@@ -435,7 +444,7 @@ fn the_on_board_filter_needs_protocol_6_and_the_host_driven_mode_takes_1_2_and_4
     let mut client = board.client();
     let e = on_board_50(&mut client, &nn, &ds.scan, &settings).unwrap_err();
     let m = e.to_string();
-    assert!(m.contains("version 2") && m.contains("need 6") && m.contains("--host-driven") && !m.contains('\n'), "{m}");
+    assert!(m.contains("version 2") && m.contains(&format!("need {}", pficp_fpga::protocol::VERSION)) && m.contains("--host-driven") && !m.contains('\n'), "{m}");
     assert_eq!(client.stats().requests, 1, "only Identify");
     host_driven::register(&mut client, &nn, &ds.scan, &settings, &mut |_, _, _| {}).unwrap();
     // A board saying it is of version `v` (its commands today's).

@@ -21,7 +21,7 @@ use pficp::geometry::Pose;
 use pficp::nn::NearestNeighbours;
 use pficp::pf_icp::{self, PfIcpSettings};
 use pficp_fpga::common::format::FxPose;
-use pficp_fpga::polish::{polish_over, within_drift};
+use pficp_fpga::polish::{polish_over, within_drift, ScaleStep};
 use pficp_fpga::protocol::messages::ResultReply;
 use pficp_fpga::surface::{GridSearch, Search};
 use rayon::prelude::*;
@@ -100,7 +100,7 @@ fn the_board_alone_misses_by_kind() {
                     .iter()
                     .enumerate()
                     .map(|(k, s)| {
-                        let mut p = polish_over(&search, &stored, s, steps).pose;
+                        let mut p = polish_over(&search, &stored, s, steps, ScaleStep::Solved).pose;
                         if !within_drift(s, &p) {
                             if k > 0 {
                                 return None;

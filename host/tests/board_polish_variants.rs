@@ -30,6 +30,7 @@ use pficp::nn::NearestNeighbours;
 use pficp::pf_icp::{self, PfIcpSettings};
 use pficp_fpga::common::format::{FxPoint, FxPose};
 use pficp_fpga::protocol::messages::ResultReply;
+use pficp_fpga::polish::ScaleStep;
 use rayon::prelude::*;
 use std::time::Duration;
 
@@ -138,7 +139,7 @@ fn ranked(
         .iter()
         .enumerate()
         .filter_map(|(i, start)| {
-            let p = polish_over(search, scan, start, steps).pose;
+            let p = polish_over(search, scan, start, steps, ScaleStep::Solved).pose;
             let pose = match (within_drift(start, &p), i) {
                 (true, _) => p,
                 (false, 0) => *start,
@@ -166,7 +167,7 @@ fn polish_best_uneven(
         .iter()
         .enumerate()
         .filter_map(|(i, start)| {
-            let p = polish_over(search, scan, start, if i == 0 { first_steps } else { steps }).pose;
+            let p = polish_over(search, scan, start, if i == 0 { first_steps } else { steps }, ScaleStep::Solved).pose;
             let pose = match (within_drift(start, &p), i) {
                 (true, _) => p,
                 (false, 0) => *start,
@@ -250,19 +251,19 @@ fn the_polish_settings_on_the_dev_split() {
                             .take(var.keep)
                             .map(|r| r.2)
                             .collect();
-                        pficp_fpga::polish::polish_best_over(&search, &pts, &kept, var.steps).expect("a start").1.pose
+                        pficp_fpga::polish::polish_best_over(&search, &pts, &kept, var.steps, ScaleStep::Solved).expect("a start").1.pose
                     } else if var.two_phase {
                         let (_, first, _) =
-                            pficp_fpga::polish::polish_best_over(&search, &plan.scan, &starts, var.first_steps)
+                            pficp_fpga::polish::polish_best_over(&search, &plan.scan, &starts, var.first_steps, ScaleStep::Solved)
                                 .expect("a start");
-                        pficp_fpga::polish::polish_best_over(&search, &pts, &[first.pose], var.steps)
+                        pficp_fpga::polish::polish_best_over(&search, &pts, &[first.pose], var.steps, ScaleStep::Solved)
                             .expect("a start")
                             .1
                             .pose
                     } else if var.first_steps != var.steps && starts.len() > 1 {
                         polish_best_uneven(&search, &pts, &starts, var.first_steps, var.steps)
                     } else {
-                        pficp_fpga::polish::polish_best_over(&search, &pts, &starts, var.steps).expect("a start").1.pose
+                        pficp_fpga::polish::polish_best_over(&search, &pts, &starts, var.steps, ScaleStep::Solved).expect("a start").1.pose
                     };
                     ok.push(score(&restored(&plan, &pose), &c).success);
                 }

@@ -18,6 +18,7 @@ use pficp::board::BoardError;
 use pficp::io::{read_points, write_points_to_bytes, Format, ParseError};
 use pficp_fpga::common::format::{point, FxPoint, FxPose, WeightScale};
 use pficp_fpga::filter::pf::{PfConfig, PARAMS, SCALE_FRAC};
+use pficp_fpga::polish::ScaleStep;
 use pficp_fpga::protocol::run_request::{PolishRequest, RunRequest};
 use pficp_fpga::protocol::Frame;
 use proptest::prelude::*;
@@ -337,6 +338,7 @@ fn fuzz_client(cases: usize, seed: u64) -> (BTreeMap<&'static str, usize>, Durat
                     points: rng.gen_range(1..40),
                     steps: rng.gen_range(0..3),
                     winner_steps: rng.gen_range(0..2),
+                    scale: if rng.gen() { ScaleStep::Held } else { ScaleStep::Solved },
                     hypotheses: vec![],
                 };
                 outcome(&client.run(&RunRequest { filter: cfg, polish }))

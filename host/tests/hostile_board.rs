@@ -194,7 +194,16 @@ fn run_config() -> RunRequest {
         thr_cost: 0,
         thr_max: 0,
     };
-    RunRequest { filter, polish: PolishRequest { points: 30, steps: 1, winner_steps: 0, hypotheses: vec![] } }
+    RunRequest {
+        filter,
+        polish: PolishRequest {
+            points: 30,
+            steps: 1,
+            winner_steps: 0,
+            scale: pficp_fpga::polish::ScaleStep::Solved,
+            hypotheses: vec![],
+        },
+    }
 }
 
 #[test]

@@ -52,10 +52,10 @@ fn the_steps_before_an_exact_fixed_point() {
                     .iter()
                     .map(|s| {
                         let mut pose = *s;
-                        let mut last = pass_over(&search, &stored, &pose, None);
+                        let mut last = pass_over(&search, &stored, &pose, None, pficp_fpga::polish::ScaleStep::Solved);
                         for k in 0..10 {
                             let Some(tau2) = gate(&last) else { return k };
-                            let sums = pass_over(&search, &stored, &pose, Some(tau2));
+                            let sums = pass_over(&search, &stored, &pose, Some(tau2), pficp_fpga::polish::ScaleStep::Solved);
                             let Some(step) = solve(&sums) else { return k };
                             let next = update(&pose, &step);
                             let same = next == pose && gate(&sums) == Some(tau2);

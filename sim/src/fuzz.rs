@@ -15,6 +15,7 @@
 use pficp_fpga::common::format::{FxPoint, FxPose, WeightScale};
 use pficp_fpga::common::splitmix::SplitMix64;
 use pficp_fpga::filter::pf::{PfConfig, PARAMS, SCALE_FRAC};
+use pficp_fpga::polish::ScaleStep;
 use pficp_fpga::protocol::messages::{self, EvaluateRequest, NearestRequest};
 use pficp_fpga::protocol::run_request::{PolishRequest, RunRequest};
 use pficp_fpga::protocol::{Command, Frame, MAX_FRAME};
@@ -101,7 +102,7 @@ impl FrameFuzzer {
 
     /// A small Run request: a small filter, then a polish of 0 to 2 steps over up to the
     /// fuzzer's largest scan (beyond the sizes in use at times) from 1 to 4 starts, and 0 to
-    /// 2 further steps for the winner.
+    /// 2 further steps for the winner, the scale solved or held.
     pub fn run_request(&mut self) -> Vec<u8> {
         let cfg = PfConfig {
             particles: 1 + self.below(MAX_RUN_PARTICLES as u64) as u16,
@@ -118,6 +119,7 @@ impl FrameFuzzer {
             points: 1 + self.below(MAX_SCAN as u64) as u16,
             steps: self.below(3) as u8,
             winner_steps: self.below(3) as u8,
+            scale: if self.below(2) == 0 { ScaleStep::Solved } else { ScaleStep::Held },
             hypotheses: (0..self.below(4)).map(|_| self.pose()).collect(),
         };
         self.request(Command::Run, RunRequest { filter: cfg, polish }.encode())

@@ -7,6 +7,7 @@ use pficp_fpga::board::BoardConfig;
 use pficp_fpga::common::format::FxPoint;
 use pficp_fpga::filter::pf::example_surface;
 use pficp_fpga::protocol::messages::{self, ResultReply, RunState, StatusReply};
+use pficp_fpga::polish::ScaleStep;
 use pficp_fpga::protocol::run_request::{example_request, execute, polish_clocks_bound, RunOutcome, RunRequest};
 use pficp_fpga::protocol::{Command, Frame};
 use pficp_fpga::search::grid::Grid;
@@ -129,6 +130,34 @@ fn the_board_runs_the_filter_and_returns_the_reference_pose() {
     println!("polish: start {} won at cost {}, filter's cost over the 30 points {}", polish.winner, polish.cost, {
         surface::evaluate(&grid, &normals, &scan, &outcome.pose).cost
     });
+    // The same Run with the polish holding the scale (protocol 7's flag): the board's
+    // choice and pose are the reference's, and the winner keeps its start's scale where the
+    // solved polish changed it.
+    let mut held = cfg.clone();
+    held.polish.scale = ScaleStep::Held;
+    let r = exchange(&mut b, &req(Command::Run, seq.wrapping_add(1), held.encode()));
+    assert_eq!(r.code, Command::Run as u8 | 0x80);
+    let mut seq = seq.wrapping_add(2);
+    for _ in 0..10_000 {
+        let r = exchange(&mut b, &req(Command::Status, seq, vec![]));
+        seq = seq.wrapping_add(1);
+        if StatusReply::decode(&r.data).unwrap().state == RunState::Done {
+            break;
+        }
+        b.run(20_000);
+    }
+    let r = exchange(&mut b, &req(Command::Result, seq, vec![]));
+    let held_result = ResultReply::decode(&r.data).unwrap();
+    let want = reference(&held, &grid, &normals, &scan, 30);
+    assert_eq!(held_result.polish, want.polish, "the held scale's polish");
+    assert_eq!(held_result.params, want.filter.params);
+    let frobenius = |m: &[i32; 9]| m.iter().map(|&v| (v as f64).powi(2)).sum::<f64>().sqrt();
+    let start = if want.polish.winner == 0 { want.filter.pose } else { held.polish.hypotheses[0] };
+    let kept = frobenius(&want.polish.pose.m) / frobenius(&start.m);
+    println!("held: start {} won, scale kept to {kept:.6}; solved polish's scale {:.6}", want.polish.winner, {
+        frobenius(&polish.pose.m) / frobenius(&start.m)
+    });
+    assert!((kept - 1.0).abs() < 1e-4, "the held scale moved by {kept}");
     let (compared, _) = b.comparison();
     println!("{polls} Status polls while running, {compared} bytes compared, {} clocks", b.clocks());
 }

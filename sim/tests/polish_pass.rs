@@ -33,6 +33,7 @@ fn verilated_passes_add_the_models_sums_and_solve_as_the_model() {
         let mut feed = BenchInputs {
             gated: pass.tau2.is_some(),
             tau2: pass.tau2.unwrap_or(0).min(u32::MAX as u64) as u32,
+            scale_held: pass.scale == pficp_fpga::polish::ScaleStep::Held,
             t: pass.t,
             ..idle
         };

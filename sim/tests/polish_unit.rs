@@ -11,7 +11,7 @@
 use pficp_fpga::common::format::{FxPoint, FxPose};
 use pficp_fpga::filter::sequencer::unpack_pose;
 use pficp_fpga::polish::cases::{pose, surface, window_scan};
-use pficp_fpga::polish::polish_best;
+use pficp_fpga::polish::{polish_best, ScaleStep};
 use pficp_fpga::search::grid::Grid;
 use pficp_fpga::surface::{evaluate, signed_residual, FxNormal};
 use pficp_fpga::surface::{GridSearch, Search};
@@ -40,6 +40,7 @@ fn run_unit(
     starts: &[FxPose],
     steps: u8,
     winner_steps: u8,
+    scale: ScaleStep,
 ) -> ((usize, FxPose, u64), Vec<FxPose>, u64) {
     let mut u = VerilatedPolishUnit::new();
     let mut i = UnitInputs { reset: true, ..Default::default() };
@@ -49,6 +50,7 @@ fn run_unit(
         starts: starts.len() as u8,
         steps,
         winner_steps,
+        scale_held: scale == ScaleStep::Held,
         start_pose: starts[0].pack(),
         ..Default::default()
     };
@@ -112,15 +114,19 @@ fn the_verilated_unit_chooses_and_polishes_as_the_model() {
     // As `polish_control.rs`: a first start dragged beyond the drift bounds (kept
     // unpolished), one near the truth (the winner), one at 1.6 times the scale (dropped).
     let starts = vec![pose(1.0, 1.5, [0.0; 3]), pose(0.9, 0.2, [0.05, 0.0, 0.0]), pose(1.6, 0.1, [0.0; 3])];
-    for (steps, winner_steps) in [(0u8, 0u8), (1, 0), (2, 0), (1, 2)] {
+    // The last case holds the scale: the winner's scale stays its start's (the model's
+    // test: `a_held_scale_stays_and_the_rest_is_polished`).
+    let cases = [(0u8, 0u8, ScaleStep::Solved), (1, 0, ScaleStep::Solved), (2, 0, ScaleStep::Solved), (1, 2, ScaleStep::Solved), (2, 1, ScaleStep::Held)];
+    for (steps, winner_steps, scale) in cases {
         let (best, p, cost) =
-            polish_best(&grid, &normals, &scan, &starts, steps as u32, winner_steps as u32).expect("a winner");
-        let ((i, rtl_pose, rtl_cost), passes, clocks) = run_unit(&grid, &normals, &scan, &starts, steps, winner_steps);
+            polish_best(&grid, &normals, &scan, &starts, steps as u32, winner_steps as u32, scale).expect("a winner");
+        let ((i, rtl_pose, rtl_cost), passes, clocks) =
+            run_unit(&grid, &normals, &scan, &starts, steps, winner_steps, scale);
         eprintln!(
-            "{steps} steps, {winner_steps} for the winner: winner {i} (model {best}), {} passes, {clocks} clocks",
+            "{steps} steps, {winner_steps} for the winner, scale {scale:?}: winner {i} (model {best}), {} passes, {clocks} clocks",
             passes.len()
         );
-        assert_eq!((i, rtl_pose, rtl_cost), (best, p.pose, cost), "{steps} steps, {winner_steps} for the winner");
+        assert_eq!((i, rtl_pose, rtl_cost), (best, p.pose, cost), "{steps} steps, {winner_steps} for the winner, {scale:?}");
     }
     // Six starts (the hypotheses from the board's RAM beyond the first two), the winner late
     // in the order, and its further polish.
@@ -132,8 +138,8 @@ fn the_verilated_unit_chooses_and_polishes_as_the_model() {
         pose(0.95, 0.1, [0.02, 0.0, 0.0]),
         pose(0.8, 0.4, [0.0; 3]),
     ];
-    let (best, p, cost) = polish_best(&grid, &normals, &scan, &six, 1, 1).expect("a winner");
-    let ((i, rtl_pose, rtl_cost), passes, clocks) = run_unit(&grid, &normals, &scan, &six, 1, 1);
+    let (best, p, cost) = polish_best(&grid, &normals, &scan, &six, 1, 1, ScaleStep::Solved).expect("a winner");
+    let ((i, rtl_pose, rtl_cost), passes, clocks) = run_unit(&grid, &normals, &scan, &six, 1, 1, ScaleStep::Solved);
     eprintln!("six starts, 1 + 1 steps: winner {i} (model {best}), {} passes, {clocks} clocks", passes.len());
     assert!(best >= 3, "the winner ({best}) comes from the RAM beyond the first two hypotheses");
     assert_eq!((i, rtl_pose, rtl_cost), (best, p.pose, cost), "six starts");

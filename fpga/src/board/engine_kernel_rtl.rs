@@ -11,7 +11,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
         dff_setup!(self, clock, state, ret, dlen, cur_cmd, cur_seq, e_code, e_cmd, e_seq, pending, p_cmd, p_seq);
         dff_setup!(self, clock, err_led, faddr, fcount, inbuf, outbuf, ecount, hdr, model_count, scan_count, idx);
         dff_setup!(self, clock, waddr, eval_mode, start_r, wi, ncost, dig_sr, dig_restart);
-        dff_setup!(self, clock, pol_count, pol_steps, pol_more, pol_starts, hcnt, pol_arm, pol_ready, run_r);
+        dff_setup!(self, clock, pol_count, pol_steps, pol_more, pol_held, pol_starts, hcnt, pol_arm, pol_ready, run_r);
         self.hyps.read_clock.next = self.clock.val();
         self.hyps.write_clock.next = self.clock.val();
         self.hyps.write_enable.next = false;
@@ -141,6 +141,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
         self.polish.starts.next = self.pol_starts.q.val();
         self.polish.steps.next = self.pol_steps.q.val();
         self.polish.winner_steps.next = self.pol_more.q.val();
+        self.polish.scale_held.next = self.pol_held.q.val();
         self.polish.start_pose.next = self.filter.pose.val();
         if self.polish.start_index.val().any() {
             self.polish.start_pose.next = self.hyps.read_data.val();
@@ -390,6 +391,7 @@ impl<const P: usize> Logic for CommandEngine<P> {
                     self.pol_count.d.next = self.pw_count.val().get_bits::<13>(0);
                     self.pol_steps.d.next = self.inbuf.q.val().get_bits::<4>(184);
                     self.pol_more.d.next = self.inbuf.q.val().get_bits::<4>(192);
+                    self.pol_held.d.next = self.inbuf.q.val().get_bit(200);
                     self.pol_starts.d.next = self.hdr.q.val().get_bits::<4>(40);
                     if !self.hdr.q.val().get_bits::<4>(40).any() {
                         self.pol_starts.d.next = 1.into();

@@ -195,6 +195,8 @@ pub struct CommandEngine<const P: usize> {
     pol_count: DFF<Bits<13>>,
     pol_steps: DFF<Bits<4>>,
     pol_more: DFF<Bits<4>>,
+    /// The Run's polish holds the scale (bit 0 of the polish word's fifth byte).
+    pol_held: DFF<Bit>,
     pol_starts: DFF<Bits<4>>,
     /// The Run's hypotheses, start `k` at word `k` (1 to 14; read a clock after the
     /// polish's `start_index` names it), and how many are in.
@@ -331,6 +333,7 @@ impl<const P: usize> CommandEngine<P> {
             pol_count: Default::default(),
             pol_steps: Default::default(),
             pol_more: Default::default(),
+            pol_held: Default::default(),
             pol_starts: Default::default(),
             hyps: Default::default(),
             hcnt: Default::default(),

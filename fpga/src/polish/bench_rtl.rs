@@ -23,6 +23,8 @@ pub struct PolishBench {
     pub gated: Signal<In, Bit>,
     /// The pass's gate.
     pub tau2: Signal<In, Bits<32>>,
+    /// The scale held ([`PolishPass::scale_held`]).
+    pub scale_held: Signal<In, Bit>,
     /// The pose's translation (3 x 18 bits, x low).
     pub t: Signal<In, Bits<54>>,
     /// Take a point (while `ready`).
@@ -70,6 +72,7 @@ impl PolishBench {
             reset: Default::default(),
             gated: Default::default(),
             tau2: Default::default(),
+            scale_held: Default::default(),
             t: Default::default(),
             in_valid: Default::default(),
             in_q: Default::default(),
@@ -111,6 +114,7 @@ impl Logic for PolishBench {
         self.prog.reset.next = self.reset.val();
         self.pass.gated.next = self.gated.val();
         self.pass.tau2.next = self.tau2.val();
+        self.pass.scale_held.next = self.scale_held.val();
         self.pass.t.next = self.t.val();
         self.pass.in_valid.next = self.in_valid.val();
         self.pass.in_q.next = self.in_q.val();
@@ -155,6 +159,8 @@ pub struct PolishUnitBench {
     pub steps: Signal<In, Bits<4>>,
     /// The winner's further steps (0: none).
     pub winner_steps: Signal<In, Bits<4>>,
+    /// The scale held ([`PolishUnit::scale_held`]).
+    pub scale_held: Signal<In, Bit>,
     /// The start taken next.
     pub start_index: Signal<Out, Bits<4>>,
     /// Its pose.
@@ -199,6 +205,7 @@ impl PolishUnitBench {
             starts: Default::default(),
             steps: Default::default(),
             winner_steps: Default::default(),
+            scale_held: Default::default(),
             start_index: Default::default(),
             start_pose: Default::default(),
             pass_go: Default::default(),
@@ -237,6 +244,7 @@ impl Logic for PolishUnitBench {
         self.unit.starts.next = self.starts.val();
         self.unit.steps.next = self.steps.val();
         self.unit.winner_steps.next = self.winner_steps.val();
+        self.unit.scale_held.next = self.scale_held.val();
         self.start_index.next = self.unit.start_index.val();
         self.unit.start_pose.next = self.start_pose.val();
         self.pass_go.next = self.unit.pass_go.val();

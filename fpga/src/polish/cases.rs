@@ -168,6 +168,8 @@ pub struct PassCase {
     pub tau2: Option<u64>,
     /// The found points.
     pub points: Vec<(FxPoint, FxNormal, i64)>,
+    /// The scale solved or held (the row's last entry).
+    pub scale: super::ScaleStep,
 }
 
 impl PassCase {
@@ -175,22 +177,22 @@ impl PassCase {
     pub fn sums(&self) -> PassSums {
         let mut sums = PassSums::new();
         for &(q, n, s) in &self.points {
-            sums.add_point(s, self.tau2, || super::jacobian(q, self.t, n));
+            sums.add_point(s, self.tau2, || super::jacobian(q, self.t, n, self.scale));
         }
         sums
     }
 }
 
-/// Four passes of `points` found points each, from `seed`: statistics only; a gate of
+/// Five passes of `points` found points each, from `seed`: statistics only; a gate of
 /// 2^12 on residuals of 8 bits (some in, some out); a gate of 2^24 - 1 (every point in);
 /// a gate of 2^20 with images and translations near the formats' extremes (`x = q - t`
-/// reaches 19 bits and the Jacobian saturates). Normals of any 16-bit size, residuals of
-/// 13 bits but in the second; the second and third passes also hold a point whose row
-/// rounds on ties (one more point).
+/// reaches 19 bits and the Jacobian saturates); a gate of 2^24 - 1 with the scale held.
+/// Normals of any 16-bit size, residuals of 13 bits but in the second; the second and
+/// third passes also hold a point whose row rounds on ties (one more point).
 pub fn pass_cases(seed: u64, points: usize) -> Vec<PassCase> {
     let mut rng = SplitMix64(seed);
     let mut out = Vec::new();
-    for case in 0..4 {
+    for case in 0..5 {
         let wide = case == 3;
         let t: [i32; 3] = std::array::from_fn(|_| if wide { rng.signed(18) as i32 } else { rng.signed(14) as i32 });
         let mut points: Vec<(FxPoint, FxNormal, i64)> = (0..points)
@@ -200,13 +202,14 @@ pub fn pass_cases(seed: u64, points: usize) -> Vec<PassCase> {
                 (q, n, rng.signed(if case == 1 { 8 } else { 13 }))
             })
             .collect();
-        let tau2 = [None, Some(1 << 12), Some(u64::MAX >> 40), Some(1 << 20)][case];
+        let tau2 = [None, Some(1 << 12), Some(u64::MAX >> 40), Some(1 << 20), Some(u64::MAX >> 40)][case];
+        let scale = if case == 4 { super::ScaleStep::Held } else { super::ScaleStep::Solved };
         if case == 1 || case == 2 {
             // Rounding ties: x = (1, 1, 1) and n = (0, 0, 2^12) give the cross product
             // (2^12, -2^12, 0) and the dot product 2^12, each half an LSB of the row.
             points.insert(points.len() / 2, (t.map(|c| c as i16 + 1), [0, 0, 1 << 12], 1));
         }
-        out.push(PassCase { t, tau2, points });
+        out.push(PassCase { t, tau2, points, scale });
     }
     out
 }
@@ -267,7 +270,11 @@ mod tests {
         assert!(sums.iter().any(|s| s.inliers > 0 && s.inliers < s.found), "{sums:?}");
         assert!(sums.iter().any(|s| s.inliers == s.found) && sums[0].inliers == 0);
         let rows: Vec<[i64; UNKNOWNS]> =
-            cases.iter().flat_map(|c| c.points.iter().map(|&(q, n, _)| super::super::jacobian(q, c.t, n))).collect();
+            cases.iter().flat_map(|c| c.points.iter().map(|&(q, n, _)| super::super::jacobian(q, c.t, n, c.scale))).collect();
         assert!(rows.iter().any(|j| j.contains(&((1 << 17) - 1))) && rows.iter().any(|j| j.contains(&-(1 << 17))));
+        // The held scale's pass: every point in, its scale column and entry of `b` zero.
+        let held = &sums[4];
+        assert!(held.inliers == held.found && held.found > 0 && held.b[6] == 0);
+        assert!((0..UNKNOWNS).all(|k| held.a[super::upper(k, 6)] == 0) && sums[2].b[6] != 0);
     }
 }

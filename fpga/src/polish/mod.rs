@@ -146,30 +146,62 @@ impl PassSums {
     }
 }
 
+/// Whether a step solves for the scale (the Run's [`crate::protocol::run_request::PolishRequest::scale`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ScaleStep {
+    /// The scale is the seventh unknown.
+    #[default]
+    Solved,
+    /// The scale is held where the start has it (the user knows it: `--scale`): the
+    /// Jacobian's scale entry is 0, so its row and column of the normal equations are 0, the
+    /// damping alone is its pivot, and the solve's scale step is exactly 0 (the update's
+    /// `G = E`). The other six unknowns are the six-parameter solve's.
+    Held,
+}
+
 /// The Jacobian row (Q3.14, module doc) of a point whose image `q` lies under a pose with
 /// translation `t`, its nearest stored point's normal `n`: `[sat18(rnd_13(x x n)), n,
-/// sat18(rnd_13(n . x))]` with `x = q - t`.
-pub fn jacobian(q: FxPoint, t: [i32; 3], n: FxNormal) -> [i64; UNKNOWNS] {
+/// sat18(rnd_13(n . x))]` with `x = q - t`; the last entry 0 when the scale is
+/// [`ScaleStep::Held`].
+pub fn jacobian(q: FxPoint, t: [i32; 3], n: FxNormal, scale: ScaleStep) -> [i64; UNKNOWNS] {
     let n = n.map(|v| v as i64);
     let x: [i64; 3] = std::array::from_fn(|k| q[k] as i64 - t[k] as i64);
     let cross = [x[1] * n[2] - x[2] * n[1], x[2] * n[0] - x[0] * n[2], x[0] * n[1] - x[1] * n[0]];
     let shift = NORMAL_FRAC + crate::common::format::COORD_FRAC - JACOBIAN_FRAC;
     let dot: i64 = (0..3).map(|k| x[k] * n[k]).sum();
     let jac = |v: i64| sat18(round_shift(v as i128, shift) as i64) as i64;
-    [jac(cross[0]), jac(cross[1]), jac(cross[2]), n[0], n[1], n[2], jac(dot)]
+    let scale_entry = match scale {
+        ScaleStep::Solved => jac(dot),
+        ScaleStep::Held => 0,
+    };
+    [jac(cross[0]), jac(cross[1]), jac(cross[2]), n[0], n[1], n[2], scale_entry]
 }
 
 /// One pass over `scan` under `pose` (module doc): the normal equations of the points whose
-/// squared residual is at most `tau2` (`None`: none, statistics only).
-pub fn pass(grid: &Grid, normals: &[FxNormal], scan: &[FxPoint], pose: &FxPose, tau2: Option<u64>) -> PassSums {
-    pass_over(&GridSearch { grid, normals }, scan, pose, tau2)
+/// squared residual is at most `tau2` (`None`: none, statistics only), with the scale
+/// `scale`.
+pub fn pass(
+    grid: &Grid,
+    normals: &[FxNormal],
+    scan: &[FxPoint],
+    pose: &FxPose,
+    tau2: Option<u64>,
+    scale: ScaleStep,
+) -> PassSums {
+    pass_over(&GridSearch { grid, normals }, scan, pose, tau2, scale)
 }
 
 /// [`pass`] over any [`Search`] (the board's raw stores: [`crate::surface::StoredSearch`]).
-pub fn pass_over(search: &impl Search, scan: &[FxPoint], pose: &FxPose, tau2: Option<u64>) -> PassSums {
+pub fn pass_over(
+    search: &impl Search,
+    scan: &[FxPoint],
+    pose: &FxPose,
+    tau2: Option<u64>,
+    scale: ScaleStep,
+) -> PassSums {
     let mut sums = PassSums::new();
     for (q, m, n) in search.found(scan, pose) {
-        sums.add_point(signed_residual(q, m, n), tau2, || jacobian(q, pose.t, n));
+        sums.add_point(signed_residual(q, m, n), tau2, || jacobian(q, pose.t, n, scale));
     }
     sums
 }
@@ -217,19 +249,27 @@ pub struct Polished {
 /// Polish `start` with `steps` Gauss-Newton steps over `scan` (module doc): a statistics
 /// pass, then per step a pass gated by the previous one, a solve and an update. Stops
 /// early when nothing is found, fewer than 7 points pass the gate or the solve finds a
-/// pivot below `lambda / 2`.
-pub fn polish(grid: &Grid, normals: &[FxNormal], scan: &[FxPoint], start: &FxPose, steps: u32) -> Polished {
-    polish_over(&GridSearch { grid, normals }, scan, start, steps)
+/// pivot below `lambda / 2`. With the scale [`ScaleStep::Held`] no step changes it beyond
+/// the update's rounding.
+pub fn polish(
+    grid: &Grid,
+    normals: &[FxNormal],
+    scan: &[FxPoint],
+    start: &FxPose,
+    steps: u32,
+    scale: ScaleStep,
+) -> Polished {
+    polish_over(&GridSearch { grid, normals }, scan, start, steps, scale)
 }
 
 /// [`polish`] over any [`Search`].
-pub fn polish_over(search: &impl Search, scan: &[FxPoint], start: &FxPose, steps: u32) -> Polished {
+pub fn polish_over(search: &impl Search, scan: &[FxPoint], start: &FxPose, steps: u32, scale: ScaleStep) -> Polished {
     let mut pose = *start;
-    let mut last = pass_over(search, scan, &pose, None);
+    let mut last = pass_over(search, scan, &pose, None, scale);
     let mut taken = 0;
     for _ in 0..steps {
         let Some(tau2) = gate(&last) else { break };
-        let sums = pass_over(search, scan, &pose, Some(tau2));
+        let sums = pass_over(search, scan, &pose, Some(tau2), scale);
         let step = solve(&sums);
         last = sums;
         let Some(step) = step else { break };
@@ -272,8 +312,9 @@ pub fn polish_best(
     starts: &[FxPose],
     steps: u32,
     winner_steps: u32,
+    scale: ScaleStep,
 ) -> Option<(usize, Polished, u64)> {
-    polish_winner_over(&GridSearch { grid, normals }, scan, starts, steps, winner_steps)
+    polish_winner_over(&GridSearch { grid, normals }, scan, starts, steps, winner_steps, scale)
 }
 
 /// What the board runs after its filter: the choice among `starts` with `steps` steps each
@@ -289,12 +330,13 @@ pub fn polish_winner_over(
     starts: &[FxPose],
     steps: u32,
     winner_steps: u32,
+    scale: ScaleStep,
 ) -> Option<(usize, Polished, u64)> {
-    let (winner, polished, cost) = polish_best_over(search, scan, starts, steps)?;
+    let (winner, polished, cost) = polish_best_over(search, scan, starts, steps, scale)?;
     if winner_steps == 0 {
         return Some((winner, polished, cost));
     }
-    let (_, again, cost) = polish_best_over(search, scan, &[polished.pose], winner_steps)?;
+    let (_, again, cost) = polish_best_over(search, scan, &[polished.pose], winner_steps, scale)?;
     Some((winner, again, cost))
 }
 
@@ -304,12 +346,13 @@ pub fn polish_best_over(
     scan: &[FxPoint],
     starts: &[FxPose],
     steps: u32,
+    scale: ScaleStep,
 ) -> Option<(usize, Polished, u64)> {
     starts
         .iter()
         .enumerate()
         .filter_map(|(i, start)| {
-            let mut p = polish_over(search, scan, start, steps);
+            let mut p = polish_over(search, scan, start, steps, scale);
             if !within_drift(start, &p.pose) {
                 if i > 0 {
                     return None;
@@ -456,7 +499,7 @@ mod tests {
         }
         assert!(found > scan.len(), "the poses find points");
         let start = pose(1.02, 0.03, [0.01, -0.008, 0.004]);
-        assert_eq!(polish_over(&stored, &scan, &start, 3), polish(&grid, &normals, &scan, &start, 3));
+        assert_eq!(polish_over(&stored, &scan, &start, 3, ScaleStep::Solved), polish(&grid, &normals, &scan, &start, 3, ScaleStep::Solved));
         let empty = vec![0u16; grid.first.len()];
         let nothing = StoredSearch { first: &empty, ..stored };
         assert!(nothing.found(&scan, &start).is_empty());
@@ -468,13 +511,37 @@ mod tests {
         let scan = scan(&grid);
         let start = pose(1.02, 0.03, [0.01, -0.008, 0.004]);
         let (s0, a0) = error(&start);
-        let out = polish(&grid, &normals, &scan, &start, 10);
+        let out = polish(&grid, &normals, &scan, &start, 10, ScaleStep::Solved);
         let (s1, a1) = error(&out.pose);
         assert!(out.steps >= 3, "{out:?}");
         assert!(s1 < s0 / 10.0 && a1 < a0 / 10.0, "scale {s0} -> {s1}, angle {a0} -> {a1}");
         for k in 0..3 {
             assert!(out.pose.t[k].abs() < 20, "{:?}", out.pose.t);
         }
+    }
+
+    /// With the scale held, a start at the true scale comes back in rotation and
+    /// translation as with the scale solved, every step's scale entry is exactly 0, and a
+    /// start off in scale keeps its scale (the update's rounding only) where the solved
+    /// polish corrects it.
+    #[test]
+    fn a_held_scale_stays_and_the_rest_is_polished() {
+        let (grid, normals) = surface();
+        let scan = scan(&grid);
+        let start = pose(1.0, 0.03, [0.01, -0.008, 0.004]);
+        let (_, a0) = error(&start);
+        let held = polish(&grid, &normals, &scan, &start, 10, ScaleStep::Held);
+        let (s1, a1) = error(&held.pose);
+        assert!(held.steps >= 3 && a1 < a0 / 10.0 && s1 < 1e-4, "scale {s1}, angle {a0} -> {a1}");
+        let stats = pass(&grid, &normals, &scan, &start, None, ScaleStep::Held);
+        let sums = pass(&grid, &normals, &scan, &start, gate(&stats), ScaleStep::Held);
+        assert!(sums.inliers > 100 && sums.b[6] == 0 && (0..UNKNOWNS).all(|k| sums.a[upper(k, 6)] == 0));
+        assert_eq!(solve(&sums).map(|step| step[6]), Some(0));
+        let off = pose(1.02, 0.03, [0.01, -0.008, 0.004]);
+        let (s0, _) = error(&off);
+        let (kept, _) = error(&polish(&grid, &normals, &scan, &off, 10, ScaleStep::Held).pose);
+        let (solved, _) = error(&polish(&grid, &normals, &scan, &off, 10, ScaleStep::Solved).pose);
+        assert!((kept - s0).abs() < 1e-4 && solved < s0 / 10.0, "held {s0} -> {kept}, solved -> {solved}");
     }
 
     #[test]
@@ -486,7 +553,7 @@ mod tests {
         // beyond three RMS residuals.
         scan.extend(grid.points.iter().step_by(97).take(12).map(|p| [p[0], p[1], p[2] + 800]));
         let start = pose(1.0, 0.0, [0.0; 3]);
-        let out = polish(&grid, &normals, &scan, &start, 3);
+        let out = polish(&grid, &normals, &scan, &start, 3, ScaleStep::Solved);
         assert_eq!(out.steps, 3);
         for k in 0..9 {
             assert!((out.pose.m[k] - start.m[k]).abs() <= 4, "{:?}", out.pose.m);
@@ -494,9 +561,9 @@ mod tests {
         for k in 0..3 {
             assert!(out.pose.t[k].abs() <= 2, "{:?}", out.pose.t);
         }
-        let stats = pass(&grid, &normals, &scan, &start, None);
+        let stats = pass(&grid, &normals, &scan, &start, None, ScaleStep::Solved);
         assert_eq!((stats.found as usize, stats.inliers), (clean + 12, 0));
-        let gated = pass(&grid, &normals, &scan, &start, gate(&stats));
+        let gated = pass(&grid, &normals, &scan, &start, gate(&stats), ScaleStep::Solved);
         assert_eq!(gated.inliers as usize, clean, "every clean point in, every outlier out");
     }
 
@@ -505,20 +572,20 @@ mod tests {
         let (grid, normals) = surface();
         // Far outside the model: every point capped.
         let far = pose(1.0, 0.0, [3.0, 3.0, 0.0]);
-        let out = polish(&grid, &normals, &scan(&grid), &far, 5);
+        let out = polish(&grid, &normals, &scan(&grid), &far, 5, ScaleStep::Solved);
         assert_eq!((out.pose, out.steps), (far, 0));
         // Fewer than seven points.
         let few: Vec<FxPoint> = scan(&grid).into_iter().take(5).collect();
         let start = pose(1.01, 0.0, [0.0; 3]);
-        assert_eq!(polish(&grid, &normals, &few, &start, 5).pose, start);
+        assert_eq!(polish(&grid, &normals, &few, &start, 5, ScaleStep::Solved).pose, start);
     }
 
     #[test]
     fn the_solver_matches_floating_point_on_a_well_posed_system() {
         let (grid, normals) = surface();
         let start = pose(1.01, 0.02, [0.005, 0.0, -0.003]);
-        let stats = pass(&grid, &normals, &scan(&grid), &start, None);
-        let sums = pass(&grid, &normals, &scan(&grid), &start, gate(&stats));
+        let stats = pass(&grid, &normals, &scan(&grid), &start, None, ScaleStep::Solved);
+        let sums = pass(&grid, &normals, &scan(&grid), &start, gate(&stats), ScaleStep::Solved);
         let step = solve(&sums).expect("positive pivots");
         agree(&sums);
         let a = nalgebra::SMatrix::<f64, 7, 7>::from_fn(|i, j| sums.a[upper(i, j)] as f64);
@@ -536,12 +603,12 @@ mod tests {
         // A start in another basin (a quarter turn) loses to one near the truth.
         let far = pose(1.0, 1.5, [0.0; 3]);
         let near = pose(1.01, 0.02, [0.0; 3]);
-        let (i, p, cost) = polish_best(&grid, &normals, &scan, &[far, near], 5, 0).unwrap();
+        let (i, p, cost) = polish_best(&grid, &normals, &scan, &[far, near], 5, 0, ScaleStep::Solved).unwrap();
         assert_eq!(i, 1);
         assert_eq!(cost, crate::surface::evaluate(&grid, &normals, &scan, &p.pose).cost);
-        assert_eq!(polish_best(&grid, &normals, &scan, &[near, near], 5, 0).unwrap().0, 0);
-        assert!(polish_best(&grid, &normals, &scan, &[], 5, 0).is_none());
-        assert!(polish_best(&grid, &normals, &scan, &[], 5, 3).is_none());
+        assert_eq!(polish_best(&grid, &normals, &scan, &[near, near], 5, 0, ScaleStep::Solved).unwrap().0, 0);
+        assert!(polish_best(&grid, &normals, &scan, &[], 5, 0, ScaleStep::Solved).is_none());
+        assert!(polish_best(&grid, &normals, &scan, &[], 5, 3, ScaleStep::Solved).is_none());
     }
 
     #[test]
@@ -549,10 +616,10 @@ mod tests {
         let (grid, normals) = surface();
         let scan = scan(&grid);
         let starts = [pose(1.0, 1.5, [0.0; 3]), pose(0.9, 0.2, [0.05, 0.0, 0.0])];
-        let (i, first, _) = polish_best(&grid, &normals, &scan, &starts, 1, 0).unwrap();
-        let (j, again, cost) = polish_best(&grid, &normals, &scan, &starts, 1, 3).unwrap();
+        let (i, first, _) = polish_best(&grid, &normals, &scan, &starts, 1, 0, ScaleStep::Solved).unwrap();
+        let (j, again, cost) = polish_best(&grid, &normals, &scan, &starts, 1, 3, ScaleStep::Solved).unwrap();
         assert_eq!(i, j, "the winner's index is the choice's");
-        let want = polish(&grid, &normals, &scan, &first.pose, 3);
+        let want = polish(&grid, &normals, &scan, &first.pose, 3, ScaleStep::Solved);
         assert!(within_drift(&first.pose, &want.pose));
         assert!(want.steps > 0 && want.pose != first.pose, "the further steps move the pose");
         assert_eq!(again, want);
@@ -633,7 +700,7 @@ mod tests {
         let rows = |pose: &FxPose| -> Vec<(u16, i64, [i64; UNKNOWNS])> {
             scan.iter()
                 .map(|&p| {
-                    let one = pass(&grid, &normals, &[p], pose, Some(u64::MAX));
+                    let one = pass(&grid, &normals, &[p], pose, Some(u64::MAX), ScaleStep::Solved);
                     let nr = grid.nearest(transform(pose, p));
                     let j: [i64; UNKNOWNS] = std::array::from_fn(|k| one.b[k]);
                     // b = J s for one point: recover s from the translation column (J = n).
@@ -677,7 +744,7 @@ mod tests {
         #[test]
         fn small_errors_converge(ds in -0.02f64..0.02, a in -0.05f64..0.05, t in proptest::array::uniform3(-0.02f64..0.02)) {
             let (grid, normals) = surface();
-            let out = polish(&grid, &normals, &scan(&grid), &pose(1.0 + ds, a, t), 10);
+            let out = polish(&grid, &normals, &scan(&grid), &pose(1.0 + ds, a, t), 10, ScaleStep::Solved);
             let (se, ae) = error(&out.pose);
             proptest::prop_assert!(se < 1e-3 && ae < 1e-3, "scale {se}, angle {ae}, {out:?}");
         }
@@ -729,7 +796,7 @@ mod tests {
         fn any_pose_is_safe(m in proptest::array::uniform9(-(1i32 << 17)..(1 << 17)), t in proptest::array::uniform3(-(1i32 << 17)..(1 << 17))) {
             let (grid, normals) = surface();
             let start = FxPose { m, t };
-            let out = polish(&grid, &normals, &scan(&grid), &start, 2);
+            let out = polish(&grid, &normals, &scan(&grid), &start, 2, ScaleStep::Solved);
             if out.steps == 0 {
                 proptest::prop_assert_eq!(out.pose, start);
             }
@@ -755,14 +822,14 @@ mod tests {
             .take(4096)
             .map(|q| q.map(|c| (((c as i64 - t as i64) << 15) as f64 / m as f64).round() as i16))
             .collect();
-        let sums = pass(&grid, &normals, &scan, &pose, Some(u64::MAX));
+        let sums = pass(&grid, &normals, &scan, &pose, Some(u64::MAX), ScaleStep::Solved);
         assert_eq!(sums.inliers, 4096);
         assert_eq!(sums.a[upper(0, 0)], 4096 * (1i64 << 17) * (1 << 17), "the rotation column saturates");
         assert!(sums.a.iter().all(|v| v.abs() <= 1 << 46));
         assert!(sums.b.iter().all(|v| v.abs() < 1 << 42));
         assert!(sums.sum_r2 < 1 << 36);
         agree(&sums);
-        let out = polish(&grid, &normals, &scan, &pose, 2);
+        let out = polish(&grid, &normals, &scan, &pose, 2, ScaleStep::Solved);
         assert!(out.steps <= 2);
     }
 

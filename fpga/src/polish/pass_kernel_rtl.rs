@@ -224,6 +224,9 @@ impl Logic for PolishPass {
                     self.row_j[4].d.next = self.n1.val();
                     self.row_j[5].d.next = self.n2.val();
                     self.row_j[6].d.next = self.jsat.val();
+                    if self.scale_held.val() {
+                        self.row_j[6].d.next = 0.into();
+                    }
                     self.row_j[7].d.next = self.s18.val();
                 }
             }

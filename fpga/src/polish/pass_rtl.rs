@@ -58,6 +58,8 @@ pub struct PolishPass {
     pub gated: Signal<In, Bit>,
     /// The gate.
     pub tau2: Signal<In, Bits<32>>,
+    /// The scale held ([`crate::polish::ScaleStep::Held`]): the row's scale entry is 0.
+    pub scale_held: Signal<In, Bit>,
     /// The pose's translation (3 x 18 bits, x low).
     pub t: Signal<In, Bits<54>>,
     /// Take a point (while `ready`).
@@ -186,6 +188,7 @@ impl PolishPass {
             reset: Default::default(),
             gated: Default::default(),
             tau2: Default::default(),
+            scale_held: Default::default(),
             t: Default::default(),
             in_valid: Default::default(),
             in_q: Default::default(),

@@ -26,6 +26,8 @@ pub struct PolishUnit {
     pub steps: Signal<In, Bits<4>>,
     /// The winner's further steps (0: none).
     pub winner_steps: Signal<In, Bits<4>>,
+    /// The steps hold the scale ([`crate::polish::ScaleStep::Held`]; steady while busy).
+    pub scale_held: Signal<In, Bit>,
     /// The start the unit takes next.
     pub start_index: Signal<Out, Bits<4>>,
     /// Its pose.
@@ -81,6 +83,7 @@ impl PolishUnit {
             starts: Default::default(),
             steps: Default::default(),
             winner_steps: Default::default(),
+            scale_held: Default::default(),
             start_index: Default::default(),
             start_pose: Default::default(),
             pass_go: Default::default(),
@@ -168,6 +171,7 @@ impl Logic for PolishUnit {
         // The pass: the control's gate and the pose's translation (its top three fields).
         self.pass.gated.next = self.control.gated.val();
         self.pass.tau2.next = self.control.tau2.val();
+        self.pass.scale_held.next = self.scale_held.val();
         self.pass.t.next = self.control.pose.val().get_bits::<54>(162);
         self.pass.in_valid.next = self.in_valid.val();
         self.pass.in_q.next = self.in_q.val();

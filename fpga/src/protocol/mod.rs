@@ -26,7 +26,7 @@ pub const MAX_FRAME: usize = MAX_BODY + 2 + (MAX_BODY + 2) / 254 + 2;
 /// The frame delimiter.
 pub const DELIMITER: u8 = 0x00;
 /// Protocol version reported by `Identify`.
-pub const VERSION: u16 = 6;
+pub const VERSION: u16 = 7;
 
 /// CRC-16/CCITT-FALSE: polynomial 0x1021, initial value 0xFFFF, no reflection, no final XOR.
 pub fn crc16(data: &[u8]) -> u16 {

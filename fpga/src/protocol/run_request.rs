@@ -1,4 +1,4 @@
-//! The Run request of protocol 6 (docs/protocol.md, "Run"): the on-board filter's
+//! The Run request of protocol 7 (docs/protocol.md, "Run"): the on-board filter's
 //! configuration ([`PfConfig`]) and the on-board polish after it ([`PolishRequest`]), and
 //! what the board does with it ([`execute`]): the filter over the first `scan_count`
 //! stored scan points (SetSizes), then [`crate::polish::polish_winner_over`] over the first
@@ -7,12 +7,13 @@
 //! Layout: the filter's 150 bytes ([`PfConfig::encode`]) with its sixth byte the number of
 //! starts (its low four bits; 0 is taken as 1), then the polish word (6 bytes: `points` u16,
 //! `steps` in the low four bits of the next byte, `winner_steps` in the low four bits of
-//! the next, two zero bytes), then `starts - 1`
+//! the next, the scale in bit 0 of the next ([`SCALE_HELD`]: set, the scale is held), a
+//! zero byte), then `starts - 1`
 //! hypothesis poses of 27 bytes ([`crate::protocol::layout::pose_bytes`]).
 
 use crate::common::format::{FxPose, MAX_POINTS};
 use crate::filter::pf::{ConfigError, PfConfig, PfOutcome, RUN_BYTES, RUN_WORD_BYTES};
-use crate::polish::polish_winner_over;
+use crate::polish::{polish_winner_over, ScaleStep};
 use crate::protocol::layout::{pose_bytes, pose_from_bytes, POSE_BYTES};
 use crate::surface::Search;
 
@@ -27,6 +28,11 @@ pub const MAX_STEPS: u8 = 15;
 pub const RUN_BASE_BYTES: usize = RUN_BYTES + RUN_WORD_BYTES;
 /// Byte of the Run request that holds the number of starts.
 pub const STARTS_BYTE: usize = 5;
+/// Byte of the Run request that holds the polish's scale flag (the polish word's fifth).
+pub const SCALE_BYTE: usize = RUN_BYTES + 4;
+/// The flag in [`SCALE_BYTE`]: the polish holds the scale ([`ScaleStep::Held`]); the
+/// byte's other bits are ignored.
+pub const SCALE_HELD: u8 = 1;
 
 /// The data bytes of a Run request with `starts` starts (as the board takes the count:
 /// the low four bits, 0 as 1).
@@ -50,6 +56,8 @@ pub struct PolishRequest {
     /// Further steps for the winner among the starts, from its pose (0 ..= [`MAX_STEPS`];
     /// 0: none; the low four bits).
     pub winner_steps: u8,
+    /// Whether the steps solve for the scale or hold it (from protocol 7 on).
+    pub scale: ScaleStep,
     /// The starts after the filter's pose (at most `MAX_STARTS - 1`).
     pub hypotheses: Vec<FxPose>,
 }
@@ -72,7 +80,11 @@ impl RunRequest {
         out.extend(self.polish.points.to_le_bytes());
         out.push(self.polish.steps & MAX_STEPS);
         out.push(self.polish.winner_steps & MAX_STEPS);
-        out.extend([0; RUN_WORD_BYTES - 4]);
+        out.push(match self.polish.scale {
+            ScaleStep::Solved => 0,
+            ScaleStep::Held => SCALE_HELD,
+        });
+        out.extend([0; RUN_WORD_BYTES - 5]);
         for h in &self.polish.hypotheses {
             out.extend_from_slice(&pose_bytes(h));
         }
@@ -94,7 +106,8 @@ impl RunRequest {
         }
         let hypotheses = d[RUN_BASE_BYTES..].chunks_exact(POSE_BYTES).map(pose_from_bytes).collect();
         let (steps, winner_steps) = (d[RUN_BYTES + 2] & MAX_STEPS, d[RUN_BYTES + 3] & MAX_STEPS);
-        Ok(RunRequest { filter, polish: PolishRequest { points, steps, winner_steps, hypotheses } })
+        let scale = if d[SCALE_BYTE] & SCALE_HELD != 0 { ScaleStep::Held } else { ScaleStep::Solved };
+        Ok(RunRequest { filter, polish: PolishRequest { points, steps, winner_steps, scale, hypotheses } })
     }
 }
 
@@ -186,6 +199,7 @@ pub fn execute(
         &starts,
         request.polish.steps as u32,
         request.polish.winner_steps as u32,
+        request.polish.scale,
     )
     .expect("one start at least");
     RunOutcome { filter, polish: PolishOutcome { winner: winner as u8, pose: polished.pose, cost } }
@@ -199,7 +213,7 @@ pub fn example_request(particles: u16, iterations: u16, seed: u32, points: u16) 
     let moved = FxPose { m: [one, 0, 0, 0, one, 0, 0, 0, one], t: [64, 0, 0] };
     RunRequest {
         filter: crate::filter::pf::example_config(particles, iterations, seed),
-        polish: PolishRequest { points, steps: 2, winner_steps: 1, hypotheses: vec![moved] },
+        polish: PolishRequest { points, steps: 2, winner_steps: 1, scale: ScaleStep::Solved, hypotheses: vec![moved] },
     }
 }
 
@@ -226,6 +240,7 @@ mod tests {
                 points: 1000,
                 steps: 5,
                 winner_steps: hyps as u8 % 3,
+                scale: if hyps % 2 == 1 { ScaleStep::Held } else { ScaleStep::Solved },
                 hypotheses: (0..hyps as i32).map(pose).collect(),
             },
         }
@@ -240,6 +255,12 @@ mod tests {
             assert_eq!(d.len(), run_bytes(d[STARTS_BYTE]));
             assert_eq!(RunRequest::decode(&d), Ok(r));
             assert_eq!(RunRequest::decode(&d[..d.len() - 1]), Err(ConfigError::Length(d.len() - 1)));
+        }
+        // The scale flag is bit 0 of its byte; the other bits are ignored.
+        for (byte, scale) in [(0xfe, ScaleStep::Solved), (0xff, ScaleStep::Held), (SCALE_HELD, ScaleStep::Held)] {
+            let mut d = request(2).encode();
+            d[SCALE_BYTE] = byte;
+            assert_eq!(RunRequest::decode(&d).map(|r| r.polish.scale), Ok(scale));
         }
         // Starts 0 is taken as 1: the length of one start.
         let mut d = request(0).encode();

@@ -7,7 +7,10 @@
 //! - 3: the model searched through a cell table; its costs are point-to-point distances,
 //!   which this host no longer models: refused;
 //! - 4 and 5: the model gridded with its normals, the costs surface residuals;
-//! - [`VERSION`]: the Run of the on-board filter and its polish.
+//! - 6: the Run of the on-board filter and its polish; the polish always solves for the
+//!   scale: refused for the on-board mode, since this host holds a known scale on the board;
+//! - [`VERSION`] (7): as 6, and the Run's polish holds the scale when asked
+//!   ([`crate::protocol::run_request::SCALE_HELD`]).
 
 use super::VERSION;
 
@@ -21,7 +24,8 @@ pub struct Capabilities {
     /// surface residuals: from 4 on (a version 1 or 2 board gets the model as it is and
     /// searches it by brute force).
     pub grid_with_normals: bool,
-    /// The on-board filter and its polish (Run): [`VERSION`] only.
+    /// The on-board filter and its polish (Run), the polish holding a known scale:
+    /// [`VERSION`] only.
     pub on_board_run: bool,
 }
 
@@ -53,7 +57,8 @@ pub fn refusal(version: u16, mode: Mode) -> Option<String> {
         )),
         Mode::OnBoard if !c.on_board_run => Some(format!(
             "the board speaks protocol version {version}, this host {VERSION} (the on-board filter and its polish \
-             need {VERSION}; --host-driven works with versions 1, 2 and 4 to {VERSION})"
+             need {VERSION}; regenerate the board, or use --host-driven, which works with versions 1, 2 and 4 to \
+             {VERSION})"
         )),
         _ => None,
     }

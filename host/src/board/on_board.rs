@@ -15,13 +15,14 @@ use super::quantise::{
     sigma22, stored_normals, Normalisation,
 };
 use super::{BoardClient, BoardError, ClientStats, Upload, BOARD_MAX_PARTICLES, BOARD_MAX_STORE_POINTS};
-use crate::geometry::Pose;
+use crate::geometry::{Pose, ScaleBounds};
 use crate::nn::NearestNeighbours;
 use crate::pf_icp::{prior, weight_sample, PfIcpResult, PfIcpSettings, Prior, StageTimes};
 use crate::registration::icp::Registration;
 use nalgebra::Point3;
 use pficp_fpga::common::format::{FxPoint, DIST_FRAC};
 use pficp_fpga::filter::pf::{Particle, PfConfig, PARAMS, PARAM_BITS, PARAM_TRANSLATION_FRAC, SCALE, SCALE_FRAC};
+use pficp_fpga::polish::ScaleStep;
 use pficp_fpga::protocol::messages::{Identity, ResultReply, RunState, MAX_D2_MASK, NO_COST};
 use pficp_fpga::protocol::run_request::{PolishRequest, RunOutcome, RunRequest, MAX_STARTS};
 use pficp_fpga::protocol::versions::{refusal, Mode};
@@ -259,7 +260,7 @@ pub fn plan_with_prior(
     let model_q = model_norm.quantise(&on_board);
     let grid = board_grid(&model_q)?;
     let rest = scan_norm.quantise(&rest_of(scan, &sample, BOARD_MAX_STORE_POINTS.saturating_sub(sample.len())));
-    let polish = polish_request(&prior, &model_norm, &scan_norm, sample.len() + rest.len());
+    let polish = polish_request(&prior, &model_norm, &scan_norm, sample.len() + rest.len(), &settings.scale);
     Ok(OnBoardPlan {
         prior,
         normals: stored_normals(&grid),
@@ -302,12 +303,14 @@ fn rest_of(scan: &[Point3<f64>], sample: &[Point3<f64>], room: usize) -> Vec<Poi
 /// stored scan points, then [`POLISH_WINNER_STEPS`] for the winner, from the filter's pose
 /// and the first `POLISH_STARTS - 1` of the
 /// hypotheses the host's conclusion would compare with it
-/// ([`crate::pf_icp::conclusion::candidates`]), as the board holds poses.
+/// ([`crate::pf_icp::conclusion::candidates`]), as the board holds poses; the steps hold
+/// the scale when the user fixed it (`--scale`: every start is at that scale).
 pub fn polish_request(
     prior: &Prior,
     model_norm: &Normalisation,
     scan_norm: &Normalisation,
     points: usize,
+    scale: &ScaleBounds,
 ) -> PolishRequest {
     let hypotheses = crate::pf_icp::conclusion::candidates(&prior.start, &prior.hypotheses)
         .iter()
@@ -319,7 +322,17 @@ pub fn polish_request(
         points: points.min(BOARD_MAX_STORE_POINTS) as u16,
         steps: POLISH_STEPS,
         winner_steps: POLISH_WINNER_STEPS,
+        scale: scale_step(scale),
         hypotheses,
+    }
+}
+
+/// How the board's polish treats the scale under the user's `bounds`: held when they fix
+/// it, solved otherwise (a range is imposed by the host after the board).
+pub fn scale_step(bounds: &ScaleBounds) -> ScaleStep {
+    match bounds.fixed_value() {
+        Some(_) => ScaleStep::Held,
+        None => ScaleStep::Solved,
     }
 }
 
@@ -391,9 +404,9 @@ pub fn finish(
     result: &ResultReply,
     filter_time: Duration,
 ) -> PfIcpResult {
-    // The board's polish solves for the scale too (protocol 6 has no way to fix it): the
-    // user's scale bounds are imposed on its pose here, the image of the scan's centroid
-    // kept (a fixed scale exactly; the host's conclusion then polishes with it fixed).
+    // The user's scale bounds imposed on the board's pose, the image of the scan's centroid
+    // kept: a range the board's polish does not know; a fixed scale, which the board holds
+    // to its formats' steps, exactly (the host's conclusion then polishes with it fixed).
     let filter_pose = settings.scale.apply(&plan.board_pose(result), &crate::cloud::centroid(scan));
     let t = Instant::now();
     let surface = crate::pf_icp::surface::Surface::new(nn);

@@ -6,10 +6,12 @@
 //! [`pficp_fpga::protocol::messages::MAX_LOAD_POINTS`] points), SetSizes, a Run whose
 //! filter starts at the prediction with the motion's spread (the centred Euler parameters
 //! of the on-board filter, the rotation vector's spread taken for each angle's) and whose
-//! polish is the smallest the protocol takes (one start, no steps, over the sample: the
-//! host polishes and checks the board's pose as a software frame does its filter's),
-//! Status polls while it runs, then Result. Each request and reply is the framed message
-//! ([`Frame::encode`]) at 10 bits a byte.
+//! polish, once the track's scale is fixed (known, or settled), is [`BOARD_POLISH_STEPS`]
+//! steps over the sample from the filter's pose with the scale held, and before that the
+//! smallest the protocol takes (one start, no steps); Status polls while it runs, then
+//! Result. The board's pose is the polish's (the filter's without steps); the host polishes
+//! and checks it as a software frame does its filter's. Each request and reply is the
+//! framed message ([`Frame::encode`]) at 10 bits a byte.
 //!
 //! **The board's time** ([`BoardFrame::seconds`]): the bytes before and after the run at
 //! the baud rate; the run's clocks at the board's clock: the sequencer's schedule
@@ -19,21 +21,23 @@
 //! bound ([`polish_clocks_bound`]); one Status round trip and half a poll period for the
 //! poll that sees it done.
 
-use crate::board::on_board::{evaluate, filter_config, params_pose, FilterPrior};
+use crate::board::on_board::{evaluate, filter_config, params_pose, scale_step, FilterPrior};
 use crate::board::quantise::{
-    board_grid, board_model, morton_sorted, normalised_pose, quantise_pose, stored_normals, Normalisation,
+    board_grid, board_model, morton_sorted, normalised_pose, original_pose, quantise_pose, restore_pose,
+    stored_normals, Normalisation,
 };
 use crate::board::{run_clocks_for, BoardClient, BoardError, BOARD_MAX_STORE_POINTS, DEFAULT_POLL};
-use crate::geometry::{Centred, Pose};
+use crate::geometry::{Centred, Pose, ScaleBounds};
 use crate::pf_icp::PfIcpSettings;
 use nalgebra::Point3;
 use pficp_fpga::board::BoardConfig;
-use pficp_fpga::common::format::FxPoint;
+use pficp_fpga::common::format::{FxPoint, FxPose};
 use pficp_fpga::filter::pf::Particle;
+use pficp_fpga::polish::ScaleStep;
 use pficp_fpga::protocol::messages::{
     load_request, two_u16, MAX_LOAD_POINTS, RESULT_BYTES, RUN_REPLY_BYTES, STATUS_BYTES,
 };
-use pficp_fpga::protocol::run_request::{polish_clocks_bound, PolishRequest, RunRequest};
+use pficp_fpga::protocol::run_request::{execute, polish_clocks_bound, PolishRequest, RunRequest};
 use pficp_fpga::protocol::versions::{refusal, Mode};
 use pficp_fpga::protocol::{Command, Frame};
 use pficp_fpga::search::grid::Grid;
@@ -44,6 +48,11 @@ use std::time::Duration;
 
 /// Bits a byte on the wire (8N1).
 const BITS_PER_BYTE: f64 = 10.0;
+
+/// The board's polish steps a tracked frame once the track's scale is fixed: one start (the
+/// filter's pose), the scale held, over the frame's sample (docs/tracking.md, "On the
+/// board").
+pub const BOARD_POLISH_STEPS: u8 = 3;
 
 /// The model as the board holds it, for a track's frames.
 pub struct BoardModel {
@@ -56,7 +65,7 @@ pub struct BoardModel {
 /// One frame's filter on the board.
 #[derive(Clone, Debug)]
 pub struct BoardFrame {
-    /// The board's pose (its filter's best; scan to model).
+    /// The board's pose (its polish's, its filter's best without steps; scan to model).
     pub pose: Pose,
     /// Bytes on the wire before the run (the scan, SetSizes, Run, their replies) and after
     /// it (Result and its reply).
@@ -139,12 +148,16 @@ impl BoardModel {
 
     /// The frame's requests: the filter from `predicted` with standard deviations `spread`
     /// (translation, relative scale, rotation) over `sample` (the frame's weighed scan
-    /// points), `particles` and `iterations`, seeded by `seed`; the least polish.
+    /// points), `particles` and `iterations`, seeded by `seed`; with the track's scale
+    /// `bounds` fixed, [`BOARD_POLISH_STEPS`] steps of the polish holding it, otherwise the
+    /// least polish.
+    #[allow(clippy::too_many_arguments)]
     fn frame_run(
         &self,
         sample: &[Point3<f64>],
         predicted: &Pose,
         spread: &[f64; 7],
+        bounds: &ScaleBounds,
         particles: usize,
         iterations: usize,
         seed: u64,
@@ -165,12 +178,15 @@ impl BoardModel {
         let settings = PfIcpSettings { particles, iterations, seed, ..Default::default() };
         let scan: Vec<FxPoint> = morton_sorted(&scan_norm.quantise(sample));
         let filter = filter_config(&prior, &self.model_norm, &scan_norm, scan.len(), &settings);
-        let polish = PolishRequest { points: scan.len() as u16, steps: 0, winner_steps: 0, hypotheses: Vec::new() };
+        let scale = scale_step(bounds);
+        let steps = if scale == ScaleStep::Held { BOARD_POLISH_STEPS } else { 0 };
+        let polish = PolishRequest { points: scan.len() as u16, steps, winner_steps: 0, scale, hypotheses: Vec::new() };
         FrameRun { scan_norm, scan, run: RunRequest { filter, polish } }
     }
 
-    /// What the frame costs on the board and its pose from the filter's `params`.
-    fn frame_of(&self, f: &FrameRun, predicted: &Pose, params: &Particle) -> BoardFrame {
+    /// What the frame costs on the board and its pose: the `polished` pose after steps, the
+    /// filter's `params` without (or when the polished matrix is no similarity).
+    fn frame_of(&self, f: &FrameRun, predicted: &Pose, params: &Particle, polished: &FxPose) -> BoardFrame {
         let model_points = self.grid.points.len();
         let uploads: usize = f
             .scan
@@ -192,8 +208,12 @@ impl BoardModel {
             clocks_per_particle(&self.grid, &f.scan, &at_prediction, self.config.lanes).clocks + SURFACE_LATENCY as u64;
         let clocks = run_clocks_for(f.run.filter.particles, f.run.filter.iterations, evaluation)
             + polish_clocks_bound(&f.run.polish, model_points, self.config.lanes);
+        let restored = restore_pose(polished).filter(|_| f.run.polish.steps > 0);
         BoardFrame {
-            pose: params_pose(params, &self.model_norm, &f.scan_norm),
+            pose: match restored {
+                Some(p) => original_pose(&p, &f.scan_norm, &self.model_norm),
+                None => params_pose(params, &self.model_norm, &f.scan_norm),
+            },
             link_bytes,
             poll_bytes: round_trip(Command::Status, Vec::new(), STATUS_BYTES),
             clocks,
@@ -205,20 +225,23 @@ impl BoardModel {
         }
     }
 
-    /// The frame's filter ([`Self::frame_run`]'s arguments) by the board's bit-exact
-    /// reference.
+    /// The frame's filter and polish ([`Self::frame_run`]'s arguments) by the board's
+    /// bit-exact reference.
+    #[allow(clippy::too_many_arguments)]
     pub fn filter(
         &self,
         sample: &[Point3<f64>],
         predicted: &Pose,
         spread: &[f64; 7],
+        bounds: &ScaleBounds,
         particles: usize,
         iterations: usize,
         seed: u64,
     ) -> BoardFrame {
-        let f = self.frame_run(sample, predicted, spread, particles, iterations, seed);
-        let outcome = pficp_fpga::filter::pf::run(&f.run.filter, |p| evaluate(&self.grid, &self.normals, &f.scan, p));
-        self.frame_of(&f, predicted, &outcome.params)
+        let f = self.frame_run(sample, predicted, spread, bounds, particles, iterations, seed);
+        let search = pficp_fpga::surface::GridSearch { grid: &self.grid, normals: &self.normals };
+        let outcome = execute(&f.run, |p| evaluate(&self.grid, &self.normals, &f.scan, p), &search, &f.scan);
+        self.frame_of(&f, predicted, &outcome.filter.params, &outcome.polish.pose)
     }
 
     /// The frame's filter on the board behind `client` (the model on it:
@@ -231,12 +254,13 @@ impl BoardModel {
         sample: &[Point3<f64>],
         predicted: &Pose,
         spread: &[f64; 7],
+        bounds: &ScaleBounds,
         particles: usize,
         iterations: usize,
         seed: u64,
         poll: Duration,
     ) -> Result<BoardFrame, BoardError> {
-        let f = self.frame_run(sample, predicted, spread, particles, iterations, seed);
+        let f = self.frame_run(sample, predicted, spread, bounds, particles, iterations, seed);
         client.load_scan(&f.scan, |_, _| {})?;
         client.set_sizes(self.grid.points.len(), f.scan.len())?;
         let modelled = client.modelled_run_time(&f.run);
@@ -244,7 +268,7 @@ impl BoardModel {
         client.run(&f.run)?;
         client.wait_for_run(limit, modelled, poll, |_| {})?;
         let result = client.result()?;
-        Ok(self.frame_of(&f, predicted, &result.params))
+        Ok(self.frame_of(&f, predicted, &result.params, &result.polish.pose))
     }
 }
 
@@ -276,7 +300,7 @@ mod tests {
             let d = 0.01 * seq.diag;
             let spread = [d, d, d, 0.0, 0.02, 0.02, 0.02];
             let sample: Vec<Point3<f64>> = f.scan.iter().take(150).copied().collect();
-            let b = board.filter(&sample, &off, &spread, 16, 3, 7);
+            let b = board.filter(&sample, &off, &spread, &fixed, 16, 3, 7);
             let polish = |p: &Pose| surface.polish(&f.scan, &fixed.apply(p, &at), 10, &fixed);
             let from_board = pose_errors(&polish(&b.pose), &f.truth, &at, seq.diag);
             let from_prediction = pose_errors(&polish(&off), &f.truth, &at, seq.diag);
@@ -285,10 +309,21 @@ mod tests {
                 "frame {k}: from the board's pose {from_board:?}, from the prediction {from_prediction:?}"
             );
             assert!(from_board.0 < 1.0 && from_board.1 < 0.01, "frame {k}: {from_board:?}");
+            // The board's pose alone: its polish held the known scale, and its steps took
+            // the prediction's error down (a tenth of a degree of the filter's).
+            let alone = pose_errors(&b.pose, &f.truth, &at, seq.diag);
+            eprintln!("frame {k}: board alone {alone:?}, prediction {predicted:?}, polished from it {from_board:?}");
+            assert_eq!(b.run.polish.steps, BOARD_POLISH_STEPS);
+            assert!(alone.2 < 1e-4, "frame {k}: the board's scale {alone:?}");
+            assert!(alone.0 < predicted.0 && alone.1 < predicted.1, "frame {k}: {alone:?} against {predicted:?}");
             let bound = run_clocks_bound(16, 3, sample.len(), seq.model.len(), 8);
             assert!(b.clocks > 0 && b.clocks < bound, "frame {k}: {} clocks, bound {bound}", b.clocks);
             assert!(b.link_bytes > sample.len() * pficp_fpga::protocol::layout::POINT_BYTES);
             assert!(b.seconds(921_600) > b.seconds(3_000_000));
+            // A scale not yet fixed: the filter alone, its pose the filter's parameters.
+            let free = board.filter(&sample, &off, &spread, &ScaleBounds::FREE, 16, 3, 7);
+            assert_eq!((free.run.polish.steps, free.run.polish.scale), (0, ScaleStep::Solved));
+            assert_eq!(free.pose, params_pose(&free.params, &board.model_norm, &Normalisation::of(&sample)));
         }
     }
 }

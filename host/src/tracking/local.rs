@@ -174,12 +174,12 @@ pub fn track_frame(
             (objective.pose(&particle_filter::run(&objective, &[0.0; 7], spread, &settings).estimate), None)
         }
         FrameFilter::BoardReference(b) => {
-            let f = b.filter(&weighed, predicted, spread, budget.particles, budget.iterations, seed);
+            let f = b.filter(&weighed, predicted, spread, bounds, budget.particles, budget.iterations, seed);
             (f.pose, Some(f))
         }
         FrameFilter::Board(b, client, poll) => {
             let f =
-                b.filter_on(client, &weighed, predicted, spread, budget.particles, budget.iterations, seed, poll)?;
+                b.filter_on(client, &weighed, predicted, spread, bounds, budget.particles, budget.iterations, seed, poll)?;
             (f.pose, Some(f))
         }
     };

@@ -15,6 +15,8 @@ pub struct BenchInputs {
     pub gated: bool,
     /// The pass's gate.
     pub tau2: u32,
+    /// The scale held (the row's scale entry 0).
+    pub scale_held: bool,
     /// The pose's translation.
     pub t: [i32; 3],
     /// Take a point (while `ready`).
@@ -69,7 +71,7 @@ pub(crate) const POLISH_BENCH_OUTPUT_WORDS: [&str; 6] = designs::output_words(de
 impl VerilatedPolishBench {
     /// The blocks after power-up (idle, registers zero).
     pub fn new() -> Self {
-        VerilatedPolishBench { core: Core::new(designs::POLISH_BENCH.name, 0, 16, &POLISH_BENCH_OUTPUT_WORDS) }
+        VerilatedPolishBench { core: Core::new(designs::POLISH_BENCH.name, 0, 17, &POLISH_BENCH_OUTPUT_WORDS) }
     }
 
     /// Drive the input ports (masked to the port widths).
@@ -78,6 +80,7 @@ impl VerilatedPolishBench {
             i.reset as u64,
             i.gated as u64,
             i.tau2 as u64,
+            i.scale_held as u64,
             pficp_fpga::common::format::pack_translation(i.t),
             i.in_valid as u64,
             pficp_fpga::common::format::pack_point(i.in_q),

@@ -18,6 +18,8 @@ pub struct UnitInputs {
     pub steps: u8,
     /// The winner's further steps (0: none).
     pub winner_steps: u8,
+    /// The steps hold the scale.
+    pub scale_held: bool,
     /// The pose of start `start_index` ([`pficp_fpga::common::format::FxPose::pack`]).
     pub start_pose: [u64; 4],
     /// The pass is over.
@@ -76,7 +78,7 @@ pub(crate) const POLISH_UNIT_OUTPUT_WORDS: [&str; 14] = designs::output_words(de
 impl VerilatedPolishUnit {
     /// The unit after power-up (idle, no result).
     pub fn new() -> Self {
-        VerilatedPolishUnit { core: Core::new(designs::POLISH_UNIT.name, 0, 16, &POLISH_UNIT_OUTPUT_WORDS) }
+        VerilatedPolishUnit { core: Core::new(designs::POLISH_UNIT.name, 0, 17, &POLISH_UNIT_OUTPUT_WORDS) }
     }
 
     /// Drive the input ports (masked to the port widths).
@@ -88,6 +90,7 @@ impl VerilatedPolishUnit {
             i.starts as u64,
             i.steps as u64,
             i.winner_steps as u64,
+            i.scale_held as u64,
             p[0],
             p[1],
             p[2],
