@@ -137,8 +137,10 @@ fn the_unit_chooses_and_polishes_as_the_model() {
     // times the scale, which the polish also drags beyond the bounds, so it drops.
     let starts = vec![pose(1.0, 1.5, [0.0; 3]), pose(0.9, 0.2, [0.05, 0.0, 0.0]), pose(1.6, 0.1, [0.0; 3])];
     let steps = 2;
-    let drifts: Vec<bool> =
-        starts.iter().map(|s| within_drift(s, &polish(&grid, &normals, &scan, s, steps, ScaleStep::Solved).pose)).collect();
+    let drifts: Vec<bool> = starts
+        .iter()
+        .map(|s| within_drift(s, &polish(&grid, &normals, &scan, s, steps, ScaleStep::Solved).pose))
+        .collect();
     assert_eq!(drifts, [false, true, false], "the case covers a kept and a dropped start beyond the bounds");
     let (best, p, cost) = polish_best(&grid, &normals, &scan, &starts, steps, 0, ScaleStep::Solved).expect("a winner");
     assert_eq!((best, p.steps), (1, steps), "a later start wins after its steps");
@@ -159,7 +161,8 @@ fn a_failed_gate_and_a_failed_solve_end_the_steps_as_in_the_model() {
     // A first start far off (nothing found: the gate fails), one near the truth (the
     // solve fails).
     let starts = vec![pose(1.0, 0.0, [3.0, 3.0, 0.0]), pose(1.01, 0.02, [0.0; 3])];
-    let stats: Vec<Option<u64>> = starts.iter().map(|s| gate(&pass(&grid, &normals, &scan, s, None, ScaleStep::Solved))).collect();
+    let stats: Vec<Option<u64>> =
+        starts.iter().map(|s| gate(&pass(&grid, &normals, &scan, s, None, ScaleStep::Solved))).collect();
     assert!(stats[0].is_none() && stats[1].is_some(), "the first start finds nothing, the second some");
     for s in &starts {
         assert_eq!(polish(&grid, &normals, &scan, s, 3, ScaleStep::Solved).steps, 0, "no step taken");

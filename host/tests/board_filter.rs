@@ -444,7 +444,13 @@ fn the_on_board_filter_needs_protocol_6_and_the_host_driven_mode_takes_1_2_and_4
     let mut client = board.client();
     let e = on_board_50(&mut client, &nn, &ds.scan, &settings).unwrap_err();
     let m = e.to_string();
-    assert!(m.contains("version 2") && m.contains(&format!("need {}", pficp_fpga::protocol::VERSION)) && m.contains("--host-driven") && !m.contains('\n'), "{m}");
+    assert!(
+        m.contains("version 2")
+            && m.contains(&format!("need {}", pficp_fpga::protocol::VERSION))
+            && m.contains("--host-driven")
+            && !m.contains('\n'),
+        "{m}"
+    );
     assert_eq!(client.stats().requests, 1, "only Identify");
     host_driven::register(&mut client, &nn, &ds.scan, &settings, &mut |_, _, _| {}).unwrap();
     // A board saying it is of version `v` (its commands today's).

@@ -75,7 +75,18 @@ fn poses(
     assert!(scan.len() <= pficp::board::BOARD_MAX_STORE_POINTS, "the whole scan fits the board");
     let whole = plan.scan_norm.quantise(scan);
     let polished = |points: &[pficp_fpga::common::format::FxPoint]| {
-        restored(&plan, &pficp_fpga::polish::polish(&plan.grid, &plan.normals, points, &out.pose, steps(), pficp_fpga::polish::ScaleStep::Solved).pose)
+        restored(
+            &plan,
+            &pficp_fpga::polish::polish(
+                &plan.grid,
+                &plan.normals,
+                points,
+                &out.pose,
+                steps(),
+                pficp_fpga::polish::ScaleStep::Solved,
+            )
+            .pose,
+        )
     };
     let host = on_board::finish(&plan, nn, scan, settings, &ResultReply::of(&unpolished(&out)), Duration::ZERO)
         .registration
@@ -88,8 +99,16 @@ fn poses(
         .enumerate()
         .map(|(i, p)| if i == 0 { out.pose } else { on_board_pose(&plan, p) })
         .collect();
-    let (_, best, _) =
-        pficp_fpga::polish::polish_best(&plan.grid, &plan.normals, &whole, &starts, steps(), 0, pficp_fpga::polish::ScaleStep::Solved).expect("a start");
+    let (_, best, _) = pficp_fpga::polish::polish_best(
+        &plan.grid,
+        &plan.normals,
+        &whole,
+        &starts,
+        steps(),
+        0,
+        pficp_fpga::polish::ScaleStep::Solved,
+    )
+    .expect("a start");
     (
         [software, alone, polished(&plan.scan), polished(&whole), restored(&plan, &best.pose), host],
         out.best.cost < at_truth.cost,

@@ -29,8 +29,8 @@ use pficp::geometry::Pose;
 use pficp::nn::NearestNeighbours;
 use pficp::pf_icp::{self, PfIcpSettings};
 use pficp_fpga::common::format::{FxPoint, FxPose};
-use pficp_fpga::protocol::messages::ResultReply;
 use pficp_fpga::polish::ScaleStep;
+use pficp_fpga::protocol::messages::ResultReply;
 use rayon::prelude::*;
 use std::time::Duration;
 
@@ -251,11 +251,19 @@ fn the_polish_settings_on_the_dev_split() {
                             .take(var.keep)
                             .map(|r| r.2)
                             .collect();
-                        pficp_fpga::polish::polish_best_over(&search, &pts, &kept, var.steps, ScaleStep::Solved).expect("a start").1.pose
+                        pficp_fpga::polish::polish_best_over(&search, &pts, &kept, var.steps, ScaleStep::Solved)
+                            .expect("a start")
+                            .1
+                            .pose
                     } else if var.two_phase {
-                        let (_, first, _) =
-                            pficp_fpga::polish::polish_best_over(&search, &plan.scan, &starts, var.first_steps, ScaleStep::Solved)
-                                .expect("a start");
+                        let (_, first, _) = pficp_fpga::polish::polish_best_over(
+                            &search,
+                            &plan.scan,
+                            &starts,
+                            var.first_steps,
+                            ScaleStep::Solved,
+                        )
+                        .expect("a start");
                         pficp_fpga::polish::polish_best_over(&search, &pts, &[first.pose], var.steps, ScaleStep::Solved)
                             .expect("a start")
                             .1
@@ -263,7 +271,10 @@ fn the_polish_settings_on_the_dev_split() {
                     } else if var.first_steps != var.steps && starts.len() > 1 {
                         polish_best_uneven(&search, &pts, &starts, var.first_steps, var.steps)
                     } else {
-                        pficp_fpga::polish::polish_best_over(&search, &pts, &starts, var.steps, ScaleStep::Solved).expect("a start").1.pose
+                        pficp_fpga::polish::polish_best_over(&search, &pts, &starts, var.steps, ScaleStep::Solved)
+                            .expect("a start")
+                            .1
+                            .pose
                     };
                     ok.push(score(&restored(&plan, &pose), &c).success);
                 }

@@ -55,7 +55,8 @@ fn the_steps_before_an_exact_fixed_point() {
                         let mut last = pass_over(&search, &stored, &pose, None, pficp_fpga::polish::ScaleStep::Solved);
                         for k in 0..10 {
                             let Some(tau2) = gate(&last) else { return k };
-                            let sums = pass_over(&search, &stored, &pose, Some(tau2), pficp_fpga::polish::ScaleStep::Solved);
+                            let sums =
+                                pass_over(&search, &stored, &pose, Some(tau2), pficp_fpga::polish::ScaleStep::Solved);
                             let Some(step) = solve(&sums) else { return k };
                             let next = update(&pose, &step);
                             let same = next == pose && gate(&sums) == Some(tau2);

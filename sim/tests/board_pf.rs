@@ -6,8 +6,8 @@
 use pficp_fpga::board::BoardConfig;
 use pficp_fpga::common::format::FxPoint;
 use pficp_fpga::filter::pf::example_surface;
-use pficp_fpga::protocol::messages::{self, ResultReply, RunState, StatusReply};
 use pficp_fpga::polish::ScaleStep;
+use pficp_fpga::protocol::messages::{self, ResultReply, RunState, StatusReply};
 use pficp_fpga::protocol::run_request::{example_request, execute, polish_clocks_bound, RunOutcome, RunRequest};
 use pficp_fpga::protocol::{Command, Frame};
 use pficp_fpga::search::grid::Grid;

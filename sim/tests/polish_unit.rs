@@ -116,7 +116,13 @@ fn the_verilated_unit_chooses_and_polishes_as_the_model() {
     let starts = vec![pose(1.0, 1.5, [0.0; 3]), pose(0.9, 0.2, [0.05, 0.0, 0.0]), pose(1.6, 0.1, [0.0; 3])];
     // The last case holds the scale: the winner's scale stays its start's (the model's
     // test: `a_held_scale_stays_and_the_rest_is_polished`).
-    let cases = [(0u8, 0u8, ScaleStep::Solved), (1, 0, ScaleStep::Solved), (2, 0, ScaleStep::Solved), (1, 2, ScaleStep::Solved), (2, 1, ScaleStep::Held)];
+    let cases = [
+        (0u8, 0u8, ScaleStep::Solved),
+        (1, 0, ScaleStep::Solved),
+        (2, 0, ScaleStep::Solved),
+        (1, 2, ScaleStep::Solved),
+        (2, 1, ScaleStep::Held),
+    ];
     for (steps, winner_steps, scale) in cases {
         let (best, p, cost) =
             polish_best(&grid, &normals, &scan, &starts, steps as u32, winner_steps as u32, scale).expect("a winner");
@@ -126,7 +132,11 @@ fn the_verilated_unit_chooses_and_polishes_as_the_model() {
             "{steps} steps, {winner_steps} for the winner, scale {scale:?}: winner {i} (model {best}), {} passes, {clocks} clocks",
             passes.len()
         );
-        assert_eq!((i, rtl_pose, rtl_cost), (best, p.pose, cost), "{steps} steps, {winner_steps} for the winner, {scale:?}");
+        assert_eq!(
+            (i, rtl_pose, rtl_cost),
+            (best, p.pose, cost),
+            "{steps} steps, {winner_steps} for the winner, {scale:?}"
+        );
     }
     // Six starts (the hypotheses from the board's RAM beyond the first two), the winner late
     // in the order, and its further polish.

@@ -269,8 +269,10 @@ mod tests {
         let sums: Vec<PassSums> = cases.iter().map(PassCase::sums).collect();
         assert!(sums.iter().any(|s| s.inliers > 0 && s.inliers < s.found), "{sums:?}");
         assert!(sums.iter().any(|s| s.inliers == s.found) && sums[0].inliers == 0);
-        let rows: Vec<[i64; UNKNOWNS]> =
-            cases.iter().flat_map(|c| c.points.iter().map(|&(q, n, _)| super::super::jacobian(q, c.t, n, c.scale))).collect();
+        let rows: Vec<[i64; UNKNOWNS]> = cases
+            .iter()
+            .flat_map(|c| c.points.iter().map(|&(q, n, _)| super::super::jacobian(q, c.t, n, c.scale)))
+            .collect();
         assert!(rows.iter().any(|j| j.contains(&((1 << 17) - 1))) && rows.iter().any(|j| j.contains(&-(1 << 17))));
         // The held scale's pass: every point in, its scale column and entry of `b` zero.
         let held = &sums[4];

@@ -499,7 +499,10 @@ mod tests {
         }
         assert!(found > scan.len(), "the poses find points");
         let start = pose(1.02, 0.03, [0.01, -0.008, 0.004]);
-        assert_eq!(polish_over(&stored, &scan, &start, 3, ScaleStep::Solved), polish(&grid, &normals, &scan, &start, 3, ScaleStep::Solved));
+        assert_eq!(
+            polish_over(&stored, &scan, &start, 3, ScaleStep::Solved),
+            polish(&grid, &normals, &scan, &start, 3, ScaleStep::Solved)
+        );
         let empty = vec![0u16; grid.first.len()];
         let nothing = StoredSearch { first: &empty, ..stored };
         assert!(nothing.found(&scan, &start).is_empty());

@@ -502,7 +502,7 @@ pub struct OnBoardResult {
 }
 
 /// Register `scan` to the model behind `nn` with PF-ICP, the whole particle filter and its
-/// polish on the board behind `client` (protocol 6: Run, Status, Result): the start and the
+/// polish on the board behind `client` (protocol 7: Run, Status, Result): the start and the
 /// covariance on the host ([`plan`]), the model uploaded unless resident, the scan stored
 /// (the `board_points` of the filter's sample first), Run, Status polled every `poll`
 /// (progress: [`OnBoardStep::Filter`] with the iterations done), Result, and the host's

@@ -126,7 +126,7 @@ pub struct Local {
 }
 
 /// `count` points of `scan` drawn with `seed` (all of them, shuffled, when fewer).
-fn sample(scan: &[Point3<f64>], count: usize, seed: u64) -> Vec<Point3<f64>> {
+pub(crate) fn sample(scan: &[Point3<f64>], count: usize, seed: u64) -> Vec<Point3<f64>> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     scan.choose_multiple(&mut rng, count.min(scan.len())).copied().collect()
 }
@@ -178,8 +178,17 @@ pub fn track_frame(
             (f.pose, Some(f))
         }
         FrameFilter::Board(b, client, poll) => {
-            let f =
-                b.filter_on(client, &weighed, predicted, spread, bounds, budget.particles, budget.iterations, seed, poll)?;
+            let f = b.filter_on(
+                client,
+                &weighed,
+                predicted,
+                spread,
+                bounds,
+                budget.particles,
+                budget.iterations,
+                seed,
+                poll,
+            )?;
             (f.pose, Some(f))
         }
     };

@@ -243,7 +243,7 @@ impl<'a> Tracker<'a> {
     }
 
     /// A tracker whose tracked frames run their filter on the board behind `client`
-    /// (protocol 6): the model put on it now unless it holds it already (true in the
+    /// (protocol 7): the model put on it now unless it holds it already (true in the
     /// second value when it was uploaded). The global registrations stay on the host.
     pub fn on_board(
         nn: &'a NearestNeighbours,
