@@ -1,6 +1,7 @@
 //! Tracking with the filter on the board: the reference board behind a real
 //! pseudo-terminal gives the same tracked frames, to the bit, as the board's bit-exact
-//! reference inside the host, and `pficp track --board` says so in its JSON.
+//! reference inside the host (the filter's parameters and the held-scale polish's choice),
+//! and `pficp track --board` says so in its JSON.
 
 mod support;
 
@@ -32,12 +33,15 @@ fn a_track_on_the_board_gives_the_references_poses_to_the_bit() {
         assert_eq!((a.state, a.verdict), (b.state, b.verdict), "frame {k}");
         assert_eq!(a.pose, b.pose, "frame {k}");
         assert_eq!(
-            a.board.as_ref().map(|x| (x.pose, x.link_bytes, x.clocks)),
-            b.board.as_ref().map(|x| (x.pose, x.link_bytes, x.clocks)),
+            a.board.as_ref().map(|x| (x.pose, x.params, x.polish, x.link_bytes, x.clocks)),
+            b.board.as_ref().map(|x| (x.pose, x.params, x.polish, x.link_bytes, x.clocks)),
             "frame {k}"
         );
         if a.state == TrackState::Tracking {
             assert!(a.board.is_some() && !a.global, "frame {k}");
+            // The scale is known: the board polishes, holding it.
+            let run = &a.board.as_ref().unwrap().run.polish;
+            assert!(run.steps > 0 && run.scale == pficp_fpga::polish::ScaleStep::Held, "frame {k}: {run:?}");
             tracked += 1;
         }
     }

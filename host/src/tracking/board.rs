@@ -31,13 +31,13 @@ use crate::geometry::{Centred, Pose, ScaleBounds};
 use crate::pf_icp::PfIcpSettings;
 use nalgebra::Point3;
 use pficp_fpga::board::BoardConfig;
-use pficp_fpga::common::format::{FxPoint, FxPose};
+use pficp_fpga::common::format::FxPoint;
 use pficp_fpga::filter::pf::Particle;
 use pficp_fpga::polish::ScaleStep;
 use pficp_fpga::protocol::messages::{
     load_request, two_u16, MAX_LOAD_POINTS, RESULT_BYTES, RUN_REPLY_BYTES, STATUS_BYTES,
 };
-use pficp_fpga::protocol::run_request::{execute, polish_clocks_bound, PolishRequest, RunRequest};
+use pficp_fpga::protocol::run_request::{execute, polish_clocks_bound, PolishOutcome, PolishRequest, RunRequest};
 use pficp_fpga::protocol::versions::{refusal, Mode};
 use pficp_fpga::protocol::{Command, Frame};
 use pficp_fpga::search::grid::Grid;
@@ -82,6 +82,8 @@ pub struct BoardFrame {
     pub run: RunRequest,
     /// The filter's best parameters (the board's Result's `params`).
     pub params: Particle,
+    /// The polish's choice (the board's Result's `polish`).
+    pub polish: PolishOutcome,
     /// The model's points on the board.
     pub model_points: usize,
 }
@@ -184,9 +186,9 @@ impl BoardModel {
         FrameRun { scan_norm, scan, run: RunRequest { filter, polish } }
     }
 
-    /// What the frame costs on the board and its pose: the `polished` pose after steps, the
+    /// What the frame costs on the board and its pose: the `polish`'s pose after steps, the
     /// filter's `params` without (or when the polished matrix is no similarity).
-    fn frame_of(&self, f: &FrameRun, predicted: &Pose, params: &Particle, polished: &FxPose) -> BoardFrame {
+    fn frame_of(&self, f: &FrameRun, predicted: &Pose, params: &Particle, polish: &PolishOutcome) -> BoardFrame {
         let model_points = self.grid.points.len();
         let uploads: usize = f
             .scan
@@ -208,7 +210,7 @@ impl BoardModel {
             clocks_per_particle(&self.grid, &f.scan, &at_prediction, self.config.lanes).clocks + SURFACE_LATENCY as u64;
         let clocks = run_clocks_for(f.run.filter.particles, f.run.filter.iterations, evaluation)
             + polish_clocks_bound(&f.run.polish, model_points, self.config.lanes);
-        let restored = restore_pose(polished).filter(|_| f.run.polish.steps > 0);
+        let restored = restore_pose(&polish.pose).filter(|_| f.run.polish.steps > 0);
         BoardFrame {
             pose: match restored {
                 Some(p) => original_pose(&p, &f.scan_norm, &self.model_norm),
@@ -221,6 +223,7 @@ impl BoardModel {
             scan: f.scan.clone(),
             run: f.run.clone(),
             params: *params,
+            polish: *polish,
             model_points,
         }
     }
@@ -241,7 +244,7 @@ impl BoardModel {
         let f = self.frame_run(sample, predicted, spread, bounds, particles, iterations, seed);
         let search = pficp_fpga::surface::GridSearch { grid: &self.grid, normals: &self.normals };
         let outcome = execute(&f.run, |p| evaluate(&self.grid, &self.normals, &f.scan, p), &search, &f.scan);
-        self.frame_of(&f, predicted, &outcome.filter.params, &outcome.polish.pose)
+        self.frame_of(&f, predicted, &outcome.filter.params, &outcome.polish)
     }
 
     /// The frame's filter on the board behind `client` (the model on it:
@@ -268,7 +271,7 @@ impl BoardModel {
         client.run(&f.run)?;
         client.wait_for_run(limit, modelled, poll, |_| {})?;
         let result = client.result()?;
-        Ok(self.frame_of(&f, predicted, &result.params, &result.polish.pose))
+        Ok(self.frame_of(&f, predicted, &result.params, &result.polish))
     }
 }
 

@@ -255,8 +255,8 @@ fn track(frames: usize, seed: u64) -> Result<()> {
         }
         let r = exchange(&mut b, &Frame { code: Command::Result as u8, seq: next(), data: vec![] })?;
         let result = ResultReply::decode(&r.data)?;
-        if result.params != bf.params {
-            bail!("frame {}: the board's parameters differ from the reference's", frame.frame);
+        if result.params != bf.params || result.polish != bf.polish {
+            bail!("frame {}: the board's parameters or polish differ from the reference's", frame.frame);
         }
         let bytes1 = b.byte_counts();
         timed.push(TrackedFrame {
