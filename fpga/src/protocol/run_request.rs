@@ -162,6 +162,26 @@ pub fn polish_clocks_bound(p: &PolishRequest, model_points: usize, lanes: usize)
     passes * (p.points as u64 * point + PASS_END_CLOCKS + program_clocks_bound())
 }
 
+/// Clocks the pass's front spends on an inlier ([`crate::polish::pass_rtl`]'s schedule: 14
+/// clocks, and one to take the next point).
+pub const PASS_INLIER_CLOCKS: u64 = 15;
+
+/// A model of the board's clocks for the polish of `p` (the estimate of a tracked frame's
+/// time, not a deadline: [`polish_clocks_bound`] is that) when the pipeline takes
+/// `pipeline` clocks over its points at the start's pose (the neighbour pipeline's cycle
+/// model): each pass the pipeline's clocks, then the front's [`PASS_INLIER_CLOCKS`] for
+/// every point as if each were an inlier and none overlapped the pipeline, and
+/// [`PASS_END_CLOCKS`]; between passes the programs' bounds ([`program_clocks_bound`]).
+pub fn polish_clocks_model(p: &PolishRequest, pipeline: u64) -> u64 {
+    let starts = 1 + p.hypotheses.len() as u64;
+    let winner = match p.winner_steps.min(MAX_STEPS) {
+        0 => 0,
+        w => w as u64 + 2,
+    };
+    let passes = starts * (p.steps.min(MAX_STEPS) as u64 + 2) + winner;
+    passes * (pipeline + p.points as u64 * PASS_INLIER_CLOCKS + PASS_END_CLOCKS + program_clocks_bound())
+}
+
 /// What the polish chose.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct PolishOutcome {
@@ -243,6 +263,22 @@ mod tests {
                 scale: if hyps % 2 == 1 { ScaleStep::Held } else { ScaleStep::Solved },
                 hypotheses: (0..hyps as i32).map(pose).collect(),
             },
+        }
+    }
+
+    /// The model of a polish's clocks stays within the deadline's bound when the pipeline
+    /// takes its bound for every point, and grows with the points and the steps.
+    #[test]
+    fn the_polish_model_is_within_the_bound() {
+        for (h, points, steps) in [(0, 150u16, 3u8), (0, 700, 3), (2, 1000, 5), (7, 4096, 15)] {
+            let mut r = request(h).polish;
+            (r.points, r.steps) = (points, steps);
+            let (model, lanes) = (2000, 8);
+            let per_point = crate::surface::surface_residual::evaluation_clocks_bound(1, model, lanes);
+            let worst = polish_clocks_model(&r, per_point * points as u64);
+            assert!(worst <= polish_clocks_bound(&r, model, lanes), "{h} {points} {steps}");
+            let more = PolishRequest { points: points + 1, steps: steps.min(14) + 1, ..r.clone() };
+            assert!(polish_clocks_model(&more, 1000) > polish_clocks_model(&r, 1000));
         }
     }
 

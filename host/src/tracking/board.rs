@@ -37,7 +37,7 @@ use pficp_fpga::polish::ScaleStep;
 use pficp_fpga::protocol::messages::{
     load_request, two_u16, MAX_LOAD_POINTS, RESULT_BYTES, RUN_REPLY_BYTES, STATUS_BYTES,
 };
-use pficp_fpga::protocol::run_request::{execute, polish_clocks_bound, PolishOutcome, PolishRequest, RunRequest};
+use pficp_fpga::protocol::run_request::{execute, polish_clocks_model, PolishOutcome, PolishRequest, RunRequest};
 use pficp_fpga::protocol::versions::{refusal, Mode};
 use pficp_fpga::protocol::{Command, Frame};
 use pficp_fpga::search::grid::Grid;
@@ -53,6 +53,9 @@ const BITS_PER_BYTE: f64 = 10.0;
 /// filter's pose), the scale held, over the frame's sample (docs/tracking.md, "On the
 /// board").
 pub const BOARD_POLISH_STEPS: u8 = 3;
+/// Scan points the board's polish of a tracked frame goes over: the filter's sample and
+/// the rest drawn from the frame's scan.
+pub const BOARD_POLISH_POINTS: usize = 700;
 
 /// The model as the board holds it, for a track's frames.
 pub struct BoardModel {
@@ -76,8 +79,11 @@ pub struct BoardFrame {
     pub clocks: u64,
     /// The board's clock [Hz].
     pub clock_hz: u32,
-    /// The requests: the scan sample as the board stores it, and the Run.
+    /// The requests: the scan sample as the board stores it (the filter's points first,
+    /// then the polish's others), and the Run.
     pub scan: Vec<FxPoint>,
+    /// The filter's points: the first of [`Self::scan`] (SetSizes' scan count).
+    pub filter_points: usize,
     /// The Run.
     pub run: RunRequest,
     /// The filter's best parameters (the board's Result's `params`).
@@ -109,7 +115,9 @@ fn round_trip(command: Command, data: Vec<u8>, reply: usize) -> usize {
 /// One tracked frame's requests: the scan sample as the board stores it and the Run.
 struct FrameRun {
     scan_norm: Normalisation,
+    /// The filter's points, then (with polish steps) the polish's others.
     scan: Vec<FxPoint>,
+    filter_points: usize,
     run: RunRequest,
 }
 
@@ -157,6 +165,7 @@ impl BoardModel {
     fn frame_run(
         &self,
         sample: &[Point3<f64>],
+        extra: &[Point3<f64>],
         predicted: &Pose,
         spread: &[f64; 7],
         bounds: &ScaleBounds,
@@ -178,12 +187,16 @@ impl BoardModel {
             threshold_max: 0.0,
         };
         let settings = PfIcpSettings { particles, iterations, seed, ..Default::default() };
-        let scan: Vec<FxPoint> = morton_sorted(&scan_norm.quantise(sample));
-        let filter = filter_config(&prior, &self.model_norm, &scan_norm, scan.len(), &settings);
+        let mut scan: Vec<FxPoint> = morton_sorted(&scan_norm.quantise(sample));
+        let filter_points = scan.len();
+        let filter = filter_config(&prior, &self.model_norm, &scan_norm, filter_points, &settings);
         let scale = scale_step(bounds);
         let steps = if scale == ScaleStep::Held { BOARD_POLISH_STEPS } else { 0 };
+        if steps > 0 {
+            scan.extend(morton_sorted(&scan_norm.quantise(extra)));
+        }
         let polish = PolishRequest { points: scan.len() as u16, steps, winner_steps: 0, scale, hypotheses: Vec::new() };
-        FrameRun { scan_norm, scan, run: RunRequest { filter, polish } }
+        FrameRun { scan_norm, scan, filter_points, run: RunRequest { filter, polish } }
     }
 
     /// What the frame costs on the board and its pose: the `polish`'s pose after steps, the
@@ -200,16 +213,22 @@ impl BoardModel {
             })
             .sum();
         let link_bytes = uploads
-            + round_trip(Command::SetSizes, two_u16(model_points as u16, f.scan.len() as u16), 4)
+            + round_trip(Command::SetSizes, two_u16(model_points as u16, f.filter_points as u16), 4)
             + round_trip(Command::Run, f.run.encode(), RUN_REPLY_BYTES)
             + round_trip(Command::Result, Vec::new(), RESULT_BYTES);
         // Every evaluation as long as the prediction's on the neighbour pipeline's cycle
         // model (the particles lie within a few spreads of it), plus the residual stage.
         let at_prediction = quantise_pose(&normalised_pose(predicted, &f.scan_norm, &self.model_norm));
-        let evaluation =
-            clocks_per_particle(&self.grid, &f.scan, &at_prediction, self.config.lanes).clocks + SURFACE_LATENCY as u64;
-        let clocks = run_clocks_for(f.run.filter.particles, f.run.filter.iterations, evaluation)
-            + polish_clocks_bound(&f.run.polish, model_points, self.config.lanes);
+        let pipeline = |points: &[FxPoint]| {
+            clocks_per_particle(&self.grid, points, &at_prediction, self.config.lanes).clocks + SURFACE_LATENCY as u64
+        };
+        let polish_clocks = match f.run.polish.steps {
+            0 => polish_clocks_model(&f.run.polish, 0),
+            _ => polish_clocks_model(&f.run.polish, pipeline(&f.scan)),
+        };
+        let clocks =
+            run_clocks_for(f.run.filter.particles, f.run.filter.iterations, pipeline(&f.scan[..f.filter_points]))
+                + polish_clocks;
         let restored = restore_pose(&polish.pose).filter(|_| f.run.polish.steps > 0);
         BoardFrame {
             pose: match restored {
@@ -221,6 +240,7 @@ impl BoardModel {
             clocks,
             clock_hz: self.config.clock_hz,
             scan: f.scan.clone(),
+            filter_points: f.filter_points,
             run: f.run.clone(),
             params: *params,
             polish: *polish,
@@ -234,6 +254,7 @@ impl BoardModel {
     pub fn filter(
         &self,
         sample: &[Point3<f64>],
+        extra: &[Point3<f64>],
         predicted: &Pose,
         spread: &[f64; 7],
         bounds: &ScaleBounds,
@@ -241,9 +262,10 @@ impl BoardModel {
         iterations: usize,
         seed: u64,
     ) -> BoardFrame {
-        let f = self.frame_run(sample, predicted, spread, bounds, particles, iterations, seed);
+        let f = self.frame_run(sample, extra, predicted, spread, bounds, particles, iterations, seed);
         let search = pficp_fpga::surface::GridSearch { grid: &self.grid, normals: &self.normals };
-        let outcome = execute(&f.run, |p| evaluate(&self.grid, &self.normals, &f.scan, p), &search, &f.scan);
+        let filtered = &f.scan[..f.filter_points];
+        let outcome = execute(&f.run, |p| evaluate(&self.grid, &self.normals, filtered, p), &search, &f.scan);
         self.frame_of(&f, predicted, &outcome.filter.params, &outcome.polish)
     }
 
@@ -255,6 +277,7 @@ impl BoardModel {
         &self,
         client: &mut BoardClient,
         sample: &[Point3<f64>],
+        extra: &[Point3<f64>],
         predicted: &Pose,
         spread: &[f64; 7],
         bounds: &ScaleBounds,
@@ -263,9 +286,9 @@ impl BoardModel {
         seed: u64,
         poll: Duration,
     ) -> Result<BoardFrame, BoardError> {
-        let f = self.frame_run(sample, predicted, spread, bounds, particles, iterations, seed);
+        let f = self.frame_run(sample, extra, predicted, spread, bounds, particles, iterations, seed);
         client.load_scan(&f.scan, |_, _| {})?;
-        client.set_sizes(self.grid.points.len(), f.scan.len())?;
+        client.set_sizes(self.grid.points.len(), f.filter_points)?;
         let modelled = client.modelled_run_time(&f.run);
         let limit = client.run_allowance(&f.run);
         client.run(&f.run)?;
@@ -304,7 +327,8 @@ mod tests {
             let spread = [d, d, d, 0.0, 0.02, 0.02, 0.02];
             // (A random sample, as the tracker weighs on.)
             let sample = crate::tracking::local::sample(&f.scan, 150, k as u64);
-            let b = board.filter(&sample, &off, &spread, &fixed, 16, 3, 7);
+            let extra = crate::tracking::local::sample(&f.scan, BOARD_POLISH_POINTS - 150, 100 + k as u64);
+            let b = board.filter(&sample, &extra, &off, &spread, &fixed, 16, 3, 7);
             let polish = |p: &Pose| surface.polish(&f.scan, &fixed.apply(p, &at), 10, &fixed);
             let from_board = pose_errors(&polish(&b.pose), &f.truth, &at, seq.diag);
             let from_prediction = pose_errors(&polish(&off), &f.truth, &at, seq.diag);
@@ -315,11 +339,15 @@ mod tests {
             assert!(from_board.0 < 1.0 && from_board.1 < 0.01, "frame {k}: {from_board:?}");
             let bound = run_clocks_bound(16, 3, sample.len(), seq.model.len(), 8);
             assert!(b.clocks > 0 && b.clocks < bound, "frame {k}: {} clocks, bound {bound}", b.clocks);
-            assert!(b.link_bytes > sample.len() * pficp_fpga::protocol::layout::POINT_BYTES);
+            assert_eq!(
+                (b.filter_points, b.scan.len(), b.run.polish.points as usize),
+                (150, BOARD_POLISH_POINTS, BOARD_POLISH_POINTS)
+            );
+            assert!(b.link_bytes > BOARD_POLISH_POINTS * pficp_fpga::protocol::layout::POINT_BYTES);
             assert!(b.seconds(921_600) > b.seconds(3_000_000));
             // A scale not yet fixed: the filter alone, its pose the filter's parameters (the
             // same filter: the same seed and spread).
-            let free = board.filter(&sample, &off, &spread, &ScaleBounds::FREE, 16, 3, 7);
+            let free = board.filter(&sample, &[], &off, &spread, &ScaleBounds::FREE, 16, 3, 7);
             assert_eq!((free.run.polish.steps, free.run.polish.scale), (0, ScaleStep::Solved));
             assert_eq!(free.pose, params_pose(&free.params, &board.model_norm, &Normalisation::of(&sample)));
             // The board's pose alone with the scale known: its polish held the scale, and its
@@ -331,7 +359,7 @@ mod tests {
             );
             assert_eq!(b.run.polish.steps, BOARD_POLISH_STEPS);
             assert!(alone.2 < 1e-4, "frame {k}: the board's scale {alone:?}");
-            assert!(alone.0 < filtered.0, "frame {k}: {alone:?} against the filter's {filtered:?}");
+            assert!(alone.0 < filtered.0 && alone.0 < 1.0, "frame {k}: {alone:?} against the filter's {filtered:?}");
         }
     }
 }

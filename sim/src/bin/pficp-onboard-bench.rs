@@ -185,6 +185,8 @@ fn registration(b: &mut SerialBoard, plan: &on_board::OnBoardPlan, config: Board
 /// What one tracked frame took on the simulated board.
 struct TrackedFrame {
     clocks: u64,
+    /// The tracker's model of the frame's time on the board (`BoardFrame::seconds`).
+    modelled_s: f64,
     bytes: u64,
     poll_bytes: u64,
     host_seconds: f64,
@@ -239,7 +241,7 @@ fn track(frames: usize, seed: u64) -> Result<()> {
             let data = messages::load_request((k * messages::MAX_LOAD_POINTS) as u16, chunk);
             exchange(&mut b, &Frame { code: Command::LoadScan as u8, seq: next(), data })?;
         }
-        let sizes = messages::two_u16(bf.model_points as u16, bf.scan.len() as u16);
+        let sizes = messages::two_u16(bf.model_points as u16, bf.filter_points as u16);
         exchange(&mut b, &Frame { code: Command::SetSizes as u8, seq: next(), data: sizes })?;
         exchange(&mut b, &Frame { code: Command::Run as u8, seq: next(), data: bf.run.encode() })?;
         let mut poll_bytes = 0;
@@ -261,6 +263,7 @@ fn track(frames: usize, seed: u64) -> Result<()> {
         let bytes1 = b.byte_counts();
         timed.push(TrackedFrame {
             clocks: b.clocks() - t0,
+            modelled_s: bf.seconds(config.baud),
             bytes: bytes1.0 - bytes0.0 + bytes1.1 - bytes0.1,
             poll_bytes,
             host_seconds: frame.host_seconds,
@@ -296,6 +299,13 @@ fn track(frames: usize, seed: u64) -> Result<()> {
         m.clocks,
         m.bytes,
         m.poll_bytes
+    );
+    let mut modelled: Vec<f64> = timed.iter().map(|t| t.modelled_s).collect();
+    modelled.sort_by(f64::total_cmp);
+    println!(
+        "the tracker's model of the same frames on the board: {:.4} s median (its polish and link at their modelled \
+         clocks and bytes)",
+        modelled[modelled.len() / 2]
     );
     println!(
         "with the host's polish and checks ({host_s:.4} s median): {:.1} frames/s at {} baud, {:.1} at 921600",
