@@ -112,6 +112,31 @@ fn round_trip(command: Command, data: Vec<u8>, reply: usize) -> usize {
         + Frame { code: code | 0x80, seq: 0, data: vec![0; reply] }.encode().len()
 }
 
+/// What a tracked frame asks of the board: the filter from `predicted` with standard
+/// deviations `spread` (translation, relative scale, rotation) over `sample` (the frame's
+/// weighed scan points), `particles` and `iterations`, seeded by `seed`; with the track's
+/// scale `bounds` fixed, [`BOARD_POLISH_STEPS`] steps of the polish holding it over the
+/// sample and `extra`, otherwise the least polish.
+#[derive(Clone, Copy, Debug)]
+pub struct FrameRequest<'a> {
+    /// The filter's points.
+    pub sample: &'a [Point3<f64>],
+    /// The polish's other points.
+    pub extra: &'a [Point3<f64>],
+    /// The prediction.
+    pub predicted: &'a Pose,
+    /// The motion's spread.
+    pub spread: &'a [f64; 7],
+    /// The track's scale bounds.
+    pub bounds: &'a ScaleBounds,
+    /// Particles.
+    pub particles: usize,
+    /// Filter iterations.
+    pub iterations: usize,
+    /// The frame's seed.
+    pub seed: u64,
+}
+
 /// One tracked frame's requests: the scan sample as the board stores it and the Run.
 struct FrameRun {
     scan_norm: Normalisation,
@@ -156,23 +181,9 @@ impl BoardModel {
         client.ensure_grid(&self.grid, &self.normals, |_, _| {})
     }
 
-    /// The frame's requests: the filter from `predicted` with standard deviations `spread`
-    /// (translation, relative scale, rotation) over `sample` (the frame's weighed scan
-    /// points), `particles` and `iterations`, seeded by `seed`; with the track's scale
-    /// `bounds` fixed, [`BOARD_POLISH_STEPS`] steps of the polish holding it, otherwise the
-    /// least polish.
-    #[allow(clippy::too_many_arguments)]
-    fn frame_run(
-        &self,
-        sample: &[Point3<f64>],
-        extra: &[Point3<f64>],
-        predicted: &Pose,
-        spread: &[f64; 7],
-        bounds: &ScaleBounds,
-        particles: usize,
-        iterations: usize,
-        seed: u64,
-    ) -> FrameRun {
+    /// The frame's requests (module doc).
+    fn frame_run(&self, r: &FrameRequest) -> FrameRun {
+        let FrameRequest { sample, extra, predicted, spread, bounds, particles, iterations, seed } = *r;
         let scan_norm = Normalisation::of(sample);
         let frame = Centred { scan: scan_norm.centre, model: self.model_norm.centre };
         let sigma0: Vec<f64> =
@@ -248,45 +259,25 @@ impl BoardModel {
         }
     }
 
-    /// The frame's filter and polish ([`Self::frame_run`]'s arguments) by the board's
-    /// bit-exact reference.
-    #[allow(clippy::too_many_arguments)]
-    pub fn filter(
-        &self,
-        sample: &[Point3<f64>],
-        extra: &[Point3<f64>],
-        predicted: &Pose,
-        spread: &[f64; 7],
-        bounds: &ScaleBounds,
-        particles: usize,
-        iterations: usize,
-        seed: u64,
-    ) -> BoardFrame {
-        let f = self.frame_run(sample, extra, predicted, spread, bounds, particles, iterations, seed);
+    /// The frame's filter and polish by the board's bit-exact reference.
+    pub fn filter(&self, r: &FrameRequest) -> BoardFrame {
+        let f = self.frame_run(r);
         let search = pficp_fpga::surface::GridSearch { grid: &self.grid, normals: &self.normals };
         let filtered = &f.scan[..f.filter_points];
         let outcome = execute(&f.run, |p| evaluate(&self.grid, &self.normals, filtered, p), &search, &f.scan);
-        self.frame_of(&f, predicted, &outcome.filter.params, &outcome.polish)
+        self.frame_of(&f, r.predicted, &outcome.filter.params, &outcome.polish)
     }
 
     /// The frame's filter on the board behind `client` (the model on it:
     /// [`Self::ensure_on`]): LoadScan, SetSizes, Run, Status every `poll`, Result. The
     /// board's parameters are the reference's to the bit.
-    #[allow(clippy::too_many_arguments)]
     pub fn filter_on(
         &self,
         client: &mut BoardClient,
-        sample: &[Point3<f64>],
-        extra: &[Point3<f64>],
-        predicted: &Pose,
-        spread: &[f64; 7],
-        bounds: &ScaleBounds,
-        particles: usize,
-        iterations: usize,
-        seed: u64,
+        r: &FrameRequest,
         poll: Duration,
     ) -> Result<BoardFrame, BoardError> {
-        let f = self.frame_run(sample, extra, predicted, spread, bounds, particles, iterations, seed);
+        let f = self.frame_run(r);
         client.load_scan(&f.scan, |_, _| {})?;
         client.set_sizes(self.grid.points.len(), f.filter_points)?;
         let modelled = client.modelled_run_time(&f.run);
@@ -294,7 +285,7 @@ impl BoardModel {
         client.run(&f.run)?;
         client.wait_for_run(limit, modelled, poll, |_| {})?;
         let result = client.result()?;
-        Ok(self.frame_of(&f, predicted, &result.params, &result.polish))
+        Ok(self.frame_of(&f, r.predicted, &result.params, &result.polish))
     }
 }
 
@@ -328,7 +319,17 @@ mod tests {
             // (A random sample, as the tracker weighs on.)
             let sample = crate::tracking::local::sample(&f.scan, 150, k as u64);
             let extra = crate::tracking::local::sample(&f.scan, BOARD_POLISH_POINTS - 150, 100 + k as u64);
-            let b = board.filter(&sample, &extra, &off, &spread, &fixed, 16, 3, 7);
+            let request = FrameRequest {
+                sample: &sample,
+                extra: &extra,
+                predicted: &off,
+                spread: &spread,
+                bounds: &fixed,
+                particles: 16,
+                iterations: 3,
+                seed: 7,
+            };
+            let b = board.filter(&request);
             let polish = |p: &Pose| surface.polish(&f.scan, &fixed.apply(p, &at), 10, &fixed);
             let from_board = pose_errors(&polish(&b.pose), &f.truth, &at, seq.diag);
             let from_prediction = pose_errors(&polish(&off), &f.truth, &at, seq.diag);
@@ -347,7 +348,7 @@ mod tests {
             assert!(b.seconds(921_600) > b.seconds(3_000_000));
             // A scale not yet fixed: the filter alone, its pose the filter's parameters (the
             // same filter: the same seed and spread).
-            let free = board.filter(&sample, &[], &off, &spread, &ScaleBounds::FREE, 16, 3, 7);
+            let free = board.filter(&FrameRequest { extra: &[], bounds: &ScaleBounds::FREE, ..request });
             assert_eq!((free.run.polish.steps, free.run.polish.scale), (0, ScaleStep::Solved));
             assert_eq!(free.pose, params_pose(&free.params, &board.model_norm, &Normalisation::of(&sample)));
             // The board's pose alone with the scale known: its polish held the scale, and its

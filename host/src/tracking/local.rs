@@ -24,7 +24,7 @@ use crate::pf_icp::hypotheses::same_pose;
 use crate::pf_icp::particle_filter::{self, FilterSettings, Objective};
 use crate::pf_icp::surface::{Surface, COST_CAP};
 use crate::pf_icp::verdict::{judge, Checks, Verdict};
-use crate::tracking::board::{BoardFrame, BoardModel, BOARD_POLISH_POINTS};
+use crate::tracking::board::{BoardFrame, BoardModel, FrameRequest, BOARD_POLISH_POINTS};
 use crate::tracking::motion::{after, LocalDelta};
 use nalgebra::{Point3, SMatrix};
 use rand::seq::SliceRandom;
@@ -155,7 +155,20 @@ pub fn track_frame(
     let at = predicted.apply(&centroid);
     let weighed = sample(scan, budget.weight_points, seed);
     // The board's polish goes over the filter's points and these (the board frame's doc).
-    let polish_extra = || sample(scan, BOARD_POLISH_POINTS.saturating_sub(weighed.len()), seed.wrapping_add(3));
+    let polish_extra = match filter {
+        FrameFilter::Host => Vec::new(),
+        _ => sample(scan, BOARD_POLISH_POINTS.saturating_sub(weighed.len()), seed.wrapping_add(3)),
+    };
+    let board_request = |extra| FrameRequest {
+        sample: &weighed,
+        extra,
+        predicted,
+        spread,
+        bounds,
+        particles: budget.particles,
+        iterations: budget.iterations,
+        seed,
+    };
     let objective =
         DeltaObjective { surface, sample: &weighed, predicted: *predicted, at, cap: COST_CAP * diag, bounds: *bounds };
     let floor: Vec<f64> = spread.iter().map(|s| 0.25 * s).collect();
@@ -176,31 +189,11 @@ pub fn track_frame(
             (objective.pose(&particle_filter::run(&objective, &[0.0; 7], spread, &settings).estimate), None)
         }
         FrameFilter::BoardReference(b) => {
-            let f = b.filter(
-                &weighed,
-                &polish_extra(),
-                predicted,
-                spread,
-                bounds,
-                budget.particles,
-                budget.iterations,
-                seed,
-            );
+            let f = b.filter(&board_request(&polish_extra));
             (f.pose, Some(f))
         }
         FrameFilter::Board(b, client, poll) => {
-            let f = b.filter_on(
-                client,
-                &weighed,
-                &polish_extra(),
-                predicted,
-                spread,
-                bounds,
-                budget.particles,
-                budget.iterations,
-                seed,
-                poll,
-            )?;
+            let f = b.filter_on(client, &board_request(&polish_extra), poll)?;
             (f.pose, Some(f))
         }
     };
