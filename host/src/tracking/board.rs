@@ -53,9 +53,13 @@ const BITS_PER_BYTE: f64 = 10.0;
 /// filter's pose), the scale held, over the frame's sample (docs/tracking.md, "On the
 /// board").
 pub const BOARD_POLISH_STEPS: u8 = 3;
-/// Scan points the board's polish of a tracked frame goes over: the filter's sample and
-/// the rest drawn from the frame's scan.
+/// Scan points the board's polish of a tracked frame goes over at most: the filter's sample
+/// and the rest drawn from the frame's scan, as many of them as keep the frame's modelled
+/// time on the board within [`BOARD_FRAME_SHARE`] of the frame period.
 pub const BOARD_POLISH_POINTS: usize = 700;
+/// The share of a frame's period (`1 / --fps`) the board's part may take (the link and the
+/// run, as modelled); the rest is for the host's polish and checks.
+pub const BOARD_FRAME_SHARE: f64 = 0.8;
 
 /// The model as the board holds it, for a track's frames.
 pub struct BoardModel {
@@ -73,9 +77,7 @@ pub struct BoardFrame {
     /// Bytes on the wire before the run (the scan, SetSizes, Run, their replies) and after
     /// it (Result and its reply).
     pub link_bytes: usize,
-    /// Bytes of one Status round trip.
-    pub poll_bytes: usize,
-    /// The run's clocks (bound).
+    /// The run's clocks (modelled: [`FrameRequest`]'s plan).
     pub clocks: u64,
     /// The board's clock [Hz].
     pub clock_hz: u32,
@@ -97,12 +99,19 @@ pub struct BoardFrame {
 impl BoardFrame {
     /// The board's time for the frame at `baud` (module doc).
     pub fn seconds(&self, baud: u32) -> f64 {
-        let wire = |bytes: usize| bytes as f64 * BITS_PER_BYTE / baud as f64;
-        wire(self.link_bytes)
-            + self.clocks as f64 / self.clock_hz as f64
-            + wire(self.poll_bytes)
-            + 0.5 * DEFAULT_POLL.as_secs_f64()
+        board_seconds(self.link_bytes, self.clocks, self.clock_hz, baud)
     }
+}
+
+/// The board's time for a frame of `link_bytes` on the wire (but the polls) and a run of
+/// `clocks` at `clock_hz`, at `baud` (module doc): one Status round trip and half a poll
+/// period besides.
+fn board_seconds(link_bytes: usize, clocks: u64, clock_hz: u32, baud: u32) -> f64 {
+    let wire = |bytes: usize| bytes as f64 * BITS_PER_BYTE / baud as f64;
+    wire(link_bytes)
+        + clocks as f64 / clock_hz as f64
+        + wire(round_trip(Command::Status, Vec::new(), STATUS_BYTES))
+        + 0.5 * DEFAULT_POLL.as_secs_f64()
 }
 
 /// The bytes of a request with `data` and its reply of `reply` data bytes.
@@ -129,6 +138,8 @@ pub struct FrameRequest<'a> {
     pub spread: &'a [f64; 7],
     /// The track's scale bounds.
     pub bounds: &'a ScaleBounds,
+    /// The frame period [s] (`1 / --fps`).
+    pub frame_seconds: f64,
     /// Particles.
     pub particles: usize,
     /// Filter iterations.
@@ -137,13 +148,18 @@ pub struct FrameRequest<'a> {
     pub seed: u64,
 }
 
-/// One tracked frame's requests: the scan sample as the board stores it and the Run.
+/// One tracked frame's requests: the scan sample as the board stores it and the Run, and
+/// their modelled cost.
 struct FrameRun {
     scan_norm: Normalisation,
     /// The filter's points, then (with polish steps) the polish's others.
     scan: Vec<FxPoint>,
     filter_points: usize,
     run: RunRequest,
+    /// Bytes on the wire but the Status polls.
+    link_bytes: usize,
+    /// The run's clocks (modelled).
+    clocks: u64,
 }
 
 impl BoardModel {
@@ -181,9 +197,31 @@ impl BoardModel {
         client.ensure_grid(&self.grid, &self.normals, |_, _| {})
     }
 
-    /// The frame's requests (module doc).
-    fn frame_run(&self, r: &FrameRequest) -> FrameRun {
-        let FrameRequest { sample, extra, predicted, spread, bounds, particles, iterations, seed } = *r;
+    /// The frame's requests (module doc) with the polish over as many of `r.extra` as fit
+    /// the frame's share ([`BOARD_FRAME_SHARE`]) at the board's baud rate: all when they
+    /// fit; otherwise the share of them that the modelled time, linear in the points,
+    /// leaves room for (none when the sample alone does not fit).
+    fn planned(&self, r: &FrameRequest) -> FrameRun {
+        let full = self.frame_run(r, r.extra.len());
+        let budget = BOARD_FRAME_SHARE * r.frame_seconds;
+        let seconds = |f: &FrameRun| board_seconds(f.link_bytes, f.clocks, self.config.clock_hz, self.config.baud);
+        if full.run.polish.steps == 0 || seconds(&full) <= budget {
+            return full;
+        }
+        let none = self.frame_run(r, 0);
+        let (s0, s1) = (seconds(&none), seconds(&full));
+        let fits = ((budget - s0) / (s1 - s0) * r.extra.len() as f64).floor();
+        self.frame_run(r, if fits > 0.0 { (fits as usize).min(r.extra.len()) } else { 0 })
+    }
+
+    /// The frame's requests with the first `extra` of `r.extra` after the sample (when
+    /// the polish steps), and their cost: the bytes of every request and reply; the clocks
+    /// of the filter's schedule with every evaluation as long as the prediction's on the
+    /// neighbour pipeline's cycle model, plus the residual stage, and of the polish's model
+    /// ([`polish_clocks_model`]) with the pipeline's clocks over its points taken at the
+    /// sample's per point (the sample is drawn from the same scan).
+    fn frame_run(&self, r: &FrameRequest, extra: usize) -> FrameRun {
+        let FrameRequest { sample, predicted, spread, bounds, particles, iterations, seed, .. } = *r;
         let scan_norm = Normalisation::of(sample);
         let frame = Centred { scan: scan_norm.centre, model: self.model_norm.centre };
         let sigma0: Vec<f64> =
@@ -204,18 +242,12 @@ impl BoardModel {
         let scale = scale_step(bounds);
         let steps = if scale == ScaleStep::Held { BOARD_POLISH_STEPS } else { 0 };
         if steps > 0 {
-            scan.extend(morton_sorted(&scan_norm.quantise(extra)));
+            scan.extend(morton_sorted(&scan_norm.quantise(&r.extra[..extra])));
         }
         let polish = PolishRequest { points: scan.len() as u16, steps, winner_steps: 0, scale, hypotheses: Vec::new() };
-        FrameRun { scan_norm, scan, filter_points, run: RunRequest { filter, polish } }
-    }
-
-    /// What the frame costs on the board and its pose: the `polish`'s pose after steps, the
-    /// filter's `params` without (or when the polished matrix is no similarity).
-    fn frame_of(&self, f: &FrameRun, predicted: &Pose, params: &Particle, polish: &PolishOutcome) -> BoardFrame {
+        let run = RunRequest { filter, polish };
         let model_points = self.grid.points.len();
-        let uploads: usize = f
-            .scan
+        let uploads: usize = scan
             .chunks(MAX_LOAD_POINTS)
             .scan(0usize, |offset, chunk| {
                 let bytes = round_trip(Command::LoadScan, load_request(*offset as u16, chunk), 4);
@@ -224,31 +256,33 @@ impl BoardModel {
             })
             .sum();
         let link_bytes = uploads
-            + round_trip(Command::SetSizes, two_u16(model_points as u16, f.filter_points as u16), 4)
-            + round_trip(Command::Run, f.run.encode(), RUN_REPLY_BYTES)
+            + round_trip(Command::SetSizes, two_u16(model_points as u16, filter_points as u16), 4)
+            + round_trip(Command::Run, run.encode(), RUN_REPLY_BYTES)
             + round_trip(Command::Result, Vec::new(), RESULT_BYTES);
-        // Every evaluation as long as the prediction's on the neighbour pipeline's cycle
-        // model (the particles lie within a few spreads of it), plus the residual stage.
-        let at_prediction = quantise_pose(&normalised_pose(predicted, &f.scan_norm, &self.model_norm));
-        let pipeline = |points: &[FxPoint]| {
-            clocks_per_particle(&self.grid, points, &at_prediction, self.config.lanes).clocks + SURFACE_LATENCY as u64
+        let at_prediction = quantise_pose(&normalised_pose(predicted, &scan_norm, &self.model_norm));
+        let evaluation =
+            clocks_per_particle(&self.grid, &scan[..filter_points], &at_prediction, self.config.lanes).clocks;
+        let polish_pipeline = match run.polish.steps {
+            0 => 0,
+            _ => evaluation * scan.len() as u64 / filter_points.max(1) as u64 + SURFACE_LATENCY as u64,
         };
-        let polish_clocks = match f.run.polish.steps {
-            0 => polish_clocks_model(&f.run.polish, 0),
-            _ => polish_clocks_model(&f.run.polish, pipeline(&f.scan)),
-        };
-        let clocks =
-            run_clocks_for(f.run.filter.particles, f.run.filter.iterations, pipeline(&f.scan[..f.filter_points]))
-                + polish_clocks;
+        let clocks = run_clocks_for(run.filter.particles, run.filter.iterations, evaluation + SURFACE_LATENCY as u64)
+            + polish_clocks_model(&run.polish, polish_pipeline);
+        FrameRun { scan_norm, scan, filter_points, run, link_bytes, clocks }
+    }
+
+    /// What the frame costs on the board and its pose: the `polish`'s pose after steps, the
+    /// filter's `params` without (or when the polished matrix is no similarity).
+    fn frame_of(&self, f: &FrameRun, params: &Particle, polish: &PolishOutcome) -> BoardFrame {
+        let model_points = self.grid.points.len();
         let restored = restore_pose(&polish.pose).filter(|_| f.run.polish.steps > 0);
         BoardFrame {
             pose: match restored {
                 Some(p) => original_pose(&p, &f.scan_norm, &self.model_norm),
                 None => params_pose(params, &self.model_norm, &f.scan_norm),
             },
-            link_bytes,
-            poll_bytes: round_trip(Command::Status, Vec::new(), STATUS_BYTES),
-            clocks,
+            link_bytes: f.link_bytes,
+            clocks: f.clocks,
             clock_hz: self.config.clock_hz,
             scan: f.scan.clone(),
             filter_points: f.filter_points,
@@ -261,11 +295,11 @@ impl BoardModel {
 
     /// The frame's filter and polish by the board's bit-exact reference.
     pub fn filter(&self, r: &FrameRequest) -> BoardFrame {
-        let f = self.frame_run(r);
+        let f = self.planned(r);
         let search = pficp_fpga::surface::GridSearch { grid: &self.grid, normals: &self.normals };
         let filtered = &f.scan[..f.filter_points];
         let outcome = execute(&f.run, |p| evaluate(&self.grid, &self.normals, filtered, p), &search, &f.scan);
-        self.frame_of(&f, r.predicted, &outcome.filter.params, &outcome.polish)
+        self.frame_of(&f, &outcome.filter.params, &outcome.polish)
     }
 
     /// The frame's filter on the board behind `client` (the model on it:
@@ -277,7 +311,7 @@ impl BoardModel {
         r: &FrameRequest,
         poll: Duration,
     ) -> Result<BoardFrame, BoardError> {
-        let f = self.frame_run(r);
+        let f = self.planned(r);
         client.load_scan(&f.scan, |_, _| {})?;
         client.set_sizes(self.grid.points.len(), f.filter_points)?;
         let modelled = client.modelled_run_time(&f.run);
@@ -285,7 +319,7 @@ impl BoardModel {
         client.run(&f.run)?;
         client.wait_for_run(limit, modelled, poll, |_| {})?;
         let result = client.result()?;
-        Ok(self.frame_of(&f, r.predicted, &result.params, &result.polish))
+        Ok(self.frame_of(&f, &result.params, &result.polish))
     }
 }
 
@@ -325,6 +359,7 @@ mod tests {
                 predicted: &off,
                 spread: &spread,
                 bounds: &fixed,
+                frame_seconds: 1.0 / 30.0,
                 particles: 16,
                 iterations: 3,
                 seed: 7,
@@ -340,11 +375,16 @@ mod tests {
             assert!(from_board.0 < 1.0 && from_board.1 < 0.01, "frame {k}: {from_board:?}");
             let bound = run_clocks_bound(16, 3, sample.len(), seq.model.len(), 8);
             assert!(b.clocks > 0 && b.clocks < bound, "frame {k}: {} clocks, bound {bound}", b.clocks);
-            assert_eq!(
-                (b.filter_points, b.scan.len(), b.run.polish.points as usize),
-                (150, BOARD_POLISH_POINTS, BOARD_POLISH_POINTS)
-            );
-            assert!(b.link_bytes > BOARD_POLISH_POINTS * pficp_fpga::protocol::layout::POINT_BYTES);
+            // The polish's points: as many as fit the board's share of a frame at 30 a
+            // second; all of them in a second, the sample's alone in a millisecond.
+            assert_eq!((b.filter_points, b.run.polish.points as usize), (150, b.scan.len()));
+            let on_board = b.seconds(3_000_000);
+            assert!(on_board <= BOARD_FRAME_SHARE / 30.0 || b.scan.len() == 150, "frame {k}: {on_board} s");
+            let slow = board.filter(&FrameRequest { frame_seconds: 1.0, ..request });
+            let fast = board.filter(&FrameRequest { frame_seconds: 0.001, ..request });
+            assert_eq!((slow.scan.len(), fast.scan.len()), (BOARD_POLISH_POINTS, 150));
+            eprintln!("frame {k}: {} polish points, {on_board:.4} s on the board", b.scan.len());
+            assert!(b.link_bytes > b.scan.len() * pficp_fpga::protocol::layout::POINT_BYTES);
             assert!(b.seconds(921_600) > b.seconds(3_000_000));
             // A scale not yet fixed: the filter alone, its pose the filter's parameters (the
             // same filter: the same seed and spread).

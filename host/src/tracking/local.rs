@@ -147,6 +147,7 @@ pub fn track_frame(
     evidence: &Evidence,
     symmetries: &[Pose],
     budget: &FrameBudget,
+    frame_seconds: f64,
     seed: u64,
     filter: FrameFilter,
 ) -> Result<Local, BoardError> {
@@ -165,6 +166,7 @@ pub fn track_frame(
         predicted,
         spread,
         bounds,
+        frame_seconds,
         particles: budget.particles,
         iterations: budget.iterations,
         seed,

@@ -407,6 +407,7 @@ impl<'a> Tracker<'a> {
             &evidence,
             &self.symmetries,
             budget,
+            1.0 / self.settings.fps,
             seed,
             filter,
         )
