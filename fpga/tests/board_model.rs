@@ -12,12 +12,12 @@ use pficp_fpga::search::neighbour_pipeline::{run_particle as grid_run, upload, N
 #[test]
 fn wire_bytes_are_exact() {
     // Computed independently (a separate CRC-16/CCITT-FALSE and COBS in Python) for a
-    // 16-lane board at 100 MHz and 921,600 baud, protocol version 6.
+    // 16-lane board at 100 MHz and 921,600 baud, protocol version 7.
     let mut b = BoardModel::new(BoardConfig { lanes: 16, clock_hz: 100_000_000, baud: 921_600 });
     let request = [0x05, 0x01, 0x05, 0x9b, 0x7e, 0x00];
     let reply = [
-        0x04, 0x81, 0x05, 0x06, 0x02, 0x10, 0x02, 0x10, 0x02, 0x10, 0x05, 0x01, 0x25, 0xaa, 0x90, 0x04, 0xe1, 0xf5,
-        0x05, 0x03, 0x10, 0x0e, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x03, 0x6b, 0x44, 0x00,
+        0x04, 0x81, 0x05, 0x07, 0x02, 0x10, 0x02, 0x10, 0x02, 0x10, 0x05, 0x01, 0x25, 0xaa, 0x90, 0x04, 0xe1, 0xf5,
+        0x05, 0x03, 0x10, 0x0e, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x03, 0x74, 0x4d, 0x00,
     ];
     for (k, &byte) in request.iter().enumerate() {
         let out = b.receive(byte);
@@ -47,7 +47,7 @@ fn identify_reports_config_limits_and_sizes() {
         .iter()
         .map(|&(at, n)| le_at(&d, at, n))
         .collect();
-    assert_eq!(fields, vec![6, 4, 4096, 4096, 256, 37, 170, 144, 50_000_000, 115_200]);
+    assert_eq!(fields, vec![pficp_fpga::protocol::VERSION as u64, 4, 4096, 4096, 256, 37, 170, 144, 50_000_000, 115_200]);
     assert_eq!(&d[20..26], &[0; 6], "sizes and stored costs are 0 after power-up");
     ok(&mut b, req(LOAD_MODEL, 1, load_data(0, 1, &[[1, 2, 3]])));
     ok(&mut b, req(SET_SIZES, 2, u16s(1000, 4096)));

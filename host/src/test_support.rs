@@ -32,3 +32,13 @@ pub(crate) fn assert_deterministic(run: impl Fn() -> Registration) {
     let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
     assert_eq!(bits(&a.errors), bits(&b.errors));
 }
+
+/// `run` (a registration of a scan from the identity) on an empty scan takes no iteration,
+/// and on a one-point scan returns a finite MSD: no panic either way. Returns the one-point
+/// result for the method's own checks.
+pub(crate) fn assert_degenerate_scans(run: impl Fn(&[Point3<f64>]) -> Registration) -> Registration {
+    assert_eq!(run(&[]).iterations, 0);
+    let r = run(&[Point3::new(0.1, 0.2, 0.3)]);
+    assert!(r.msd.is_finite());
+    r
+}

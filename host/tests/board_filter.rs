@@ -12,9 +12,8 @@ use pficp::datasets::{make, ModelId, Sampling, ScanSpec};
 use pficp::nn::NearestNeighbours;
 use pficp::pf_icp::PfIcpSettings;
 use pficp::registration::methods::{PoseError, Tolerance};
-use pficp_fpga::filter::pf::{self, PfConfig};
+use pficp_fpga::filter::pf;
 use pficp_fpga::protocol::messages::{Identity, ResultReply, RunState, StatusReply};
-use pficp_fpga::protocol::run_request::{PolishRequest, RunRequest};
 use pficp_fpga::protocol::{Command, ErrorCode, Frame};
 use std::time::{Duration, Instant};
 use support::{cloud, grid, loaded, normals, run_reference, upload, PtyBoard};
@@ -30,38 +29,12 @@ fn on_board_50(
     on_board::register_on_board(client, nn, scan, settings, 50, Duration::from_millis(20), &mut |_, _, _| {})
 }
 
-/// A Run: the filter of `particles`, `iterations`, `seed`, then a polish of 2 steps over
-/// the first 30 stored scan points from its pose alone.
-fn run_config(particles: u16, iterations: u16, seed: u32) -> RunRequest {
-    let filter = PfConfig {
-        particles,
-        iterations,
-        temper_exp: 12,
-        centre: [0, 0, 0, 1 << pficp_fpga::filter::pf::SCALE_FRAC, 0, 0, 0],
-        sigma0: [20_000, 20_000, 20_000, 1 << 14, 1 << 15, 1 << 15, 1 << 15],
-        floor: [50, 50, 50, 50, 50, 50, 50],
-        seed,
-        thr_cost: 0,
-        thr_max: 0,
-    };
-    RunRequest {
-        filter,
-        polish: PolishRequest {
-            points: 30,
-            steps: 2,
-            winner_steps: 1,
-            scale: pficp_fpga::polish::ScaleStep::Solved,
-            hypotheses: vec![],
-        },
-    }
-}
-
 #[test]
 fn run_status_and_result_equal_the_functional_reference() {
     let (model, scan) = (cloud(300, 21), cloud(80, 22));
     let (_board, mut client) = loaded(&model, &scan);
     assert_eq!(client.status().unwrap(), StatusReply::IDLE);
-    let cfg = run_config(20, 8, 99);
+    let cfg = support::run_config(20, 8, 99, 2, 1);
     client.run(&cfg).unwrap();
     let (g, n) = (grid(&model), normals(&model));
     let run = run_reference(&model, &scan, &cfg);
@@ -102,11 +75,11 @@ fn result_before_any_run_is_a_clear_no_result_error() {
     assert!(matches!(e, BoardError::Board { command: Command::Result, code: ErrorCode::NoResult }), "{e:?}");
     assert!(e.to_string().contains("NoResult"), "{e}");
     // Run without sizes: the board's OverCapacity; out-of-range counts never reach the wire.
-    let e = client.run(&run_config(10, 2, 1)).unwrap_err();
+    let e = client.run(&support::run_config(10, 2, 1, 2, 1)).unwrap_err();
     assert!(matches!(e, BoardError::Board { command: Command::Run, code: ErrorCode::OverCapacity }), "{e:?}");
     let sent = client.stats().bytes_sent;
     for (p, i) in [(0, 3), (257, 3), (5, 0)] {
-        assert!(matches!(client.run(&run_config(p, i, 1)), Err(BoardError::Limit(_))));
+        assert!(matches!(client.run(&support::run_config(p, i, 1, 2, 1)), Err(BoardError::Limit(_))));
     }
     assert_eq!(client.stats().bytes_sent, sent, "host-side limits never reach the wire");
 }
@@ -129,7 +102,7 @@ fn a_lost_run_reply_is_not_run_twice_blindly() {
     }));
     let mut client = board.client();
     upload(&mut client, &model, &scan);
-    let cfg = run_config(8, 4, 5);
+    let cfg = support::run_config(8, 4, 5, 2, 1);
     client.run(&cfg).unwrap();
     assert_eq!(client.stats().resends, 1);
     assert_eq!(client.result().unwrap(), ResultReply::of(&run_reference(&model, &scan, &cfg)));
@@ -154,7 +127,7 @@ fn a_running_board_is_polled_and_busy_is_not_resent() {
     }));
     let mut client = board.client();
     upload(&mut client, &model, &scan);
-    let cfg = run_config(6, 3, 8);
+    let cfg = support::run_config(6, 3, 8, 2, 1);
     client.run(&cfg).unwrap();
     let e = client.result().unwrap_err();
     assert!(matches!(e, BoardError::Board { command: Command::Result, code: ErrorCode::Busy }), "{e:?}");
@@ -289,7 +262,7 @@ fn a_board_that_never_finishes_is_a_run_timeout() {
     let mut client = board.client();
     client.set_timeout(Duration::from_millis(200));
     upload(&mut client, &model, &scan);
-    let cfg = run_config(20, 10, 3);
+    let cfg = support::run_config(20, 10, 3, 2, 1);
     let limit = client.run_allowance(&cfg);
     assert_eq!(limit, Duration::from_millis(200) + client.modelled_run_time(&cfg) * pficp::board::RUN_SAFETY);
     client.run(&cfg).unwrap();
@@ -325,7 +298,7 @@ fn a_slow_board_that_makes_progress_is_waited_for() {
         }))
     };
     let limit = Duration::from_millis(400);
-    let cfg = run_config(8, 6, 4);
+    let cfg = support::run_config(8, 6, 4, 2, 1);
     for (stall_at, finishes) in [(6, true), (3, false)] {
         let mut board = serve(Duration::from_millis(150), 6, stall_at);
         let mut client = board.client();
@@ -374,7 +347,7 @@ fn an_iteration_count_that_goes_back_or_past_the_cap_is_an_error() {
         }));
         let mut client = board.client();
         upload(&mut client, &model, &scan);
-        client.run(&run_config(8, 6, 4)).unwrap();
+        client.run(&support::run_config(8, 6, 4, 2, 1)).unwrap();
         let e =
             client.wait_for_run(Duration::from_secs(5), Duration::ZERO, Duration::from_millis(5), |_| {}).unwrap_err();
         assert!(matches!(&e, BoardError::Filter(m) if m.contains(words)), "{e:?}");
@@ -434,7 +407,8 @@ fn a_version_1_board_serves_the_host_driven_mode_only() {
 }
 
 #[test]
-fn the_on_board_filter_needs_protocol_6_and_the_host_driven_mode_takes_1_2_and_4_to_6() {
+fn the_on_board_filter_needs_the_hosts_protocol_and_the_host_driven_mode_takes_1_2_and_4_on() {
+    use pficp_fpga::protocol::VERSION;
     let (ds, _) = reduced_model_1();
     let nn = NearestNeighbours::new(&ds.model);
     let settings = PfIcpSettings { clusters: 25, particles: 20, iterations: 4, seed: 5, ..Default::default() };
@@ -446,7 +420,7 @@ fn the_on_board_filter_needs_protocol_6_and_the_host_driven_mode_takes_1_2_and_4
     let m = e.to_string();
     assert!(
         m.contains("version 2")
-            && m.contains(&format!("need {}", pficp_fpga::protocol::VERSION))
+            && m.contains(&format!("need {VERSION}"))
             && m.contains("--host-driven")
             && !m.contains('\n'),
         "{m}"
@@ -463,21 +437,27 @@ fn the_on_board_filter_needs_protocol_6_and_the_host_driven_mode_takes_1_2_and_4
             })
         }))
     };
-    // Version 5 (a Run of at most 3 starts, no winner steps): the on-board filter refuses
-    // it before anything is uploaded; the host-driven mode serves it.
-    let mut board = board_of(5);
-    let mut client = board.client();
-    let e = on_board_50(&mut client, &nn, &ds.scan, &settings).unwrap_err();
-    assert!(e.to_string().contains("version 5") && e.to_string().contains("4 to 6"), "{e}");
-    assert_eq!(client.stats().requests, 1, "only Identify");
-    host_driven::register(&mut client, &nn, &ds.scan, &settings, &mut |_, _, _| {}).unwrap();
+    // Version 5 (a Run of at most 3 starts, no winner steps) and version 6 (a polish that
+    // cannot hold a known scale): the on-board filter refuses them before anything is
+    // uploaded; the host-driven mode serves them.
+    for old in [5, 6] {
+        let mut board = board_of(old);
+        let mut client = board.client();
+        let e = on_board_50(&mut client, &nn, &ds.scan, &settings).unwrap_err();
+        let to = format!("4 to {VERSION}");
+        assert!(e.to_string().contains(&format!("version {old}")) && e.to_string().contains(&to), "{e}");
+        assert_eq!(client.stats().requests, 1, "only Identify");
+        host_driven::register(&mut client, &nn, &ds.scan, &settings, &mut |_, _, _| {}).unwrap();
+    }
     // A board of a later version than the host: both modes refuse it.
-    let mut board = board_of(7);
+    let later = VERSION + 1;
+    let mut board = board_of(later);
     let mut client = board.client();
     let e = on_board_50(&mut client, &nn, &ds.scan, &settings).unwrap_err();
-    assert!(e.to_string().contains("version 7"), "{e}");
+    assert!(e.to_string().contains(&format!("version {later}")), "{e}");
     let e = host_driven::register(&mut client, &nn, &ds.scan, &settings, &mut |_, _, _| {}).unwrap_err();
-    assert!(matches!(&e, BoardError::Limit(m) if m.contains("version 7") && m.contains("1, 2 or 4 to 6")), "{e}");
+    let takes = format!("1, 2 or 4 to {VERSION}");
+    assert!(matches!(&e, BoardError::Limit(m) if m.contains(&format!("version {later}")) && m.contains(&takes)), "{e}");
 }
 
 #[test]

@@ -6,11 +6,9 @@ mod support;
 
 use pficp::board::{BoardClient, BoardError, MAX_RETRIES};
 use pficp_fpga::common::format::{FxPose, WeightScale};
-use pficp_fpga::filter::pf::PfConfig;
 use pficp_fpga::protocol::messages::{
     EvaluateReply, NearestReply, NearestRequest, ResultReply, RunState, StatusReply, FLAG_LAST,
 };
-use pficp_fpga::protocol::run_request::{PolishRequest, RunRequest};
 use pficp_fpga::protocol::{Command, Frame};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -181,31 +179,6 @@ fn a_nearest_reply_outside_the_model_or_with_a_wrong_sum_is_an_error() {
     }
 }
 
-/// A small Run: the filter, then a polish of 1 step over 30 stored points.
-fn run_config() -> RunRequest {
-    let filter = PfConfig {
-        particles: 8,
-        iterations: 4,
-        temper_exp: 12,
-        centre: [0, 0, 0, 1 << pficp_fpga::filter::pf::SCALE_FRAC, 0, 0, 0],
-        sigma0: [20_000, 20_000, 20_000, 1 << 14, 1 << 15, 1 << 15, 1 << 15],
-        floor: [50; 7],
-        seed: 7,
-        thr_cost: 0,
-        thr_max: 0,
-    };
-    RunRequest {
-        filter,
-        polish: PolishRequest {
-            points: 30,
-            steps: 1,
-            winner_steps: 0,
-            scale: pficp_fpga::polish::ScaleStep::Solved,
-            hypotheses: vec![],
-        },
-    }
-}
-
 #[test]
 fn a_result_whose_pose_or_numbers_do_not_fit_is_an_error() {
     type Edit = Box<dyn Fn(&mut ResultReply) + Send>;
@@ -225,7 +198,7 @@ fn a_result_whose_pose_or_numbers_do_not_fit_is_an_error() {
             Some(Frame { code: reply.code, seq: f.seq, data: r.encode() }.encode())
         }));
         let mut client = loaded(&mut board, 200, 60);
-        let cfg = run_config();
+        let cfg = support::run_config(8, 4, 7, 1, 0);
         client.run(&cfg).unwrap();
         client
             .wait_for_run(client.run_allowance(&cfg), client.modelled_run_time(&cfg), Duration::from_millis(5), |_| {})
@@ -254,10 +227,10 @@ fn a_creeping_board_ends_within_the_overall_cap() {
         Some(Frame { code: 0x88, seq: f.seq, data: s.encode() }.encode())
     }));
     let mut client = loaded(&mut board, 200, 60);
-    client.run(&run_config()).unwrap();
+    client.run(&support::run_config(8, 4, 7, 1, 0)).unwrap();
     let t = Instant::now();
     let e = client.wait_for_run(limit, Duration::ZERO, Duration::from_millis(10), |_| {}).unwrap_err();
-    let overall = limit * (run_config().filter.iterations as u32 + 1);
+    let overall = limit * (support::run_config(8, 4, 7, 1, 0).filter.iterations as u32 + 1);
     assert!(
         matches!(e, BoardError::RunTimeout { overall_limit, iterations: 4, .. } if overall_limit == overall),
         "{e:?}"

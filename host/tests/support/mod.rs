@@ -228,3 +228,34 @@ pub fn upload(client: &mut BoardClient, model: &[FxPoint], scan: &[FxPoint]) {
     client.load_scan(scan, |_, _| {}).unwrap();
     client.set_sizes(model.len(), scan.len()).unwrap();
 }
+
+/// A Run over the first 30 stored scan points: the filter of `particles`, `iterations`,
+/// `seed` about the identity, then a polish of `steps` steps from its pose alone and
+/// `winner_steps` more, the scale solved.
+pub fn run_config(
+    particles: u16,
+    iterations: u16,
+    seed: u32,
+    steps: u8,
+    winner_steps: u8,
+) -> pficp_fpga::protocol::run_request::RunRequest {
+    let filter = pficp_fpga::filter::pf::PfConfig {
+        particles,
+        iterations,
+        temper_exp: 12,
+        centre: [0, 0, 0, 1 << pficp_fpga::filter::pf::SCALE_FRAC, 0, 0, 0],
+        sigma0: [20_000, 20_000, 20_000, 1 << 14, 1 << 15, 1 << 15, 1 << 15],
+        floor: [50; 7],
+        seed,
+        thr_cost: 0,
+        thr_max: 0,
+    };
+    let polish = pficp_fpga::protocol::run_request::PolishRequest {
+        points: 30,
+        steps,
+        winner_steps,
+        scale: pficp_fpga::polish::ScaleStep::Solved,
+        hypotheses: vec![],
+    };
+    pficp_fpga::protocol::run_request::RunRequest { filter, polish }
+}

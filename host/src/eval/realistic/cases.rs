@@ -264,12 +264,7 @@ pub fn make_case(family: Family, shape: Shape, index: usize, seed: u64) -> Case 
         crate::datasets::cut_view(&mut view, &unit_vector(&mut rng), visible);
         view.shuffle(&mut rng);
     }
-    let noise = Normal::new(0.0, NOISE_FRACTION * diag).expect("positive sigma");
-    for p in view.iter_mut() {
-        for c in p.coords.iter_mut() {
-            *c += noise.sample(&mut rng);
-        }
-    }
+    add_noise(&mut view, NOISE_FRACTION * diag, &mut rng);
     let outliers =
         if family == Family::RealOutliers { (OUTLIER_FRACTION * view.len() as f64).round() as usize } else { 0 };
     if outliers > 0 {
@@ -316,19 +311,24 @@ pub const CAMERA_SCALE_RANGE: (f64, f64) = (0.8, 1.25);
 /// Largest rotation of the bounded camera-view families (about a random axis) [deg].
 pub const CAMERA_MAX_ANGLE_DEG: f64 = 90.0;
 
+/// Gaussian noise of standard deviation `sigma` on every coordinate, point by point.
+fn add_noise(points: &mut [Point3<f64>], sigma: f64, rng: &mut ChaCha8Rng) {
+    let noise = Normal::new(0.0, sigma).expect("positive sigma");
+    for p in points.iter_mut() {
+        for c in p.coords.iter_mut() {
+            *c += noise.sample(rng);
+        }
+    }
+}
+
 /// A camera-view case ([`super::camera::camera_view`]): the view, 0.5% noise, the truth.
 fn make_camera_case(family: Family, shape: Shape, index: usize, seed: u64) -> Case {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let (model, surface) = shape.draw(CAMERA_MODEL_POINTS, CAMERA_SURFACE_POINTS, &mut rng);
     let diag = bbox_diagonal(&model);
     let view = super::camera::camera_view(&surface, diag, CAMERA_SCAN_POINTS, &mut rng);
-    let noise = Normal::new(0.0, NOISE_FRACTION * diag).expect("positive sigma");
     let mut points = view.surface;
-    for p in points.iter_mut() {
-        for c in p.coords.iter_mut() {
-            *c += noise.sample(&mut rng);
-        }
-    }
+    add_noise(&mut points, NOISE_FRACTION * diag, &mut rng);
     let outliers = view.clutter.len();
     points.extend(view.clutter);
     points.shuffle(&mut rng);
