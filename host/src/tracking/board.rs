@@ -1,24 +1,26 @@
-//! A tracked frame's filter on the board, by the board's bit-exact reference, and the
-//! board's time for it (the model resident).
+//! A tracked frame's filter and polish on the board, by the board's bit-exact reference,
+//! and the board's time for it (the model resident).
 //!
 //! **What crosses the link a frame**: the frame's scan sample (normalised, quantised, in
 //! the Morton order of its cells; LoadScan requests of at most
-//! [`pficp_fpga::protocol::messages::MAX_LOAD_POINTS`] points), SetSizes, a Run whose
-//! filter starts at the prediction with the motion's spread (the centred Euler parameters
-//! of the on-board filter, the rotation vector's spread taken for each angle's) and whose
-//! polish, once the track's scale is fixed (known, or settled), is [`BOARD_POLISH_STEPS`]
-//! steps over the sample from the filter's pose with the scale held, and before that the
-//! smallest the protocol takes (one start, no steps); Status polls while it runs, then
-//! Result. The board's pose is the polish's (the filter's without steps); the host polishes
-//! and checks it as a software frame does its filter's. Each request and reply is the
-//! framed message ([`Frame::encode`]) at 10 bits a byte.
+//! [`pficp_fpga::protocol::messages::MAX_LOAD_POINTS`] points), SetSizes (the sample's
+//! count), a Run whose filter starts at the prediction with the motion's spread (the
+//! centred Euler parameters of the on-board filter, the rotation vector's spread taken for
+//! each angle's) and whose polish, once the track's scale is fixed (known, or settled), is
+//! [`BOARD_POLISH_STEPS`] steps from the filter's pose with the scale held over the sample
+//! and more of the frame's scan uploaded after it (up to [`BOARD_POLISH_POINTS`] in all, as
+//! many as the frame's time allows: [`FrameRequest`]), and before that the smallest the
+//! protocol takes (one start, no steps); Status polls while it runs, then Result. The
+//! board's pose is the polish's (the filter's without steps); the host polishes and checks
+//! it as a software frame does its filter's. Each request and reply is the framed message
+//! ([`Frame::encode`]) at 10 bits a byte.
 //!
 //! **The board's time** ([`BoardFrame::seconds`]): the bytes before and after the run at
 //! the baud rate; the run's clocks at the board's clock: the sequencer's schedule
 //! ([`run_clocks_for`]) with every evaluation as long as the prediction's, counted on the
 //! neighbour pipeline's cycle model ([`clocks_per_particle`], plus the residual stage's
 //! latency; the particles lie within a few spreads of the prediction), and the polish's
-//! bound ([`polish_clocks_bound`]); one Status round trip and half a poll period for the
+//! model ([`polish_clocks_model`]); one Status round trip and half a poll period for the
 //! poll that sees it done.
 
 use crate::board::on_board::{evaluate, filter_config, params_pose, scale_step, FilterPrior};
@@ -50,8 +52,7 @@ use std::time::Duration;
 const BITS_PER_BYTE: f64 = 10.0;
 
 /// The board's polish steps a tracked frame once the track's scale is fixed: one start (the
-/// filter's pose), the scale held, over the frame's sample (docs/tracking.md, "On the
-/// board").
+/// filter's pose), the scale held (docs/tracking.md, "On the board").
 pub const BOARD_POLISH_STEPS: u8 = 3;
 /// Scan points the board's polish of a tracked frame goes over at most: the filter's sample
 /// and the rest drawn from the frame's scan, as many of them as keep the frame's modelled
