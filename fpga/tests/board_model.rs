@@ -47,7 +47,10 @@ fn identify_reports_config_limits_and_sizes() {
         .iter()
         .map(|&(at, n)| le_at(&d, at, n))
         .collect();
-    assert_eq!(fields, vec![pficp_fpga::protocol::VERSION as u64, 4, 4096, 4096, 256, 37, 170, 144, 50_000_000, 115_200]);
+    assert_eq!(
+        fields,
+        vec![pficp_fpga::protocol::VERSION as u64, 4, 4096, 4096, 256, 37, 170, 144, 50_000_000, 115_200]
+    );
     assert_eq!(&d[20..26], &[0; 6], "sizes and stored costs are 0 after power-up");
     ok(&mut b, req(LOAD_MODEL, 1, load_data(0, 1, &[[1, 2, 3]])));
     ok(&mut b, req(SET_SIZES, 2, u16s(1000, 4096)));
