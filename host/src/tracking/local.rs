@@ -135,7 +135,8 @@ pub(crate) fn sample(scan: &[Point3<f64>], count: usize, seed: u64) -> Vec<Point
 /// polish, the checks; the scale within `bounds` (the track's), judged at a bound against
 /// the user's `user_bounds`. `evidence` is the acquisition's (the sensor's noise), `symmetries`
 /// the carried alternatives' model-frame maps, `seed` this frame's; `filter` says where the
-/// frame's filter runs. Only a board's failure is an error.
+/// frame's filter runs, and `frame_seconds` (the frame period) bounds the board's part of
+/// it ([`FrameRequest`]). Only a board's failure is an error.
 #[allow(clippy::too_many_arguments)]
 pub fn track_frame(
     surface: &Surface,
@@ -160,9 +161,9 @@ pub fn track_frame(
         FrameFilter::Host => Vec::new(),
         _ => sample(scan, BOARD_POLISH_POINTS.saturating_sub(weighed.len()), seed.wrapping_add(3)),
     };
-    let board_request = |extra| FrameRequest {
+    let board_request = FrameRequest {
         sample: &weighed,
-        extra,
+        extra: &polish_extra,
         predicted,
         spread,
         bounds,
@@ -191,11 +192,11 @@ pub fn track_frame(
             (objective.pose(&particle_filter::run(&objective, &[0.0; 7], spread, &settings).estimate), None)
         }
         FrameFilter::BoardReference(b) => {
-            let f = b.filter(&board_request(&polish_extra));
+            let f = b.filter(&board_request);
             (f.pose, Some(f))
         }
         FrameFilter::Board(b, client, poll) => {
-            let f = b.filter_on(client, &board_request(&polish_extra), poll)?;
+            let f = b.filter_on(client, &board_request, poll)?;
             (f.pose, Some(f))
         }
     };
