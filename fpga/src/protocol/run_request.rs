@@ -151,15 +151,20 @@ pub const PASS_END_CLOCKS: u64 = 64;
 /// lets several into the pipeline, which only overlaps them) and [`PASS_POINT_CLOCKS`],
 /// and a pass ends within [`PASS_END_CLOCKS`] of its last point.
 pub fn polish_clocks_bound(p: &PolishRequest, model_points: usize, lanes: usize) -> u64 {
+    let point =
+        crate::surface::surface_residual::evaluation_clocks_bound(1, model_points, lanes.max(1)) + PASS_POINT_CLOCKS;
+    polish_passes(p) * (p.points as u64 * point + PASS_END_CLOCKS + program_clocks_bound())
+}
+
+/// The passes of the polish of `p`, at most: each start's `steps + 2` (the statistics,
+/// the steps, the cost), and the winner's further polish `winner_steps + 2`.
+fn polish_passes(p: &PolishRequest) -> u64 {
     let starts = 1 + p.hypotheses.len() as u64;
     let winner = match p.winner_steps.min(MAX_STEPS) {
         0 => 0,
         w => w as u64 + 2,
     };
-    let passes = starts * (p.steps.min(MAX_STEPS) as u64 + 2) + winner;
-    let point =
-        crate::surface::surface_residual::evaluation_clocks_bound(1, model_points, lanes.max(1)) + PASS_POINT_CLOCKS;
-    passes * (p.points as u64 * point + PASS_END_CLOCKS + program_clocks_bound())
+    starts * (p.steps.min(MAX_STEPS) as u64 + 2) + winner
 }
 
 /// Clocks the pass's front spends on an inlier ([`crate::polish::pass_rtl`]'s schedule: 14
@@ -173,13 +178,7 @@ pub const PASS_INLIER_CLOCKS: u64 = 15;
 /// every point as if each were an inlier and none overlapped the pipeline, and
 /// [`PASS_END_CLOCKS`]; between passes the programs' bounds ([`program_clocks_bound`]).
 pub fn polish_clocks_model(p: &PolishRequest, pipeline: u64) -> u64 {
-    let starts = 1 + p.hypotheses.len() as u64;
-    let winner = match p.winner_steps.min(MAX_STEPS) {
-        0 => 0,
-        w => w as u64 + 2,
-    };
-    let passes = starts * (p.steps.min(MAX_STEPS) as u64 + 2) + winner;
-    passes * (pipeline + p.points as u64 * PASS_INLIER_CLOCKS + PASS_END_CLOCKS + program_clocks_bound())
+    polish_passes(p) * (pipeline + p.points as u64 * PASS_INLIER_CLOCKS + PASS_END_CLOCKS + program_clocks_bound())
 }
 
 /// What the polish chose.

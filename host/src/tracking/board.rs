@@ -34,7 +34,7 @@ use crate::pf_icp::PfIcpSettings;
 use nalgebra::Point3;
 use pficp_fpga::board::BoardConfig;
 use pficp_fpga::common::format::FxPoint;
-use pficp_fpga::filter::pf::Particle;
+use pficp_fpga::filter::pf::{Particle, PfConfig};
 use pficp_fpga::polish::ScaleStep;
 use pficp_fpga::protocol::messages::{
     load_request, two_u16, MAX_LOAD_POINTS, RESULT_BYTES, RUN_REPLY_BYTES, STATUS_BYTES,
@@ -149,6 +149,18 @@ pub struct FrameRequest<'a> {
     pub seed: u64,
 }
 
+/// A tracked frame's filter ([`BoardModel::filter_part`]).
+struct FilterPart {
+    scan_norm: Normalisation,
+    /// The filter's points as the board stores them.
+    sample: Vec<FxPoint>,
+    filter: PfConfig,
+    scale: ScaleStep,
+    steps: u8,
+    /// The pipeline's clocks for one evaluation of the sample at the prediction.
+    evaluation: u64,
+}
+
 /// One tracked frame's requests: the scan sample as the board stores it and the Run, and
 /// their modelled cost.
 struct FrameRun {
@@ -203,25 +215,24 @@ impl BoardModel {
     /// fit; otherwise the share of them that the modelled time, linear in the points,
     /// leaves room for (none when the sample alone does not fit).
     fn planned(&self, r: &FrameRequest) -> FrameRun {
-        let full = self.frame_run(r, r.extra.len());
+        let filter = self.filter_part(r);
+        let full = self.frame_run(&filter, r.extra, r.extra.len());
         let budget = BOARD_FRAME_SHARE * r.frame_seconds;
         let seconds = |f: &FrameRun| board_seconds(f.link_bytes, f.clocks, self.config.clock_hz, self.config.baud);
         if full.run.polish.steps == 0 || seconds(&full) <= budget {
             return full;
         }
-        let none = self.frame_run(r, 0);
+        let none = self.frame_run(&filter, r.extra, 0);
         let (s0, s1) = (seconds(&none), seconds(&full));
         let fits = ((budget - s0) / (s1 - s0) * r.extra.len() as f64).floor();
-        self.frame_run(r, if fits > 0.0 { (fits as usize).min(r.extra.len()) } else { 0 })
+        self.frame_run(&filter, r.extra, if fits > 0.0 { (fits as usize).min(r.extra.len()) } else { 0 })
     }
 
-    /// The frame's requests with the first `extra` of `r.extra` after the sample (when
-    /// the polish steps), and their cost: the bytes of every request and reply; the clocks
-    /// of the filter's schedule with every evaluation as long as the prediction's on the
-    /// neighbour pipeline's cycle model, plus the residual stage, and of the polish's model
-    /// ([`polish_clocks_model`]) with the pipeline's clocks over its points taken at the
-    /// sample's per point (the sample is drawn from the same scan).
-    fn frame_run(&self, r: &FrameRequest, extra: usize) -> FrameRun {
+    /// The frame's filter (the part of its requests that does not depend on the polish's
+    /// points): the sample as the board stores it, the Run's filter, the polish's scale and
+    /// steps, and the clocks of one evaluation at the prediction on the neighbour
+    /// pipeline's cycle model.
+    fn filter_part(&self, r: &FrameRequest) -> FilterPart {
         let FrameRequest { sample, predicted, spread, bounds, particles, iterations, seed, .. } = *r;
         let scan_norm = Normalisation::of(sample);
         let frame = Centred { scan: scan_norm.centre, model: self.model_norm.centre };
@@ -237,16 +248,35 @@ impl BoardModel {
             threshold_max: 0.0,
         };
         let settings = PfIcpSettings { particles, iterations, seed, ..Default::default() };
-        let mut scan: Vec<FxPoint> = morton_sorted(&scan_norm.quantise(sample));
-        let filter_points = scan.len();
-        let filter = filter_config(&prior, &self.model_norm, &scan_norm, filter_points, &settings);
+        let sample: Vec<FxPoint> = morton_sorted(&scan_norm.quantise(sample));
+        let filter = filter_config(&prior, &self.model_norm, &scan_norm, sample.len(), &settings);
         let scale = scale_step(bounds);
         let steps = if scale == ScaleStep::Held { BOARD_POLISH_STEPS } else { 0 };
-        if steps > 0 {
-            scan.extend(morton_sorted(&scan_norm.quantise(&r.extra[..extra])));
+        let at_prediction = quantise_pose(&normalised_pose(predicted, &scan_norm, &self.model_norm));
+        let evaluation = clocks_per_particle(&self.grid, &sample, &at_prediction, self.config.lanes).clocks;
+        FilterPart { scan_norm, sample, filter, scale, steps, evaluation }
+    }
+
+    /// The frame's requests with the first `extra` of `points` after the sample (when the
+    /// polish steps), and their cost: the bytes of every request and reply; the clocks of
+    /// the filter's schedule with every evaluation as long as the prediction's, plus the
+    /// residual stage, and of the polish's model ([`polish_clocks_model`]) with the
+    /// pipeline's clocks over its points taken at the sample's per point (the sample is
+    /// drawn from the same scan).
+    fn frame_run(&self, f: &FilterPart, points: &[Point3<f64>], extra: usize) -> FrameRun {
+        let filter_points = f.sample.len();
+        let mut scan = f.sample.clone();
+        if f.steps > 0 {
+            scan.extend(morton_sorted(&f.scan_norm.quantise(&points[..extra])));
         }
-        let polish = PolishRequest { points: scan.len() as u16, steps, winner_steps: 0, scale, hypotheses: Vec::new() };
-        let run = RunRequest { filter, polish };
+        let polish = PolishRequest {
+            points: scan.len() as u16,
+            steps: f.steps,
+            winner_steps: 0,
+            scale: f.scale,
+            hypotheses: Vec::new(),
+        };
+        let run = RunRequest { filter: f.filter.clone(), polish };
         let model_points = self.grid.points.len();
         let uploads: usize = scan
             .chunks(MAX_LOAD_POINTS)
@@ -260,16 +290,13 @@ impl BoardModel {
             + round_trip(Command::SetSizes, two_u16(model_points as u16, filter_points as u16), 4)
             + round_trip(Command::Run, run.encode(), RUN_REPLY_BYTES)
             + round_trip(Command::Result, Vec::new(), RESULT_BYTES);
-        let at_prediction = quantise_pose(&normalised_pose(predicted, &scan_norm, &self.model_norm));
-        let evaluation =
-            clocks_per_particle(&self.grid, &scan[..filter_points], &at_prediction, self.config.lanes).clocks;
         let polish_pipeline = match run.polish.steps {
             0 => 0,
-            _ => evaluation * scan.len() as u64 / filter_points.max(1) as u64 + SURFACE_LATENCY as u64,
+            _ => f.evaluation * scan.len() as u64 / filter_points.max(1) as u64 + SURFACE_LATENCY as u64,
         };
-        let clocks = run_clocks_for(run.filter.particles, run.filter.iterations, evaluation + SURFACE_LATENCY as u64)
+        let clocks = run_clocks_for(run.filter.particles, run.filter.iterations, f.evaluation + SURFACE_LATENCY as u64)
             + polish_clocks_model(&run.polish, polish_pipeline);
-        FrameRun { scan_norm, scan, filter_points, run, link_bytes, clocks }
+        FrameRun { scan_norm: f.scan_norm, scan, filter_points, run, link_bytes, clocks }
     }
 
     /// What the frame costs on the board and its pose: the `polish`'s pose after steps, the
