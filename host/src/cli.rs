@@ -171,7 +171,7 @@ fn shell_word(s: &str) -> String {
     }
 }
 
-/// Another pose that fits as well (JSON).
+/// Another pose the scan does not rule out (JSON).
 #[derive(Clone, Debug, Serialize)]
 pub struct AlternativeRecord {
     /// The pose.
@@ -181,6 +181,9 @@ pub struct AlternativeRecord {
     pub cost: f64,
     /// Its mean cost excess over the answer, in standard errors.
     pub excess_sigmas: f64,
+    /// It fits as well as the answer within the noise; `false`: it fits worse, but the
+    /// evidence rules do not rule it out (listed only beside some that fit as well).
+    pub fits_as_well: bool,
 }
 
 /// PF-ICP's verdict, alternatives, uncertainty and fit (docs in `crate::pf_icp::conclusion`
@@ -194,10 +197,12 @@ pub struct Assessment {
     pub reasons: Vec<String>,
     /// What the verdict was judged on: `explained` (share of the scan on the surface within
     /// the noise), `hidden` (share the model would hide from `--viewpoint`, or `null`),
-    /// `scale_at_bound`, `alternatives`, `undetermined`, `widest_sigma` (deg, fraction of the
-    /// diagonal, relative scale).
+    /// `scale_at_bound`, `alternatives` (how many fit as well), `not_ruled_out` (how many more
+    /// are listed), `undetermined`, `widest_sigma` (deg, fraction of the diagonal, relative
+    /// scale).
     pub checks: crate::pf_icp::verdict::Checks,
-    /// Other poses that fit as well within the noise (empty: the pose is unambiguous).
+    /// Other poses that fit as well within the noise, then (only beside some of those) the
+    /// poses that fit worse but are not ruled out; empty: the pose is unambiguous.
     pub alternatives: Vec<AlternativeRecord>,
     /// Names and order of the covariance's parameters ([`crate::pf_icp::surface::LOCAL_NAMES`]).
     pub covariance_order: [&'static str; 7],
@@ -229,7 +234,12 @@ impl Assessment {
             alternatives: c
                 .alternatives
                 .iter()
-                .map(|a| AlternativeRecord { pose: a.pose.record(), cost: a.cost, excess_sigmas: a.excess_sigmas })
+                .map(|a| AlternativeRecord {
+                    pose: a.pose.record(),
+                    cost: a.cost,
+                    excess_sigmas: a.excess_sigmas,
+                    fits_as_well: a.fits_as_well,
+                })
                 .collect(),
             covariance_order: crate::pf_icp::surface::LOCAL_NAMES,
             covariance: c.uncertainty.covariance,
@@ -270,9 +280,14 @@ impl Assessment {
             self.fitness, self.inlier_distance, self.inlier_rmse
         );
         if !self.alternatives.is_empty() {
+            let as_well = self.alternatives.iter().filter(|a| a.fits_as_well).count();
+            let more = match self.alternatives.len() - as_well {
+                0 => String::new(),
+                n => format!(", {n} more fit worse but are not ruled out"),
+            };
             s += &format!(
-                "warning: the shape looks symmetric: {} poses fit as well as this one within the noise (see alternatives in --json)\n",
-                self.alternatives.len() + 1
+                "warning: the shape looks symmetric: {} poses fit as well as this one within the noise{more} (see alternatives in --json)\n",
+                as_well + 1
             );
         }
         if !self.undetermined.is_empty() {

@@ -50,7 +50,7 @@ class Registration:
     def reasons(self) -> List[str]: ...
     @property
     def alternatives(self) -> List[Dict[str, Any]]:
-        """Other poses that fit as well: transformation, scale, rotation, translation, cost, excess_sigmas."""
+        """Other poses that fit as well, then (beside some of those) poses that fit worse but are not ruled out: transformation, scale, rotation, translation, cost, excess_sigmas, fits_as_well."""
     @property
     def msd(self) -> float: ...
     @property

@@ -111,8 +111,9 @@ impl Registration {
     fn reasons(&self) -> Vec<String> {
         self.report.assessment.as_ref().map(|a| a.reasons.clone()).unwrap_or_default()
     }
-    /// Other poses that fit as well within the noise: dicts with `transformation`,
-    /// `scale`, `rotation`, `translation`, `cost` and `excess_sigmas`.
+    /// Other poses that fit as well within the noise, then (beside some of those) poses that
+    /// fit worse but are not ruled out: dicts with `transformation`, `scale`, `rotation`,
+    /// `translation`, `cost`, `excess_sigmas` and `fits_as_well`.
     #[getter]
     fn alternatives<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
         let list = PyList::empty(py);
@@ -120,6 +121,7 @@ impl Registration {
             let d = pose_dict(py, &a.pose)?;
             d.set_item("cost", a.cost)?;
             d.set_item("excess_sigmas", a.excess_sigmas)?;
+            d.set_item("fits_as_well", a.fits_as_well)?;
             list.append(d)?;
         }
         Ok(list)

@@ -18,7 +18,13 @@
 //!    standard error over spatial blocks was tried and dropped: a clearly seen small
 //!    feature puts all the evidence in one block, and it then listed the flip of a block
 //!    with a boss seen whole. An exactly symmetric shape lists its symmetric poses; a
-//!    near-symmetric one whose breaking feature is clearly seen lists none.
+//!    near-symmetric one whose breaking feature is clearly seen lists none. When some pose
+//!    fits as well, the scan's ranking of the others is no firmer: every other polished
+//!    pose the verdict's evidence rules would not rule out on its own
+//!    ([`crate::pf_icp::verdict::not_ruled_out`]: explained share and hidden share) is
+//!    listed after them (`fits_as_well` false), so that the truth is among the answer and
+//!    its alternatives when a clutter blob over the breaking feature tipped the test (the
+//!    verdict, `ambiguous` either way, does not change).
 //! 3. **Uncertainty**: the covariance of the local parameters
 //!    [`crate::pf_icp::surface::LOCAL_NAMES`] (translation of the scan centroid's image, scale,
 //!    rotation vector in the model frame) is the cluster-robust (sandwich) covariance
@@ -99,6 +105,15 @@ pub struct Alternative {
     pub cost: f64,
     /// Its mean cost excess over the answer, in standard errors.
     pub excess_sigmas: f64,
+    /// It fits as well as the answer (the paired test); else it is only not ruled out
+    /// (module doc, step 2).
+    pub fits_as_well: bool,
+}
+
+/// The share of per-point tight costs below `cap2` (the cap: a point beyond the noise, or
+/// hidden from the sensor).
+pub fn explained_share(costs: &[f64], cap2: f64) -> f64 {
+    costs.iter().filter(|&&c| c < cap2).count() as f64 / costs.len().max(1) as f64
 }
 
 /// The pose's uncertainty.
@@ -365,10 +380,44 @@ pub fn conclude_on(
         }
         let z = paired_excess(&costs, c);
         if z < ALTERNATIVE_SIGMAS {
-            alternatives.push(Alternative { pose: *p, cost: mean(c), excess_sigmas: z });
+            alternatives.push(Alternative { pose: *p, cost: mean(c), excess_sigmas: z, fits_as_well: true });
         }
     }
-    alternatives.sort_by(|a, b| a.cost.total_cmp(&b.cost));
+    // A scan that cannot tell the answer from another pose cannot rank the rest either:
+    // then every other polished pose the verdict's evidence checks would not rule out is
+    // listed too, behind the ones that fit as well.
+    let fit_as_well = alternatives.len();
+    if fit_as_well > 0 {
+        let cap2 = evidence.tight_cap * evidence.tight_cap;
+        let others: Vec<Alternative> = polished
+            .par_iter()
+            .enumerate()
+            .filter(|(i, (p, _))| {
+                *i != best
+                    && !same_pose(p, &pose, &at, diag)
+                    && !alternatives.iter().any(|a| same_pose(&a.pose, p, &at, diag))
+            })
+            .filter_map(|(_, (p, c))| {
+                let hidden = evidence.viewpoint.map(|v| {
+                    crate::pf_icp::evidence::hidden(surface, &compared, p, &v).iter().filter(|&&h| h).count() as f64
+                        / compared.len().max(1) as f64
+                });
+                crate::pf_icp::verdict::not_ruled_out(explained_share(c, cap2), hidden).then(|| Alternative {
+                    pose: *p,
+                    cost: mean(c),
+                    excess_sigmas: paired_excess(&costs, c),
+                    fits_as_well: false,
+                })
+            })
+            .collect();
+        for a in others {
+            if !alternatives.iter().any(|b| same_pose(&a.pose, &b.pose, &at, diag)) {
+                alternatives.push(a);
+            }
+        }
+    }
+    // Those that fit as well first, each kind best first.
+    alternatives.sort_by(|a, b| b.fits_as_well.cmp(&a.fits_as_well).then(a.cost.total_cmp(&b.cost)));
 
     // Uncertainty: the curvature's, inflated. (The filter's last particle set is no
     // posterior: it spreads over the propagation region, a prior's width, and on an exact
@@ -402,7 +451,7 @@ pub fn conclude_on(
         (surface, evidence, costs)
     };
     let cap2 = evidence.tight_cap * evidence.tight_cap;
-    let explained = costs.iter().filter(|&&c| c < cap2).count() as f64 / costs.len().max(1) as f64;
+    let explained = explained_share(&costs, cap2);
     let hidden = evidence.viewpoint.map(|v| {
         crate::pf_icp::evidence::hidden(checked, &compared, &pose, &v).iter().filter(|&&h| h).count() as f64
             / compared.len().max(1) as f64
@@ -413,7 +462,8 @@ pub fn conclude_on(
         explained,
         hidden,
         scale_at_bound,
-        alternatives: alternatives.len(),
+        alternatives: fit_as_well,
+        not_ruled_out: alternatives.len() - fit_as_well,
         undetermined: uncertainty.undetermined.clone(),
         widest_sigma: widest_sigma(&uncertainty.sigma, diag, pose.scale),
     };

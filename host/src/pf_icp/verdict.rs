@@ -70,13 +70,23 @@ pub struct Checks {
     pub hidden: Option<f64>,
     /// The scale sits at a bound of the user's range.
     pub scale_at_bound: bool,
-    /// Alternatives listed.
+    /// Alternatives that fit as well as the answer.
     pub alternatives: usize,
+    /// Further alternatives listed: not ruled out by the evidence rules ([`not_ruled_out`]),
+    /// though the scan prefers the answer to them (listed only beside some that fit as well).
+    pub not_ruled_out: usize,
     /// Motions the scan cannot determine.
     pub undetermined: Vec<String>,
     /// Widest one-sigma rotation [deg], translation [fraction of the diagonal] and relative
     /// scale (0 where fixed).
     pub widest_sigma: [f64; 3],
+}
+
+/// Whether a pose explaining `explained` of the scan, with `hidden` of it where the model
+/// would hide it from the sensor, passes the evidence rules of [`judge`]: at least
+/// [`MIN_EXPLAINED`] explained, at most [`MAX_HIDDEN`] hidden.
+pub fn not_ruled_out(explained: f64, hidden: Option<f64>) -> bool {
+    explained >= MIN_EXPLAINED && hidden.is_none_or(|h| h <= MAX_HIDDEN)
 }
 
 /// The verdict and its reasons in words (empty for `confident`).
@@ -114,9 +124,13 @@ pub fn judge(c: &Checks) -> (Verdict, Vec<String>) {
         return (Verdict::Unreliable, unreliable);
     }
     if c.alternatives > 0 {
+        let more = match c.not_ruled_out {
+            0 => String::new(),
+            n => format!(", {n} more fit worse but are not ruled out"),
+        };
         return (
             Verdict::Ambiguous,
-            vec![format!("{} other poses fit as well within the noise (see alternatives)", c.alternatives)],
+            vec![format!("{} other poses fit as well within the noise{more} (see alternatives)", c.alternatives)],
         );
     }
     (Verdict::Confident, Vec::new())
@@ -132,6 +146,7 @@ mod tests {
             hidden: Some(0.05),
             scale_at_bound: false,
             alternatives: 0,
+            not_ruled_out: 0,
             undetermined: Vec::new(),
             widest_sigma: [0.1, 0.001, 0.001],
         }
@@ -141,6 +156,9 @@ mod tests {
     fn each_rule_can_turn_the_verdict() {
         assert_eq!(judge(&good()), (Verdict::Confident, vec![]));
         assert_eq!(judge(&Checks { alternatives: 2, ..good() }).0, Verdict::Ambiguous);
+        let (v, reasons) = judge(&Checks { alternatives: 2, not_ruled_out: 3, ..good() });
+        assert_eq!(v, Verdict::Ambiguous);
+        assert!(reasons[0].starts_with("2 other poses") && reasons[0].contains("3 more"), "{reasons:?}");
         for bad in [
             Checks { explained: 0.4, ..good() },
             Checks { hidden: Some(0.5), ..good() },
@@ -154,6 +172,9 @@ mod tests {
             assert_eq!(v, Verdict::Unreliable, "{bad:?}");
             assert_eq!(reasons.len(), 1, "{reasons:?}");
         }
+        // The poses the evidence rules do not rule out: those a verdict's own evidence passes.
+        assert!(not_ruled_out(MIN_EXPLAINED, Some(MAX_HIDDEN)) && not_ruled_out(0.95, None));
+        assert!(!not_ruled_out(MIN_EXPLAINED - 0.01, None) && !not_ruled_out(0.95, Some(MAX_HIDDEN + 0.01)));
         // Without a viewpoint there is no visibility check.
         assert_eq!(judge(&Checks { hidden: None, ..good() }).0, Verdict::Confident);
     }

@@ -268,6 +268,7 @@ pub fn track_frame(
         hidden,
         scale_at_bound: user_bounds.fixed_value().is_none() && (at_bound(user_bounds.lo) || at_bound(user_bounds.hi)),
         alternatives: alternatives.len(),
+        not_ruled_out: 0,
         undetermined: uncertainty.undetermined.clone(),
         widest_sigma: widest_sigma(&uncertainty.sigma, diag, pose.scale),
     };

@@ -329,7 +329,10 @@ impl<'a> Tracker<'a> {
         };
         if held {
             self.evidence = Some(Evidence::new(&self.surface, scan, c.pose.scale, settings.viewpoint));
-            let maps = c.alternatives.iter().map(|a| a.pose.compose(&c.pose.inverse())).collect();
+            // (The track carries the poses that fit as well; those only not ruled out fit
+            // worse on this view, and a tracked frame's paired test would drop them.)
+            let maps =
+                c.alternatives.iter().filter(|a| a.fits_as_well).map(|a| a.pose.compose(&c.pose.inverse())).collect();
             if self.scale.working.fixed_value().is_none() {
                 let s = c.pose.scale;
                 self.scale.working = self.scale.user.within(s * (1.0 - SCALE_SETTLING), s * (1.0 + SCALE_SETTLING));

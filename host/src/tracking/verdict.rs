@@ -52,6 +52,7 @@ mod tests {
             hidden: None,
             scale_at_bound: false,
             alternatives,
+            not_ruled_out: 0,
             undetermined: Vec::new(),
             widest_sigma,
         }
