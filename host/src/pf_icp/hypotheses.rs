@@ -20,7 +20,11 @@
 //! [`SearchSettings::screen_keep`] [`SearchSettings::coarse_iterations`] more on
 //! [`SearchSettings::coarse_points`], the best [`SearchSettings::keep`]
 //! [`SearchSettings::fine_iterations`] more on [`SearchSettings::fine_points`]
-//! (least-squares scale); ranked by the wide cost in the scan's units
+//! (least-squares scale); with the scale free, the screen and coarse passes also run with
+//! each start's own scale held, and their best [`SearchSettings::held_keep`] distinct
+//! survivors join the fine pass (on a small cluttered view a free scale drifts 25 to 40%
+//! into a wrong basin within the first passes, while the radius ratio is within a few
+//! percent of the truth; docs/global-registration.md, "Held-scale branch"); ranked by the wide cost in the scan's units
 //! ([`Evidence::wide_cost`]) over the whole cost sample; every scale within the user's
 //! bounds. Poses
 //! count as distinct when they differ by more than 5 deg, 2% of the diagonal at the scan's
@@ -61,6 +65,9 @@ pub struct SearchSettings {
     pub fine_iterations: usize,
     /// Fraction of pairs kept by each trimmed ICP iteration (the closest ones).
     pub trim: f64,
+    /// With the scale free: distinct survivors of the held-scale screen and coarse passes
+    /// (each start keeps its own scale) added to the fine pass; 0 turns the branch off.
+    pub held_keep: usize,
 }
 
 impl Default for SearchSettings {
@@ -76,6 +83,7 @@ impl Default for SearchSettings {
             fine_points: 300,
             fine_iterations: 20,
             trim: 0.85,
+            held_keep: 8,
         }
     }
 }
@@ -262,12 +270,18 @@ pub fn search(
             && (s0 == 0.0 || bounds.fixed_value().is_some() || (h.pose.scale > 0.5 * s0 && h.pose.scale < 2.0 * s0))
     };
     // One pass: trimmed ICP from each pose, ranked by the cost over `cost_pts`, implausible
-    // scales dropped, best first.
-    let pass = |from: &[Pose], pts: &[Point3<f64>], iterations: usize, rule: ScaleRule, cost_pts: &[Point3<f64>]| {
+    // scales dropped, best first. `held` keeps each pose's own scale.
+    let pass = |from: &[Pose],
+                pts: &[Point3<f64>],
+                iterations: usize,
+                rule: ScaleRule,
+                cost_pts: &[Point3<f64>],
+                held: bool| {
         let mut out: Vec<Hypothesis> = from
             .par_iter()
             .map(|s| {
-                let pose = trimmed_icp(nn, pts, s, iterations, settings.trim, rule, bounds);
+                let within = if held { bounds.within(s.scale, s.scale) } else { *bounds };
+                let pose = trimmed_icp(nn, pts, s, iterations, settings.trim, rule, &within);
                 Hypothesis { pose, cost: evidence.wide_cost(surface, cost_pts, &pose) }
             })
             .collect();
@@ -278,16 +292,27 @@ pub fn search(
     let best = |ranked: Vec<Hypothesis>, n: usize| -> Vec<Pose> {
         distinct(ranked, &at, diag).into_iter().take(n).map(|h| h.pose).collect()
     };
-    let screened = pass(starts, screen_pts, settings.screen_iterations, ScaleRule::Ratio, screen_pts);
-    let coarse = pass(
-        &best(screened, settings.screen_keep),
-        coarse_pts,
-        settings.coarse_iterations,
-        ScaleRule::Ratio,
-        coarse_pts,
-    );
-    let mut fine =
-        pass(&best(coarse, settings.keep), fine_pts, settings.fine_iterations, ScaleRule::LeastSquares, sample);
+    // The screen and coarse passes (ratio scale), the best `n` distinct survivors.
+    let coarse_stage = |held: bool, n: usize| {
+        let screened = pass(starts, screen_pts, settings.screen_iterations, ScaleRule::Ratio, screen_pts, held);
+        let coarse = pass(
+            &best(screened, settings.screen_keep),
+            coarse_pts,
+            settings.coarse_iterations,
+            ScaleRule::Ratio,
+            coarse_pts,
+            held,
+        );
+        best(coarse, n)
+    };
+    let mut fine_from = coarse_stage(false, settings.keep);
+    if bounds.fixed_value().is_none() && settings.held_keep > 0 {
+        let held = coarse_stage(true, settings.held_keep);
+        let new: Vec<Pose> =
+            held.into_iter().filter(|p| !fine_from.iter().any(|q| same_pose(p, q, &at, diag))).collect();
+        fine_from.extend(new);
+    }
+    let mut fine = pass(&fine_from, fine_pts, settings.fine_iterations, ScaleRule::LeastSquares, sample, false);
     // The exact poses, unrefined, join the last ranking (a stable sort: ties keep the
     // refined ones first, as before).
     fine.extend(

@@ -369,6 +369,24 @@ mod tests {
         assert!(listed_more > 0, "no case listed a pose not ruled out");
     }
 
+    /// At unknown scale a small cluttered view drifts a free-scale ICP's scale into a wrong
+    /// basin; the search's held-scale branch keeps starts at their own scale, and these dev
+    /// cases, missed without it (the truth nowhere among the fine pass's hypotheses), come
+    /// out right (and wrong with `held_keep` 0).
+    #[test]
+    fn the_held_scale_branch_finds_views_a_free_scale_misses() {
+        for (i, shape) in [(17, "chinese_dragon"), (21, "part"), (35, "fandisk")] {
+            let c = case(Family::CameraAny, i, Split::Dev, 1);
+            assert_eq!(c.shape.name(), shape);
+            let nn = NearestNeighbours::new(&c.model);
+            let surface = crate::pf_icp::surface::Surface::new(&nn);
+            let pf = PfIcpSettings { seed: c.seed, viewpoint: c.viewpoint, ..Default::default() };
+            let r = crate::pf_icp::register(&nn, &c.scan, &pf);
+            let result = CaseResult::assessed("pf-icp", &c, &r.conclusion, 0.0, &surface);
+            assert!(result.score.success, "{}: {result:?}", c.id);
+        }
+    }
+
     #[test]
     fn dev_split_has_no_held_out_shape() {
         for f in Family::ALL {
