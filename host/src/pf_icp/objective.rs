@@ -66,9 +66,11 @@ impl Objective for PoseObjective<'_> {
     }
     fn distances(&self, x: &[f64]) -> (f64, f64) {
         let pose = self.pose(x);
+        let images: Vec<Point3<f64>> = self.sample.iter().map(|p| pose.apply(p)).collect();
+        // The distances in parallel, the sum in order (the same rounding on any thread count).
         let (mut sum, mut max) = (0.0f64, 0.0f64);
-        for p in self.sample {
-            let d = self.surface.nn().closest(&pose.apply(p)).dist2.sqrt();
+        for c in self.surface.nn().closest_all(&images) {
+            let d = c.dist2.sqrt();
             sum += d;
             max = max.max(d);
         }

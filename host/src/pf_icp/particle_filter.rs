@@ -288,15 +288,18 @@ pub fn try_run(
         let mut estimate = weighted_estimate(obj, &particles, &w);
         obj.constrain(&mut estimate);
         let spread = weighted_sigma(obj, &particles, &w, &estimate);
-        let mut est_cost = obj.cost(&estimate);
         // Refine both the weighted estimate and this iteration's best particle: a particle
         // that landed in a better basin is carried to its minimum and becomes the centre.
-        for start in [estimate.clone(), particles[imin].clone()] {
-            if let Some((refined, c)) = obj.refine(&start) {
-                if c < est_cost {
-                    estimate = refined;
-                    est_cost = c;
-                }
+        // (The estimate's cost and the two refinements run side by side; the choice below
+        // takes them in this order.)
+        let (mut est_cost, refined) = rayon::join(
+            || obj.cost(&estimate),
+            || rayon::join(|| obj.refine(&estimate), || obj.refine(&particles[imin])),
+        );
+        for (refined, c) in [refined.0, refined.1].into_iter().flatten() {
+            if c < est_cost {
+                estimate = refined;
+                est_cost = c;
             }
         }
         if est_cost < best.0 {
