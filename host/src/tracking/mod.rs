@@ -24,8 +24,9 @@
 //!   is `confident`: on the benchmark's near-symmetric flange the per-frame test dropped
 //!   the truth and the track slid along the part's near-symmetry while its frames said
 //!   `confident`.
-//! - **Verdict**: a frame is `confident` only when two sigma lie within the tracking
-//!   tolerance of 1 deg, 1% of the diagonal and 1% of scale ([`verdict`]); the track's
+//! - **Verdict**: a frame is `confident` only when 95% of the errors its covariance
+//!   describes lie within the tracking tolerance of 1 deg, 1% of the diagonal and 1% of
+//!   scale ([`verdict`]); the track's
 //!   hold ([`holds`]) keeps a registration's rules.
 
 pub mod board;
@@ -341,7 +342,7 @@ impl<'a> Tracker<'a> {
             self.hold(c.pose, maps);
             self.ambiguous = c.verdict == Verdict::Ambiguous;
         }
-        let (verdict, reasons) = verdict::frame_verdict(&c.checks);
+        let (verdict, reasons) = verdict::frame_verdict(&c.checks, &c.uncertainty, self.diag);
         Ok(TrackFrame {
             frame: 0,
             pose: c.pose,
@@ -418,7 +419,7 @@ impl<'a> Tracker<'a> {
 
     fn frame_of(&self, local: local::Local, state: TrackState, global: bool) -> TrackFrame {
         let mut local = local;
-        (local.verdict, local.reasons) = verdict::frame_verdict(&local.checks);
+        (local.verdict, local.reasons) = verdict::frame_verdict(&local.checks, &local.uncertainty, self.diag);
         if self.ambiguous && local.verdict == Verdict::Confident {
             // (The carried alternatives are weighed on one frame's view; a near-symmetric
             // part's flip can win that test by clutter or bias, and a track can slide along
