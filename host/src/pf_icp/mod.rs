@@ -14,7 +14,7 @@
 //! 3. **Filter** ([`crate::pf_icp::particle_filter`]): particles `[a, b, c, s, phi, theta, psi]`
 //!    in the centred frame ([`Centred`]: rotation about the clouds' centroids), each
 //!    weighed by the capped surface cost ([`Surface::cost`]) of the transformed scan (a
-//!    fixed random subset of at most `weight_points` scan points); after every iteration a
+//!    fixed random subset of at most `filter_points` scan points); after every iteration a
 //!    few trimmed ICP iterations refine the weighted estimate and the best particle
 //!    (`icp_per_iteration`, 0 to turn off); stop on the thresholds, a stalled best cost
 //!    (`patience`) or the cap.
@@ -153,8 +153,13 @@ pub struct PfIcpSettings {
     pub init: InitMode,
     /// Propagation region half-width in sigmas (the paper's 2).
     pub region_sigmas: f64,
-    /// Scan points used per particle weight (a fixed random subset; all if fewer).
+    /// Scan points of the weight sample (a fixed random subset in random order; all if
+    /// fewer): the search ranks its hypotheses on it, the board weighs its particles on it.
     pub weight_points: usize,
+    /// Scan points the host's filter weighs each particle and refines over: the first of the
+    /// weight sample (the polish after the filter sets the accuracy; docs/benchmarks.md,
+    /// "Time and large clouds").
+    pub filter_points: usize,
     /// ICP iterations run on the estimate after every filter iteration (0: none).
     pub icp_per_iteration: usize,
     /// Iterations of the final point-to-plane polish on the whole scan (0: none).
@@ -190,6 +195,7 @@ impl Default for PfIcpSettings {
             init: InitMode::Auto,
             region_sigmas: 2.0,
             weight_points: 1000,
+            filter_points: 500,
             icp_per_iteration: 2,
             polish_iterations: 50,
             threshold_avg: 1e-4,
@@ -462,7 +468,8 @@ pub fn register_with(
     let objective = PoseObjective {
         // (The board's costs are over the whole model.)
         surface: if weights.is_some() { &surface } else { search },
-        sample: &sample,
+        // (The board weighs the whole weight sample.)
+        sample: if weights.is_some() { &sample } else { &sample[..settings.filter_points.max(1).min(sample.len())] },
         frame,
         refine_iterations: settings.icp_per_iteration,
         weights,
