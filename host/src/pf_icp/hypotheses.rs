@@ -24,9 +24,9 @@
 //! each start's own scale held, and their best [`SearchSettings::held_keep`] distinct
 //! survivors join the fine pass (on a small cluttered view a free scale drifts 25 to 40%
 //! into a wrong basin within the first passes, while the radius ratio is within a few
-//! percent of the truth; docs/global-registration.md, "Held-scale branch"); ranked by the wide cost in the scan's units
-//! ([`Evidence::wide_cost`]) over the whole cost sample; every scale within the user's
-//! bounds. Poses
+//! percent of the truth; docs/global-registration.md, "Held-scale branch"); ranked by the
+//! wide cost in the scan's units ([`Evidence::wide_cost`]) over the whole cost sample;
+//! every scale within the user's bounds. Poses
 //! count as distinct when they differ by more than 5 deg, 2% of the diagonal at the scan's
 //! centroid or 2% in scale; a scale outside half to twice the median start's (the radius
 //! ratio) is a collapse and dropped (which also bounds the views it handles: a view so

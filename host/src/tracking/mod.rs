@@ -26,8 +26,7 @@
 //!   `confident`.
 //! - **Verdict**: a frame is `confident` only when 95% of the errors its covariance
 //!   describes lie within the tracking tolerance of 1 deg, 1% of the diagonal and 1% of
-//!   scale ([`verdict`]); the track's
-//!   hold ([`holds`]) keeps a registration's rules.
+//!   scale ([`verdict`]); the track's hold ([`holds`]) keeps a registration's rules.
 
 pub mod board;
 pub mod local;
