@@ -7,7 +7,6 @@
 
 use anyhow::{Context, Result};
 use pficp::eval::realistic::{case, Family, Split};
-use pficp::geometry::ScaleBounds;
 use pficp::nn::NearestNeighbours;
 use pficp::pf_icp::PfIcpSettings;
 use std::time::Instant;
@@ -26,9 +25,7 @@ fn main() -> Result<()> {
             let c = case(family, i, Split::Dev, 1);
             let t0 = Instant::now();
             let nn = NearestNeighbours::new(&c.model);
-            let scale = c.known_scale.map_or(PfIcpSettings::default().scale, ScaleBounds::fixed);
-            let settings = PfIcpSettings { seed: c.seed, scale, viewpoint: c.viewpoint, ..Default::default() };
-            let r = pficp::pf_icp::register(&nn, &c.scan, &settings);
+            let r = pficp::pf_icp::register(&nn, &c.scan, &c.pf_settings(&PfIcpSettings::default()));
             let t = &r.times;
             let stages = [t0.elapsed(), t.clustering, t.covariance, t.filter, t.polish];
             for (v, d) in times.iter_mut().zip(stages) {

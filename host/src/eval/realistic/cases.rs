@@ -3,8 +3,9 @@
 //! each family is).
 
 use crate::cloud::bbox_diagonal;
-use crate::geometry::Pose;
+use crate::geometry::{Pose, ScaleBounds};
 use crate::parts::Part;
+use crate::pf_icp::PfIcpSettings;
 use crate::real_shapes::RealShape;
 use nalgebra::{Matrix3, Point3, UnitQuaternion, Vector3};
 use rand::seq::SliceRandom;
@@ -228,6 +229,19 @@ pub struct Case {
     pub viewpoint: Option<Point3<f64>>,
     /// The scale the user knows ([`Family::known_scale`]).
     pub known_scale: Option<f64>,
+}
+
+impl Case {
+    /// `base` told what the case's user knows: the case's seed, the known scale (fixed) and
+    /// the camera's position.
+    pub fn pf_settings(&self, base: &PfIcpSettings) -> PfIcpSettings {
+        PfIcpSettings {
+            seed: self.seed,
+            scale: self.known_scale.map_or(base.scale, ScaleBounds::fixed),
+            viewpoint: self.viewpoint,
+            ..base.clone()
+        }
+    }
 }
 
 fn uniform_rotation(rng: &mut impl Rng) -> Matrix3<f64> {

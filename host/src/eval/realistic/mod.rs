@@ -150,10 +150,12 @@ pub fn run(opts: &RealisticOptions) -> anyhow::Result<RealisticReport> {
             }
             let nn = NearestNeighbours::new(&c.model);
             let surface = crate::pf_icp::surface::Surface::new(&nn);
-            // The scale as the family's user knows it.
-            let scale = c.known_scale.map_or(opts.pf.scale, ScaleBounds::fixed);
-            let viewpoint = if opts.viewpoint { c.viewpoint } else { None };
-            let settings = MethodSettings { pf: PfIcpSettings { seed: c.seed, scale, viewpoint, ..opts.pf.clone() } };
+            // The scale and the viewpoint as the family's user knows them.
+            let mut pf = c.pf_settings(&opts.pf);
+            if !opts.viewpoint {
+                pf.viewpoint = None;
+            }
+            let settings = MethodSettings { pf };
             let mut results: Vec<CaseResult> = opts
                 .methods
                 .iter()
@@ -341,9 +343,7 @@ mod tests {
                 let c = case(family, i, Split::Dev, 1);
                 let nn = NearestNeighbours::new(&c.model);
                 let surface = crate::pf_icp::surface::Surface::new(&nn);
-                let scale = c.known_scale.map_or(PfIcpSettings::default().scale, ScaleBounds::fixed);
-                let pf = PfIcpSettings { seed: c.seed, scale, viewpoint: c.viewpoint, ..Default::default() };
-                let r = crate::pf_icp::register(&nn, &c.scan, &pf);
+                let r = crate::pf_icp::register(&nn, &c.scan, &c.pf_settings(&PfIcpSettings::default()));
                 let result = CaseResult::assessed("pf-icp", &c, &r.conclusion, 0.0, &surface);
                 assert_eq!(result.right_or_flagged(), Some(true), "{}: {result:?}", c.id);
                 let alts = &r.conclusion.alternatives;
@@ -380,8 +380,7 @@ mod tests {
             assert_eq!(c.shape.name(), shape);
             let nn = NearestNeighbours::new(&c.model);
             let surface = crate::pf_icp::surface::Surface::new(&nn);
-            let pf = PfIcpSettings { seed: c.seed, viewpoint: c.viewpoint, ..Default::default() };
-            let r = crate::pf_icp::register(&nn, &c.scan, &pf);
+            let r = crate::pf_icp::register(&nn, &c.scan, &c.pf_settings(&PfIcpSettings::default()));
             let result = CaseResult::assessed("pf-icp", &c, &r.conclusion, 0.0, &surface);
             assert!(result.score.success, "{}: {result:?}", c.id);
         }
