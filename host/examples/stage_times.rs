@@ -18,22 +18,22 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 fn main() -> Result<()> {
     let n: usize = std::env::args().nth(1).map_or(Ok(20), |s| s.parse()).context("N")?;
-    println!("family: median s a case (whole call; the start with k-means and the search; the covariance; the filter; the polish and the conclusion)");
+    println!("family: median s a case (whole call; the start with k-means and the search; the covariance; the filter; the polish and the conclusion; the rescue)");
     for family in [Family::Camera, Family::CameraAny, Family::CameraMetric, Family::CameraAnyMetric] {
-        let mut times: [Vec<f64>; 5] = Default::default();
+        let mut times: [Vec<f64>; 6] = Default::default();
         for i in 0..n {
             let c = case(family, i, Split::Dev, 1);
             let t0 = Instant::now();
             let nn = NearestNeighbours::new(&c.model);
             let r = pficp::pf_icp::register(&nn, &c.scan, &c.pf_settings(&PfIcpSettings::default()));
             let t = &r.times;
-            let stages = [t0.elapsed(), t.clustering, t.covariance, t.filter, t.polish];
+            let stages = [t0.elapsed(), t.clustering, t.covariance, t.filter, t.polish, t.rescue];
             for (v, d) in times.iter_mut().zip(stages) {
                 v.push(d.as_secs_f64());
             }
         }
-        let [whole, start, covariance, filter, polish] = times.map(median);
-        println!("{}: {whole:.3} ({start:.3}, {covariance:.3}, {filter:.3}, {polish:.3})", family.name());
+        let [whole, start, covariance, filter, polish, rescue] = times.map(median);
+        println!("{}: {whole:.3} ({start:.3}, {covariance:.3}, {filter:.3}, {polish:.3}, {rescue:.3})", family.name());
     }
     Ok(())
 }

@@ -410,15 +410,8 @@ pub fn finish(
     let filter_pose = settings.scale.apply(&plan.board_pose(result), &crate::cloud::centroid(scan));
     let t = Instant::now();
     let surface = crate::pf_icp::surface::Surface::new(nn);
-    let conclusion = crate::pf_icp::conclusion::conclude(
-        &surface,
-        scan,
-        &filter_pose,
-        &plan.prior.hypotheses,
-        settings.polish_iterations,
-        &settings.scale,
-        &plan.prior.evidence,
-    );
+    let (conclusion, hypotheses, rescue_time) =
+        crate::pf_icp::rescue::conclude_prior(&surface, scan, &filter_pose, &plan.prior, settings);
     let polished = Registration {
         pose: conclusion.pose,
         msd: crate::registration::icp::msd(nn, scan, &conclusion.pose),
@@ -435,7 +428,7 @@ pub fn finish(
             errors,
         },
         initial: plan.prior.initial.clone(),
-        hypotheses: plan.prior.hypotheses.clone(),
+        hypotheses,
         conclusion,
         covariance: plan.prior.covariance.clone(),
         filter_pose,
@@ -443,7 +436,8 @@ pub fn finish(
             clustering: plan.prior.clustering_time,
             covariance: plan.prior.covariance_time,
             filter: filter_time,
-            polish: polish_time,
+            polish: polish_time - rescue_time,
+            rescue: rescue_time,
         },
         filter_history: Vec::new(),
         filter_poses: Vec::new(),

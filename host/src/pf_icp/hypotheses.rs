@@ -68,6 +68,9 @@ pub struct SearchSettings {
     /// With the scale free: distinct survivors of the held-scale screen and coarse passes
     /// (each start keeps its own scale) added to the fine pass; 0 turns the branch off.
     pub held_keep: usize,
+    /// A second, wider search when the evidence rules out the answer
+    /// ([`crate::pf_icp::rescue`]).
+    pub rescue: bool,
 }
 
 impl Default for SearchSettings {
@@ -84,6 +87,7 @@ impl Default for SearchSettings {
             fine_iterations: 20,
             trim: 0.85,
             held_keep: 8,
+            rescue: true,
         }
     }
 }
@@ -166,7 +170,7 @@ pub fn same_pose(a: &Pose, b: &Pose, at: &Point3<f64>, diag: f64) -> bool {
 }
 
 /// The distinct poses of `ranked` (sorted by cost), best first.
-fn distinct(ranked: Vec<Hypothesis>, at: &Point3<f64>, diag: f64) -> Vec<Hypothesis> {
+pub fn distinct(ranked: Vec<Hypothesis>, at: &Point3<f64>, diag: f64) -> Vec<Hypothesis> {
     let mut out: Vec<Hypothesis> = Vec::new();
     for h in ranked {
         if !out.iter().any(|k| same_pose(&k.pose, &h.pose, at, diag)) {

@@ -36,6 +36,7 @@ pub mod kmeans;
 pub mod objective;
 pub mod particle_filter;
 pub mod probe;
+pub mod rescue;
 pub mod surface;
 pub mod symmetry;
 pub mod verdict;
@@ -220,6 +221,8 @@ pub struct StageTimes {
     pub filter: Duration,
     /// The final ICP.
     pub polish: Duration,
+    /// The rescue's wider search and second conclusion (zero when it did not run).
+    pub rescue: Duration,
 }
 
 /// Everything PF-ICP produces.
@@ -360,21 +363,7 @@ fn prior_on(surface: &Surface, whole: &[Point3<f64>], scan: &[Point3<f64>], sett
     );
     let initial = initial_pose_for(nn, whole, scan, &sample, k, settings.seed, settings.init, bounds);
     let hypotheses = match &settings.search {
-        Some(search) => {
-            let mut starts = initial.candidates.clone();
-            starts.extend(hypotheses::grid_starts(scan, model, search.grid, bounds));
-            if let Some(v) = &settings.viewpoint {
-                starts.extend(hypotheses::view_starts(surface, &sample, search.grid, bounds, v));
-            }
-            starts.extend(crate::pf_icp::features::proposals(
-                nn,
-                &sample,
-                hypotheses::radius_ratio(scan, model),
-                settings.seed,
-                bounds,
-            ));
-            hypotheses::search(surface, &sample, &[initial.pose], &starts, search, bounds, &evidence)
-        }
+        Some(search) => global_search(surface, scan, &sample, &initial, search, settings, &evidence),
         None => Vec::new(),
     };
     let start = hypotheses.first().map_or(initial.pose, |h| h.pose);
@@ -426,6 +415,37 @@ fn prior_on(surface: &Surface, whole: &[Point3<f64>], scan: &[Point3<f64>], sett
         clustering_time: t1 - t0,
         covariance_time: t2 - t1,
     }
+}
+
+/// The global search ([`hypotheses::search`]) with `search`'s settings from every start:
+/// the k-means stage's candidates, the uniform rotations, the sensor's view of each when
+/// its position is known, and the feature proposals; the k-means start itself is ranked
+/// unrefined.
+pub(crate) fn global_search(
+    surface: &Surface,
+    scan: &[Point3<f64>],
+    sample: &[Point3<f64>],
+    initial: &InitialPose,
+    search: &SearchSettings,
+    settings: &PfIcpSettings,
+    evidence: &Evidence,
+) -> Vec<Hypothesis> {
+    let nn = surface.nn();
+    let model = nn.points();
+    let bounds = &settings.scale;
+    let mut starts = initial.candidates.clone();
+    starts.extend(hypotheses::grid_starts(scan, model, search.grid, bounds));
+    if let Some(v) = &settings.viewpoint {
+        starts.extend(hypotheses::view_starts(surface, sample, search.grid, bounds, v));
+    }
+    starts.extend(crate::pf_icp::features::proposals(
+        nn,
+        sample,
+        hypotheses::radius_ratio(scan, model),
+        settings.seed,
+        bounds,
+    ));
+    hypotheses::search(surface, sample, &[initial.pose], &starts, search, bounds, evidence)
 }
 
 /// [`register`] with the particles' costs and weights from `weights` (`None`: the host's
@@ -506,17 +526,24 @@ pub fn register_with(
         ),
         None => evidence,
     };
-    let conclusion = crate::pf_icp::conclusion::conclude_on(
-        search,
-        &evidence,
-        &surface,
-        &full_evidence,
-        scan,
-        &filter_pose,
-        &hypotheses,
-        settings.polish_iterations,
-        &settings.scale,
-    );
+    let conclude = |hypotheses: &[Hypothesis]| {
+        crate::pf_icp::conclusion::conclude_on(
+            search,
+            &evidence,
+            &surface,
+            &full_evidence,
+            scan,
+            &filter_pose,
+            hypotheses,
+            settings.polish_iterations,
+            &settings.scale,
+        )
+    };
+    let first = conclude(&hypotheses);
+    let t_rescue = Instant::now();
+    let (conclusion, hypotheses, rescued) =
+        rescue::conclude_or_rescue(first, hypotheses, conclude, search, scan, &sample, &initial, settings, &evidence);
+    let rescue_time = if rescued { t_rescue.elapsed() } else { Duration::ZERO };
     let polished = Registration {
         pose: conclusion.pose,
         msd: crate::registration::icp::msd(nn, scan, &conclusion.pose),
@@ -543,7 +570,8 @@ pub fn register_with(
             clustering: clustering_time,
             covariance: covariance_time,
             filter: t3 - t2,
-            polish: t4 - t3,
+            polish: t4 - t3 - rescue_time,
+            rescue: rescue_time,
         },
     })
 }

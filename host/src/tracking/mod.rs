@@ -318,7 +318,12 @@ impl<'a> Tracker<'a> {
                 return Ok(self.frame_of(local, TrackState::Reacquired, false));
             }
         }
-        let settings = PfIcpSettings { scale: self.scale.working, seed, ..self.settings.registration.clone() };
+        let mut settings = PfIcpSettings { scale: self.scale.working, seed, ..self.settings.registration.clone() };
+        // No rescue search (`crate::pf_icp::rescue`): a frame the evidence rules out is
+        // lost, and the next frame, a camera period later, is the better second try.
+        if let Some(search) = &mut settings.search {
+            search.rescue = false;
+        }
         let r = register(self.surface.nn(), scan, &settings);
         let c = r.conclusion;
         let held = holds(&c.checks, self.scale.user.fixed_value().is_none(), false);

@@ -51,8 +51,14 @@ pub(crate) fn register(a: &RegisterArgs) -> Result<()> {
     }
     if let Some(pf) = &outcome.pf {
         let t = &pf.times;
+        // The rescue runs only when the evidence ruled out the first answer.
+        let rescue = if t.rescue.is_zero() {
+            String::new()
+        } else {
+            format!(", rescue search {:.3} s (the first answer was ruled out)", t.rescue.as_secs_f64())
+        };
         note(format_args!(
-            "stages: clustering {:.3} s, covariance {:.3} s, filter {:.3} s, polish {:.3} s",
+            "stages: clustering {:.3} s, covariance {:.3} s, filter {:.3} s, polish {:.3} s{rescue}",
             t.clustering.as_secs_f64(),
             t.covariance.as_secs_f64(),
             t.filter.as_secs_f64(),

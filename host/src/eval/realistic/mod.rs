@@ -386,6 +386,30 @@ mod tests {
         }
     }
 
+    /// On a small one-sided view the first search can miss the truth's basin; the answer
+    /// then fits visibly badly, and the rescue's wider search finds it. On these dev cases
+    /// the answer without the rescue is wrong and ruled out by the evidence (so the rescue
+    /// runs), and right with it.
+    #[test]
+    fn the_rescue_finds_views_the_first_search_misses() {
+        for (family, i, shape) in [(Family::Camera, 57, "dog_vertebra"), (Family::CameraMetric, 98, "b9_lidar")] {
+            let c = case(family, i, Split::Dev, 1);
+            assert_eq!(c.shape.name(), shape);
+            let nn = NearestNeighbours::new(&c.model);
+            let surface = crate::pf_icp::surface::Surface::new(&nn);
+            let with = c.pf_settings(&PfIcpSettings::default());
+            let mut without = with.clone();
+            without.search.as_mut().expect("the default searches").rescue = false;
+            let first = crate::pf_icp::register(&nn, &c.scan, &without);
+            assert!(crate::pf_icp::rescue::needed(&first.conclusion), "{}: {:?}", c.id, first.conclusion.checks);
+            assert!(!CaseResult::assessed("pf-icp", &c, &first.conclusion, 0.0, &surface).score.success, "{}", c.id);
+            let r = crate::pf_icp::register(&nn, &c.scan, &with);
+            assert!(r.times.rescue > std::time::Duration::ZERO, "{}", c.id);
+            let result = CaseResult::assessed("pf-icp", &c, &r.conclusion, 0.0, &surface);
+            assert!(result.score.success, "{}: {result:?}", c.id);
+        }
+    }
+
     #[test]
     fn dev_split_has_no_held_out_shape() {
         for f in Family::ALL {
