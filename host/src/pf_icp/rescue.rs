@@ -4,18 +4,18 @@
 //! A search of [`SearchSettings::grid`] rotations misses the basin of the truth on some small
 //! one-sided views (a thin part, a cortex seen over 13% of its surface): no start lands close
 //! enough for the trimmed ICP to reach it, and the answer then fits visibly badly. The
-//! verdict sees it: too little of the scan explained within the noise, or too much of it where
-//! the model would hide it from the sensor ([`not_ruled_out`] false). Only then, the search
-//! runs again with [`wider`] settings (four times the rotations, twice the survivors of
-//! each pass), its hypotheses join the first search's ([`merge`]) and the conclusion
-//! compares them all again with the filter's estimate. A pose the evidence does not rule out
-//! costs nothing more; the rescue's answer is judged by the same rules as any other, so a
-//! rescue that finds nothing better still says `unreliable`.
+//! verdict sees it: too little of the scan explained within the noise, or too much of it
+//! where the model would hide it from the sensor ([`not_ruled_out`] false). Only then, the
+//! search runs again with [`wider`] settings (four times the rotations, twice the survivors
+//! of each pass) and fresh feature proposals ([`PROPOSAL_SEED`]), its hypotheses join the
+//! first search's ([`merge`]) and the conclusion compares them all again with the filter's
+//! estimate. A pose the evidence does not rule out costs nothing more; the rescue's answer
+//! is judged by the same rules as any other, so a rescue that finds nothing better still
+//! says `unreliable`.
 //!
 //! On the realistic benchmark's dev split (the four camera-view families, 100 cases each,
 //! seed 1) the rule fires on 16 of the 400 results, all of them wrong, and on none of the 339
-//! right ones; the wider search finds the truth on 8 of the 16 (docs/global-registration.md,
-//! "The rescue").
+//! right ones; the rescue turns 8 of the 16 right (docs/global-registration.md, "Rescue").
 
 use crate::cloud::{bbox_diagonal, centroid};
 use crate::geometry::Pose;
@@ -33,6 +33,9 @@ use std::time::{Duration, Instant};
 pub const GRID_FACTOR: usize = 4;
 /// ... and keeps this many times the survivors of its screen and coarse passes.
 pub const KEEP_FACTOR: usize = 2;
+/// The rescue's feature proposals are drawn with the seed XOR this (fresh correspondences
+/// and RANSAC triples, not the first search's again).
+pub const PROPOSAL_SEED: u64 = 0x7265_7363;
 
 /// Whether `conclusion`'s answer is ruled out by the verdict's evidence rules (explained
 /// share, hidden share): the rescue's trigger.
@@ -83,7 +86,10 @@ pub fn conclude_or_rescue(
 ) -> (Conclusion, Vec<Hypothesis>, bool) {
     match settings.search.as_ref().filter(|s| s.rescue) {
         Some(search) if needed(&first) => {
-            let more = crate::pf_icp::global_search(surface, scan, sample, initial, &wider(search), settings, evidence);
+            // Its own feature proposals: with the first search's seed they would be the
+            // first search's again.
+            let fresh = PfIcpSettings { seed: settings.seed ^ PROPOSAL_SEED, ..settings.clone() };
+            let more = crate::pf_icp::global_search(surface, scan, sample, initial, &wider(search), &fresh, evidence);
             let merged = merge(&hypotheses, &more, sample, surface.nn().points());
             (conclude(&merged), merged, true)
         }
