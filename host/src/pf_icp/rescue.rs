@@ -119,13 +119,17 @@ pub fn conclude_prior(
             &prior.evidence,
         )
     };
+    let first = conclude(&prior.hypotheses);
+    if !needed(&first) {
+        return (first, prior.hypotheses.clone(), Duration::ZERO);
+    }
+    let t = Instant::now();
     // The rescue searches where the prior's search did (the model's subset in a large
     // registration).
     let subset = crate::pf_icp::search_model(surface.nn().points(), scan.len(), settings.seed);
     let subset_surface = subset.as_ref().map(Surface::new);
-    let t = Instant::now();
     let (conclusion, hypotheses, rescued) = conclude_or_rescue(
-        conclude(&prior.hypotheses),
+        first,
         prior.hypotheses.clone(),
         conclude,
         subset_surface.as_ref().unwrap_or(surface),
