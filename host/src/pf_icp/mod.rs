@@ -540,10 +540,8 @@ pub fn register_with(
         )
     };
     let first = conclude(&hypotheses);
-    let t_rescue = Instant::now();
-    let (conclusion, hypotheses, rescued) =
+    let (conclusion, hypotheses, rescue_time) =
         rescue::conclude_or_rescue(first, hypotheses, conclude, search, scan, &sample, &initial, settings, &evidence);
-    let rescue_time = if rescued { t_rescue.elapsed() } else { Duration::ZERO };
     let polished = Registration {
         pose: conclusion.pose,
         msd: crate::registration::icp::msd(nn, scan, &conclusion.pose),

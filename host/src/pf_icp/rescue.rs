@@ -71,7 +71,7 @@ pub fn merge(
 /// `first`, the conclusion over `hypotheses`; or, when the evidence rules its answer out
 /// and the search's settings allow ([`needed`]), the conclusion over the hypotheses of both
 /// `hypotheses` and a wider search (over `surface`, the search's). Returns the conclusion,
-/// the hypotheses it was drawn from, and whether the rescue ran.
+/// the hypotheses it was drawn from, and the rescue's time (zero when it did not run).
 #[allow(clippy::too_many_arguments)]
 pub fn conclude_or_rescue(
     first: Conclusion,
@@ -83,17 +83,18 @@ pub fn conclude_or_rescue(
     initial: &InitialPose,
     settings: &PfIcpSettings,
     evidence: &Evidence,
-) -> (Conclusion, Vec<Hypothesis>, bool) {
+) -> (Conclusion, Vec<Hypothesis>, Duration) {
     match settings.search.as_ref().filter(|s| s.rescue) {
         Some(search) if needed(&first) => {
+            let t = Instant::now();
             // Its own feature proposals: with the first search's seed they would be the
             // first search's again.
             let fresh = PfIcpSettings { seed: settings.seed ^ PROPOSAL_SEED, ..settings.clone() };
             let more = crate::pf_icp::global_search(surface, scan, sample, initial, &wider(search), &fresh, evidence);
             let merged = merge(&hypotheses, &more, sample, surface.nn().points());
-            (conclude(&merged), merged, true)
+            (conclude(&merged), merged, t.elapsed())
         }
-        _ => (first, hypotheses, false),
+        _ => (first, hypotheses, Duration::ZERO),
     }
 }
 
@@ -123,12 +124,11 @@ pub fn conclude_prior(
     if !needed(&first) {
         return (first, prior.hypotheses.clone(), Duration::ZERO);
     }
-    let t = Instant::now();
     // The rescue searches where the prior's search did (the model's subset in a large
     // registration).
     let subset = crate::pf_icp::search_model(surface.nn().points(), scan.len(), settings.seed);
     let subset_surface = subset.as_ref().map(Surface::new);
-    let (conclusion, hypotheses, rescued) = conclude_or_rescue(
+    conclude_or_rescue(
         first,
         prior.hypotheses.clone(),
         conclude,
@@ -138,8 +138,7 @@ pub fn conclude_prior(
         &prior.initial,
         settings,
         &prior.evidence,
-    );
-    (conclusion, hypotheses, if rescued { t.elapsed() } else { Duration::ZERO })
+    )
 }
 
 #[cfg(test)]
