@@ -298,10 +298,16 @@ impl<'a> Tracker<'a> {
             self.held = false;
             return Ok(self.frame_of(local, TrackState::Lost, false));
         }
-        let at = predicted.apply(&crate::cloud::centroid(scan));
-        self.motion.accept(local.pose, &predicted, &at);
+        let centroid = crate::cloud::centroid(scan);
+        let at = predicted.apply(&centroid);
+        let measured = local.pose;
+        let (sigma, fps) = (&local.uncertainty.sigma, self.settings.fps);
+        let estimate = self.motion.accept(measured, sigma, &predicted, &at, self.diag, fps);
+        let mut local = local;
+        // (Within the track's scale bounds: a fixed scale stays fixed.)
+        local.pose = self.scale.working.apply(&estimate, &centroid);
         self.symmetries = local.alternatives.clone();
-        self.settle_scale(local.pose.scale);
+        self.settle_scale(measured.scale);
         Ok(self.frame_of(local, TrackState::Tracking, false))
     }
 
@@ -314,15 +320,17 @@ impl<'a> Tracker<'a> {
             let s = if self.scale.working.fixed_value().is_some() { 0.0 } else { s };
             let local = self.local(scan, &last, &[t, t, t, s, r, r, r], &REACQUIRE_BUDGET, seed)?;
             if holds(&local.checks, self.settling(), false) {
-                self.hold(local.pose, local.alternatives.clone());
+                self.hold(local.pose, &local.uncertainty.sigma, local.alternatives.clone());
                 return Ok(self.frame_of(local, TrackState::Reacquired, false));
             }
         }
         let mut settings = PfIcpSettings { scale: self.scale.working, seed, ..self.settings.registration.clone() };
-        // No rescue search (`crate::pf_icp::rescue`): a frame the evidence rules out is
-        // lost, and the next frame, a camera period later, is the better second try.
+        // The rescue search (`crate::pf_icp::rescue`) only before the first track: a view
+        // the first search misses is missed on the next frames as well (the test split's
+        // armadillo, 8 frames), while a lost track's frames are mostly a hidden part, which
+        // no search finds, and the next frame is a camera period away.
         if let Some(search) = &mut settings.search {
-            search.rescue = false;
+            search.rescue = !self.ever_held;
         }
         let r = register(self.surface.nn(), scan, &settings);
         let c = r.conclusion;
@@ -343,8 +351,10 @@ impl<'a> Tracker<'a> {
                 self.scale.working = self.scale.user.within(s * (1.0 - SCALE_SETTLING), s * (1.0 + SCALE_SETTLING));
                 self.scale.settling.clear();
             }
-            self.hold(c.pose, maps);
-            self.ambiguous = c.verdict == Verdict::Ambiguous;
+            self.hold(c.pose, &c.uncertainty.sigma, maps);
+            // (Poses that fit as well make the track ambiguous whatever the verdict: one
+            // held while its scale settles may be `unreliable` with alternatives.)
+            self.ambiguous = c.verdict == Verdict::Ambiguous || c.checks.alternatives > 0;
         }
         let (verdict, reasons) = verdict::frame_verdict(&c.checks, &c.uncertainty, self.diag);
         Ok(TrackFrame {
@@ -369,11 +379,11 @@ impl<'a> Tracker<'a> {
         self.scale.working.fixed_value().is_none()
     }
 
-    /// Start (or re-start) the track at `pose` with no velocity.
-    fn hold(&mut self, pose: Pose, symmetries: Vec<Pose>) {
+    /// Start (or re-start) the track at `pose` (one-sigma `sigma`) with no velocity known.
+    fn hold(&mut self, pose: Pose, sigma: &[Option<f64>; 7], symmetries: Vec<Pose>) {
         self.held = true;
         self.ever_held = true;
-        self.motion.restart(pose);
+        self.motion.restart(pose, sigma, self.diag, self.settings.fps);
         self.symmetries = symmetries;
     }
 
