@@ -86,6 +86,8 @@ pub struct Settings {
     pub scale_range: Option<[f64; 2]>,
     /// The sensor's position in the scan's frame (`--viewpoint`), or `null`.
     pub viewpoint: Option<[f64; 3]>,
+    /// Whether a ruled-out answer gets the rescue search (`false`: `--no-rescue`).
+    pub rescue: bool,
     /// With the filter on the board: scan points it weighs each particle over.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub board_points: Option<usize>,
@@ -104,6 +106,7 @@ impl Settings {
             scale: s.scale.fixed_value(),
             scale_range: (!s.scale.is_free() && s.scale.fixed_value().is_none()).then_some([s.scale.lo, s.scale.hi]),
             viewpoint: s.viewpoint.map(|v| [v.x, v.y, v.z]),
+            rescue: s.search.as_ref().is_some_and(|s| s.rescue),
             board_points: match request.engine {
                 crate::request::Engine::OnBoard { board_points, .. } => Some(board_points),
                 _ => None,
@@ -145,6 +148,9 @@ impl Provenance {
         }
         if let Some(v) = settings.viewpoint {
             words.extend(["--viewpoint".to_string(), join(&v)]);
+        }
+        if !settings.rescue {
+            words.push("--no-rescue".to_string());
         }
         if let Some(port) = port {
             words.push("--board".to_string());
@@ -222,6 +228,9 @@ pub struct Assessment {
     pub inlier_distance: f64,
     /// Capped surface cost of the pose over the whole scan.
     pub cost: f64,
+    /// The rescue search ran: the evidence ruled out the first search's answer, and this
+    /// result is the better of both searches' ([`crate::pf_icp::rescue`]).
+    pub rescued: bool,
 }
 
 impl Assessment {
@@ -249,6 +258,7 @@ impl Assessment {
             inlier_rmse: c.fit.inlier_rmse,
             inlier_distance: c.fit.inlier_distance,
             cost: c.fit.cost,
+            rescued: false,
         }
     }
 
@@ -329,6 +339,9 @@ impl RegisterReport {
             RegisterReport::new(request.method.name(), &outcome.registration, outcome.elapsed.as_secs_f64());
         if let Some(pf) = &outcome.pf {
             report = report.assessed(&pf.conclusion);
+            if let Some(a) = &mut report.assessment {
+                a.rescued = !pf.times.rescue.is_zero();
+            }
         }
         if let (Some(port), Some(run)) = (port, &registered.board) {
             report = report.on_board(port);
@@ -573,6 +586,7 @@ mod tests {
             scale: None,
             scale_range: None,
             viewpoint: None,
+            rescue: true,
             board_points: Some(200),
         };
         let p = Provenance::new("pf-icp", inputs, settings, Some("/dev/ttyUSB0"), false);

@@ -10,6 +10,7 @@ use crate::board::{BoardClient, DEFAULT_POLL};
 use crate::cloud::Cloud;
 use crate::geometry::ScaleBounds;
 use crate::nn::NearestNeighbours;
+use crate::pf_icp::hypotheses::SearchSettings;
 use crate::pf_icp::init::InitMode;
 use crate::pf_icp::{PfIcpSettings, MAX_CLUSTERS, MAX_FILTER_PARTICLES, MAX_ITERATIONS};
 use crate::registration::methods::{self, Method, MethodSettings, Outcome};
@@ -41,6 +42,9 @@ pub struct PfIcpOptions {
     pub scale_range: Option<Vec<f64>>,
     /// The sensor's position in the scan's frame `X,Y,Z` (`--viewpoint`).
     pub viewpoint: Option<Vec<f64>>,
+    /// The rescue search when the evidence rules out the first answer (`--no-rescue`
+    /// turns it off: [`crate::pf_icp::rescue`]).
+    pub rescue: bool,
 }
 
 impl Default for PfIcpOptions {
@@ -55,6 +59,7 @@ impl Default for PfIcpOptions {
             scale: None,
             scale_range: None,
             viewpoint: None,
+            rescue: true,
         }
     }
 }
@@ -104,6 +109,7 @@ impl PfIcpOptions {
             }
             Some(v) => bail!("--viewpoint takes three numbers X,Y,Z (got {})", v.len()),
         };
+        let d = PfIcpSettings::default();
         Ok(PfIcpSettings {
             clusters: self.clusters,
             particles: self.particles,
@@ -112,7 +118,8 @@ impl PfIcpOptions {
             init: self.init,
             scale,
             viewpoint,
-            ..Default::default()
+            search: d.search.map(|s| SearchSettings { rescue: self.rescue, ..s }),
+            ..d
         })
     }
 }

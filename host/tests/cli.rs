@@ -552,6 +552,38 @@ fn a_json_result_reruns_from_its_own_command() {
     }
 }
 
+/// A scan of something else (a curve, not the model's surface): the evidence rules the
+/// first answer out and the rescue search runs (`rescued`); `--no-rescue` skips it and is
+/// recorded in the settings and the command. Either way the verdict is `unreliable`.
+#[test]
+fn the_rescue_is_reported_and_can_be_turned_off() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = gen(dir.path(), &["--model", "model-2", "--points", "800", "--scan-points", "600"]);
+    let foreign = write(dir.path(), "foreign.xyz", cloud_text(600).as_bytes());
+    let json = |extra: &[&str]| -> serde_json::Value {
+        let mut args = vec!["--json"];
+        args.extend_from_slice(extra);
+        let o = register(Path::new(&files[0]), &foreign, &args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        serde_json::from_slice(&o.stdout).unwrap()
+    };
+    let with = json(&[]);
+    assert_eq!(with["verdict"], "unreliable", "{with}");
+    assert_eq!(with["rescued"], true);
+    assert_eq!(with["settings"]["rescue"], true);
+    assert!(!with["command"].as_str().unwrap().contains("--no-rescue"));
+    let without = json(&["--no-rescue"]);
+    assert_eq!(without["verdict"], "unreliable", "{without}");
+    assert_eq!(without["rescued"], false);
+    assert_eq!(without["settings"]["rescue"], false);
+    assert!(without["command"].as_str().unwrap().ends_with("--no-rescue"), "{}", without["command"]);
+    // The model's own scan: nothing ruled out, no rescue.
+    let o = register(Path::new(&files[0]), Path::new(&files[1]), &["--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let own: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(own["rescued"], false, "{own}");
+}
+
 #[test]
 fn pcd_files_go_through_gen_register_and_out_aligned() {
     let dir = tempfile::tempdir().unwrap();

@@ -148,6 +148,7 @@ def register(
     board: Optional[Board] = None,
     board_points: Optional[int] = None,
     host_driven: bool = False,
+    rescue: bool = True,
 ) -> Registration:
     """Register scan to model; None takes the CLI's default (seed 1, 100 clusters, 50 particles, 50 iterations)."""
 

@@ -34,12 +34,14 @@ use std::path::PathBuf;
 /// `particles`, `iterations` and `init` (`auto`, `index`, `nearest`) are the CLI's flags;
 /// `None` takes the CLI's default. With `board=pficp.Board(port)` the particle filter runs
 /// on the board (`board_points` scan points a particle) or, with `host_driven=True`, the
-/// board weighs the host filter's particles.
+/// board weighs the host filter's particles. `rescue=False` skips the rescue search (a
+/// second, wider search when the evidence rules out the first answer; the CLI's
+/// `--no-rescue`): a bounded time, the ruled-out answer left `unreliable`.
 ///
 /// Returns a `Registration`. Bad input raises `ValueError`; a board's failure
 /// `pficp.BoardError` (an `OSError`).
 #[pyfunction]
-#[pyo3(signature = (model, scan, *, method = "pf-icp", scale = None, scale_range = None, viewpoint = None, seed = None, clusters = None, particles = None, iterations = None, init = "auto", board = None, board_points = None, host_driven = false))]
+#[pyo3(signature = (model, scan, *, method = "pf-icp", scale = None, scale_range = None, viewpoint = None, seed = None, clusters = None, particles = None, iterations = None, init = "auto", board = None, board_points = None, host_driven = false, rescue = true))]
 #[allow(clippy::too_many_arguments)]
 fn register(
     py: Python<'_>,
@@ -57,6 +59,7 @@ fn register(
     board: Option<Py<board::Board>>,
     board_points: Option<usize>,
     host_driven: bool,
+    rescue: bool,
 ) -> PyResult<result::Registration> {
     use pficp::pf_icp::init::InitMode;
     use pficp::registration::methods::Method;
@@ -77,6 +80,7 @@ fn register(
         scale,
         scale_range,
         viewpoint,
+        rescue,
     };
     let settings = options.settings().map_err(request_error)?;
     let engine = Engine::from_options(board.is_some(), host_driven, board_points).map_err(request_error)?;

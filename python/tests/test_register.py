@@ -82,6 +82,19 @@ def test_a_symmetric_box_is_ambiguous_with_its_other_poses():
         assert a["transformation"].shape == (4, 4) and a["excess_sigmas"] >= 0
 
 
+def test_the_rescue_is_reported_and_can_be_turned_off(model1):
+    """A scan of something else (a curve): the evidence rules the first answer out, the
+    rescue search runs (`rescued`); `rescue=False` skips it. `unreliable` either way."""
+    model = pficp.read_cloud(model1[0])
+    i = np.arange(600, dtype=np.float64)
+    curve = np.stack([np.cos(0.7 * i), np.sin(0.3 * i), 0.01 * i], axis=1)
+    with_rescue = pficp.register(model, curve).to_dict()
+    without = pficp.register(model, curve, rescue=False).to_dict()
+    assert with_rescue["verdict"] == without["verdict"] == "unreliable"
+    assert with_rescue["rescued"] and with_rescue["settings"]["rescue"]
+    assert not without["rescued"] and not without["settings"]["rescue"]
+
+
 def test_a_baseline_has_a_pose_and_no_verdict(model1):
     model_path, scan_path, _ = model1
     r = pficp.register(pficp.read_cloud(model_path), pficp.read_cloud(scan_path), method="icp")

@@ -325,12 +325,13 @@ impl<'a> Tracker<'a> {
             }
         }
         let mut settings = PfIcpSettings { scale: self.scale.working, seed, ..self.settings.registration.clone() };
-        // The rescue search (`crate::pf_icp::rescue`) only before the first track: a view
+        // The rescue search (`crate::pf_icp::rescue`, unless the user turned it off) only
+        // before the first track: a view
         // the first search misses is missed on the next frames as well (the test split's
         // armadillo, 8 frames), while a lost track's frames are mostly a hidden part, which
         // no search finds, and the next frame is a camera period away.
         if let Some(search) = &mut settings.search {
-            search.rescue = !self.ever_held;
+            search.rescue &= !self.ever_held;
         }
         let r = register(self.surface.nn(), scan, &settings);
         let c = r.conclusion;

@@ -143,6 +143,11 @@ pub(crate) struct PfArgs {
     /// near it counts against a pose.
     #[arg(long, value_name = "X,Y,Z", value_delimiter = ',', num_args = 1, allow_hyphen_values = true)]
     pub(crate) viewpoint: Vec<f64>,
+    /// No rescue search: when the evidence rules out the first search's answer, PF-ICP
+    /// searches again wider (about twice the time of that registration); without it the
+    /// answer stays as found, `unreliable`, in bounded time.
+    #[arg(long)]
+    pub(crate) no_rescue: bool,
 }
 
 impl PfArgs {
@@ -156,6 +161,7 @@ impl PfArgs {
             scale: self.scale,
             scale_range: (!self.scale_range.is_empty()).then(|| self.scale_range.clone()),
             viewpoint: (!self.viewpoint.is_empty()).then(|| self.viewpoint.clone()),
+            rescue: !self.no_rescue,
         }
         .settings()
     }
