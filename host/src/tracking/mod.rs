@@ -326,10 +326,10 @@ impl<'a> Tracker<'a> {
         }
         let mut settings = PfIcpSettings { scale: self.scale.working, seed, ..self.settings.registration.clone() };
         // The rescue search (`crate::pf_icp::rescue`, unless the user turned it off) only
-        // before the first track: a view
-        // the first search misses is missed on the next frames as well (the test split's
-        // armadillo, 8 frames), while a lost track's frames are mostly a hidden part, which
-        // no search finds, and the next frame is a camera period away.
+        // before the first track: a view the first search misses is missed on the next
+        // frames as well (the test split's armadillo: its first 8 frames, 5 with the rescue),
+        // while a lost track's frames are mostly a hidden part, which no search finds, and
+        // the next frame is a camera period away.
         if let Some(search) = &mut settings.search {
             search.rescue &= !self.ever_held;
         }
