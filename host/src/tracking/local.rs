@@ -118,6 +118,9 @@ pub struct Local {
     /// The carried alternatives still as good as the answer, as model-frame maps `G`
     /// (the alternative is `G T`).
     pub alternatives: Vec<Pose>,
+    /// A carried alternative became the answer: the answer is another pose of a
+    /// near-symmetric part, not the predicted one moved.
+    pub swapped: bool,
     /// With the filter on the board: its pose, the link's bytes and the run's clocks.
     pub board: Option<BoardFrame>,
     /// Wall time of the host's part after the filter (the polish, the alternatives, the
@@ -274,5 +277,6 @@ pub fn track_frame(
     };
     let (verdict, reasons) = judge(&checks);
     let host_seconds = host.elapsed().as_secs_f64();
-    Ok(Local { pose, uncertainty, fit, checks, verdict, reasons, alternatives, board, host_seconds })
+    let swapped = swaps > 0;
+    Ok(Local { pose, uncertainty, fit, checks, verdict, reasons, alternatives, swapped, board, host_seconds })
 }

@@ -302,7 +302,14 @@ impl<'a> Tracker<'a> {
         let at = predicted.apply(&centroid);
         let measured = local.pose;
         let (sigma, fps) = (&local.uncertainty.sigma, self.settings.fps);
-        let estimate = self.motion.accept(measured, sigma, &predicted, &at, self.diag, fps);
+        // (A carried alternative that became the answer is another pose of the part, not a
+        // motion: the filter starts again from it.)
+        let estimate = if local.swapped {
+            self.motion.rebase(measured, sigma, self.diag, fps);
+            measured
+        } else {
+            self.motion.accept(measured, sigma, &predicted, &at, self.diag, fps)
+        };
         let mut local = local;
         // (Within the track's scale bounds: a fixed scale stays fixed.)
         local.pose = self.scale.working.apply(&estimate, &centroid);

@@ -78,6 +78,12 @@ pub fn orthonormal(pose: &Pose) -> Pose {
 /// "Why the answers are filtered", has the dev split's errors at half to four times them).
 pub const ACCELERATION: (f64, f64) = (90.0, 0.2);
 
+/// An answer this many standard deviations from the prediction in some parameter is a
+/// manoeuvre (a move faster than [`ACCELERATION`] allows): the track takes the answer
+/// whole and measures the velocity again from it, so that the estimate never trails a
+/// sudden move the answer has seen.
+pub const MANOEUVRE_SIGMAS: f64 = 4.0;
+
 /// Constant velocity, filtered: per [`LocalDelta`] parameter a Kalman filter over the
 /// track's estimate and its velocity, the frames' answers its measurements (their
 /// one-sigma values from the curvature), white acceleration of [`ACCELERATION`] its process
@@ -136,6 +142,15 @@ impl Motion {
         *self = Motion { last: Some(orthonormal(&pose)), covariance, fresh: true, ..Motion::new() };
     }
 
+    /// Start again from `pose` as [`Motion::restart`] does, keeping the innovations'
+    /// spread: the track's answer became another pose of a near-symmetric part (a carried
+    /// alternative), which is no motion.
+    pub fn rebase(&mut self, pose: Pose, sigma: &[Option<f64>; 7], diag: f64, fps: f64) {
+        let mean_square = self.mean_square;
+        self.restart(pose, sigma, diag, fps);
+        self.mean_square = mean_square;
+    }
+
     /// The newest estimate the track holds.
     pub fn last(&self) -> Option<Pose> {
         self.last
@@ -170,10 +185,32 @@ impl Motion {
         let step = after(&Pose::identity(), &self.velocity, &self.centre);
         let mut velocity = delta_between(&Pose::identity(), &step, at);
         let cap = spread_cap(diag, fps);
-        if self.fresh {
+        // Per parameter: the answer's variance and the prediction's covariance (x + v, v;
+        // the white acceleration adds a/2 on x and a on v).
+        let measured: [f64; 7] = std::array::from_fn(|k| variance(sigma[k], k, pose.scale));
+        let dt2 = 1.0 / (fps * fps);
+        let (deg, diags) = ACCELERATION;
+        let predicted_covariance: [[f64; 3]; 7] = std::array::from_fn(|k| {
+            let a = match k {
+                0..=2 => diags * diag * dt2,
+                3 => 0.0,
+                _ => deg.to_radians() * dt2,
+            };
+            let q = a * a;
+            let [p00, p01, p11] = self.covariance[k];
+            [p00 + 2.0 * p01 + p11 + 0.25 * q, p01 + p11 + 0.5 * q, p11 + q]
+        });
+        // A manoeuvre: an answer more than `MANOEUVRE_SIGMAS` from the prediction in some
+        // parameter, by the prediction's and the answer's variances together (the part
+        // moved off its velocity faster than `ACCELERATION`, or the answer is far off).
+        let manoeuvre = (0..7).any(|k| {
+            let s = predicted_covariance[k][0] + measured[k];
+            s.is_finite() && s > 0.0 && innovation[k] * innovation[k] > MANOEUVRE_SIGMAS * MANOEUVRE_SIGMAS * s
+        });
+        if self.fresh || manoeuvre {
             // Two-point start: the answer whole, the velocity from the last estimate to it.
             for k in 0..7 {
-                let r = variance(sigma[k], k, pose.scale).min(cap[k] * cap[k]);
+                let r = measured[k].min(cap[k] * cap[k]);
                 velocity[k] += innovation[k];
                 self.covariance[k] = [r, r, self.covariance[k][0] + r];
             }
@@ -183,20 +220,10 @@ impl Motion {
             self.last = Some(orthonormal(&pose));
             return pose;
         }
-        let dt2 = 1.0 / (fps * fps);
-        let (deg, diags) = ACCELERATION;
         let mut correction = [0.0; 7];
         for k in 0..7 {
-            let a = match k {
-                0..=2 => diags * diag * dt2,
-                3 => 0.0,
-                _ => deg.to_radians() * dt2,
-            };
-            let q = a * a;
-            let [p00, p01, p11] = self.covariance[k];
-            // Predicted: x + v, v (white acceleration: a/2 on x, a on v).
-            let (p00, p01, p11) = (p00 + 2.0 * p01 + p11 + 0.25 * q, p01 + p11 + 0.5 * q, p11 + q);
-            let s = p00 + variance(sigma[k], k, pose.scale);
+            let [p00, p01, p11] = predicted_covariance[k];
+            let s = p00 + measured[k];
             // (An exact measurement, the fixed scale's among them, is taken whole; an
             // undetermined one not at all.)
             let (k0, k1) = match s {
@@ -330,5 +357,56 @@ mod tests {
             }
         }
         assert!(estimates < 0.5 * answers, "mean square rotation errors: estimates {estimates}, answers {answers}");
+    }
+
+    /// A sudden change of the motion (a part turned the other way within a frame): the
+    /// estimate is the answer on that frame, not a lagging mix of it and the prediction,
+    /// and the next frame's prediction follows the new motion.
+    #[test]
+    fn a_manoeuvre_is_taken_whole() {
+        let at = Point3::new(0.2, 0.1, -0.3);
+        let sigma = [Some(1e-4), Some(1e-4), Some(1e-4), Some(0.0), Some(1e-3), Some(1e-3), Some(1e-3)];
+        let turn = |deg_per_frame: f64| {
+            let r = deg_per_frame.to_radians();
+            after(&Pose::identity(), &[0.0, 0.0, 0.0, 0.0, 0.6 * r, 0.0, 0.8 * r], &Point3::origin())
+        };
+        let mut truth = Pose::from_params(&[0.1, -0.2, 0.3, 1.0, 0.3, -0.2, 0.5]);
+        let mut m = Motion::new();
+        m.restart(truth, &sigma, 1.0, CAP_FPS);
+        for k in 0..30 {
+            // 0.5 deg a frame, then 1 deg a frame the other way.
+            let step = if k < 20 { turn(0.5) } else { turn(-1.0) };
+            truth = truth.compose(&step.inverse());
+            let predicted = m.predict().unwrap();
+            let estimate = m.accept(truth, &sigma, &predicted, &at, 1.0, CAP_FPS);
+            let off = estimate.rotation_angle_to(&truth).to_degrees();
+            assert!(off < 1e-6 || (k != 20 && off < 0.2), "frame {k}: the estimate is {off} deg off the answer");
+        }
+    }
+
+    /// Another pose of a near-symmetric part (a carried alternative that became the
+    /// answer): the filter starts again from it, with no velocity and the same spread.
+    #[test]
+    fn a_rebase_is_no_motion() {
+        let at = Point3::new(0.2, 0.1, -0.3);
+        let sigma = [Some(1e-3); 7];
+        let step = after(&Pose::identity(), &[0.002, 0.0, 0.0, 0.0, 0.0, 0.01, 0.0], &Point3::origin());
+        let mut pose = Pose::from_params(&[0.1, -0.2, 0.3, 1.0, 0.3, -0.2, 0.5]);
+        let mut m = Motion::new();
+        m.restart(pose, &sigma, 1.0, CAP_FPS);
+        for _ in 0..5 {
+            pose = pose.compose(&step.inverse());
+            m.accept(pose, &sigma, &m.predict().unwrap(), &at, 1.0, CAP_FPS);
+        }
+        let spread = m.spread(1.0, false, CAP_FPS);
+        // The part's other pose: turned 60 deg about the model's z axis.
+        let g = after(&Pose::identity(), &[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 60f64.to_radians()], &Point3::origin());
+        let other = g.compose(&pose);
+        m.rebase(other, &sigma, 1.0, CAP_FPS);
+        let p = m.predict().unwrap();
+        // (The angle between two rotations is read through an arccosine: 1e-6 rad is its
+        // rounding, against the 0.01 rad a frame the part was turning.)
+        assert!(p.rotation_angle_to(&other) < 1e-6 && (p.translation - other.translation).norm() < 1e-12);
+        assert_eq!(m.spread(1.0, false, CAP_FPS), spread);
     }
 }
