@@ -4,9 +4,10 @@
 //! - **Acquiring**: the first frame, and every frame while no track is held, is a global
 //!   registration ([`crate::pf_icp::register`], the whole PF-ICP with its verdict). A result
 //!   that is not `unreliable` starts the track.
-//! - **Tracking**: every other frame starts from the previous answer moved by the constant
+//! - **Tracking**: every other frame starts from the track's estimate moved by the constant
 //!   velocity of [`motion`], with a spread that follows the measured innovations; a short
-//!   filter and one short polish ([`local`], [`FrameBudget`]), then the cheap checks.
+//!   filter and one short polish ([`local`], [`FrameBudget`]), then the cheap checks; the
+//!   frame's answer is then weighed against the prediction ([`motion::Motion::accept`]).
 //! - **Lost**: a tracked frame that does not [`holds`] (the part hidden, a scan of something
 //!   else, a jump beyond the spread) does not move the track: the answer is reported with
 //!   its verdict, the state is `lost`, and the track keeps its last good pose.
