@@ -6,7 +6,8 @@
 //!
 //! Sub-routines (`Fetch*`: read `fcount` frame bytes into `inbuf`; `Emit`: append `ecount`
 //! bytes of `outbuf` to the reply) return to the state in `ret`; the states are [`EngState`]
-//! (`state.rs`), the state machine is `kernel.rs`, the scan stream into the pipeline is the
+//! (`engine_state_rtl.rs`), the kernel is the wiring (`engine_signals_rtl.rs`) then the states'
+//! arms (`engine_kernel_rtl.rs`), the scan stream into the pipeline is the
 //! [`ScanFeeder`].
 //!
 //! After the filter the engine runs the polish ([`PolishUnit`], docs/polish-datapath.md): it lends
@@ -43,6 +44,8 @@ use rust_hdl::prelude::*;
 
 #[path = "engine_kernel_rtl.rs"]
 mod kernel;
+#[path = "engine_signals_rtl.rs"]
+mod signals;
 
 /// A length as a `Fetch` or `Emit` count (`inbuf` and `outbuf` hold 27 bytes; the count
 /// is 5 bits).

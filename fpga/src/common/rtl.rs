@@ -113,3 +113,57 @@ pub fn waive_unused_wires(v: &str, names: &[&str]) -> String {
     }
     out
 }
+
+/// One part of a kernel written as several `#[hdl_gen]` functions (`N` numbers the parts in
+/// order). `#[hdl_gen]` turns one function into a block's `always` and takes no calls to
+/// helper functions, so a state machine longer than a file is written in parts: the
+/// block's `Logic` runs the parts' `update`s one after the other and joins their Verilog in
+/// the same order ([`joined_kernel`]), which is the Verilog of the same statements written
+/// in one function, byte for byte (the engine's and the sequencer's kernels: the children's
+/// wiring and defaults, then the states' arms).
+pub trait KernelPart<const N: usize> {
+    /// The part's statements (`#[hdl_gen]`'s function).
+    fn update(&mut self);
+    /// The signals the part drives (written by `#[hdl_gen]`).
+    fn connect(&mut self);
+    /// The part's Verilog statements (written by `#[hdl_gen]`).
+    fn hdl(&self) -> Verilog;
+}
+
+/// The Verilog of a kernel's parts, their statements in order in one `always` block.
+pub fn joined_kernel(parts: impl IntoIterator<Item = Verilog>) -> Verilog {
+    let mut statements: ast::VerilogBlock = Vec::new();
+    for part in parts {
+        match part {
+            Verilog::Combinatorial(block) => statements.extend(block),
+            _ => unreachable!("#[hdl_gen] writes a combinatorial block"),
+        }
+    }
+    Verilog::Combinatorial(statements)
+}
+
+/// `Logic` for a block whose kernel is written in two parts, [`KernelPart`] 0 then 1:
+/// `logic_in_two_parts!([const P: usize] CommandEngine<P>)`, `logic_in_two_parts!([] PfSequencer)`.
+macro_rules! logic_in_two_parts {
+    ([$($generics:tt)*] $block:ty) => {
+        impl<$($generics)*> rust_hdl::prelude::Logic for $block {
+            fn update(&mut self) {
+                <Self as $crate::common::rtl::KernelPart<0>>::update(self);
+                <Self as $crate::common::rtl::KernelPart<1>>::update(self);
+            }
+
+            fn connect(&mut self) {
+                <Self as $crate::common::rtl::KernelPart<0>>::connect(self);
+                <Self as $crate::common::rtl::KernelPart<1>>::connect(self);
+            }
+
+            fn hdl(&self) -> rust_hdl::prelude::Verilog {
+                $crate::common::rtl::joined_kernel([
+                    <Self as $crate::common::rtl::KernelPart<0>>::hdl(self),
+                    <Self as $crate::common::rtl::KernelPart<1>>::hdl(self),
+                ])
+            }
+        }
+    };
+}
+pub(crate) use logic_in_two_parts;

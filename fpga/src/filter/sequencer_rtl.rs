@@ -1,6 +1,7 @@
 //! `PfSequencer`: the on-board particle filter (docs/sequencer.md), the RTL of
 //! [`crate::filter::pf::run`]. It owns the particle set (two halves of a 4,096 x 24 RAM), the
-//! per-particle costs and weights and the state machine (`kernel.rs`), and drives the
+//! per-particle costs and weights and the state machine (its kernel in two parts: the wiring in
+//! `sequencer_signals_rtl.rs`, the states' arms in `sequencer_kernel_rtl.rs`), and drives the
 //! nearest-neighbour pipeline through `start` / `pose`. Its parameter vectors and its
 //! arithmetic are one block a file, each the twin of the model of the same stem beside it
 //! (`cordic_rtl.rs` and `cordic.rs`; tests: `fpga/tests/sequencer_blocks.rs`):
@@ -31,6 +32,8 @@ use rust_hdl::prelude::*;
 
 #[path = "sequencer_kernel_rtl.rs"]
 mod kernel;
+#[path = "sequencer_signals_rtl.rs"]
+mod signals;
 
 use super::cordic_rtl::Cordic;
 use super::estimate_rtl::Estimate;
