@@ -32,6 +32,9 @@ fn the_quick_tracking_benchmark_keeps_its_floors() {
         // Measured: re-acquired on the first frame after the hidden stretch.
         assert!(s.reacquire_frames.is_some_and(|n| n <= 10), "{}: re-acquired after {:?}", s.id, s.reacquire_frames);
         assert!(s.tracked_median_seconds.is_finite() && s.tracked_median_seconds > 0.0);
+        // The single-frame floor, a polish from the truth: measured 0.77 deg (dog_skull) and
+        // 0.29 deg (bunny) over 300 frames; it stays within the tolerance of the truth.
+        assert!(s.floor_rotation_deg > 0.0 && s.floor_rotation_deg < 1.0, "{}: floor {}", s.id, s.floor_rotation_deg);
         assert!(s.frames.iter().skip(150).take(30).all(|f| f.hidden));
         // Every 40th tracked frame registered from scratch too, its errors beside the
         // tracked frame's and their medians in the report and its text.

@@ -6,8 +6,8 @@
 //!    scale, rotation vector: no Euler angles, so no gimbal lock at any pose), the prior's
 //!    spread from [`super::motion::Motion::spread`], the particles weighed by the capped
 //!    surface cost on a seeded sample of the scan.
-//! 2. **Polish**: point-to-plane ICP ([`Surface::polish`]) from the filter's estimate on a
-//!    seeded subset of the scan.
+//! 2. **Polish**: point-to-plane ICP ([`Surface::polish_weighted`], the inliers weighed as
+//!    the budget says) from the filter's estimate on a seeded subset of the scan.
 //! 3. **Checks**: the contacts of the scan give the uncertainty
 //!    ([`crate::pf_icp::conclusion::uncertainty_of`], the curvature's sandwich, no probe),
 //!    the fit, the share explained within the acquisition's noise and, with a viewpoint,
@@ -22,7 +22,7 @@ use crate::pf_icp::conclusion::{
 use crate::pf_icp::evidence::Evidence;
 use crate::pf_icp::hypotheses::same_pose;
 use crate::pf_icp::particle_filter::{self, FilterSettings, Objective};
-use crate::pf_icp::surface::{Surface, COST_CAP};
+use crate::pf_icp::surface::{Surface, Weights, COST_CAP};
 use crate::pf_icp::verdict::{judge, Checks, Verdict};
 use crate::tracking::board::{BoardFrame, BoardModel, FrameRequest, BOARD_POLISH_POINTS};
 use crate::tracking::motion::{after, LocalDelta};
@@ -44,6 +44,8 @@ pub struct FrameBudget {
     pub polish_points: usize,
     /// Polish iterations.
     pub polish_iterations: usize,
+    /// How the polish weighs its inliers.
+    pub polish_weights: Weights,
 }
 
 /// The filter's objective: a [`LocalDelta`] after the prediction, about `at`.
@@ -208,7 +210,9 @@ pub fn track_frame(
     // its least step only, and a polish keeps a fixed scale where it starts.)
     let filter_pose = bounds.apply(&filter_pose, &centroid);
     let polished_on = sample(scan, budget.polish_points, seed.wrapping_add(2));
-    let mut pose = surface.polish(&polished_on, &filter_pose, budget.polish_iterations, bounds);
+    let polish =
+        |p: &Pose| surface.polish_weighted(&polished_on, p, budget.polish_iterations, bounds, budget.polish_weights);
+    let mut pose = polish(&filter_pose);
     if !pose.scale.is_finite() || !bounds.contains(pose.scale) {
         pose = filter_pose;
     }
@@ -216,7 +220,6 @@ pub fn track_frame(
     // The carried alternatives: each `G T`, polished as the answer is, against the answer
     // over the same points (the conclusion's paired test).
     let tight = |p: &Pose| evidence.tight_costs(surface, &polished_on, p);
-    let polish = |p: &Pose| surface.polish(&polished_on, p, budget.polish_iterations, bounds);
     let mut costs = tight(&pose);
     let mut maps: Vec<Pose> = symmetries.to_vec();
     let mut kept = Vec::new();
