@@ -56,7 +56,7 @@ pub enum Weights {
     /// [`INLIER_SIGMAS`] robust standard deviations of the inliers' residuals (1.4826 times
     /// their median magnitude). On the tracking benchmark's dev sequences (clutter blobs in
     /// front of the part) it took the tracked frames' median rotation error from 0.66,
-    /// 1.31 and 0.68 deg to 0.61, 0.86 and 0.63 on dog_skull (seeds 1 to 3; docs/tracking.md).
+    /// 1.31 and 0.68 deg to 0.60, 0.86 and 0.63 on dog_skull (seeds 1 to 3; docs/tracking.md).
     Biweight,
 }
 

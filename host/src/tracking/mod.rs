@@ -53,7 +53,7 @@ use std::time::Instant;
 /// against 78, at 2.9 against 4.7 ms a frame), the inliers weighed by Tukey's biweight so
 /// that clutter in front of the part (a tool held against it) pulls less than the part's
 /// surface (on the dev split, seeds 1 to 3: dog_skull's frames right 218, 82, 220 -> 248,
-/// 182, 245 of 260; docs/tracking.md).
+/// 178, 246 of 260; docs/tracking.md).
 pub const FRAME_BUDGET: FrameBudget = FrameBudget {
     particles: 16,
     iterations: 3,
