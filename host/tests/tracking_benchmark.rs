@@ -22,10 +22,11 @@ fn the_quick_tracking_benchmark_keeps_its_floors() {
     for s in &report.sequences {
         let share = |n: usize| n as f64 / s.scored as f64;
         assert_eq!(s.scored, 160, "{}", s.id);
-        // Measured: dog_skull 74% right, 100% right or flagged, no frame confidently wrong
-        // (a frame is `confident` when 95% of the errors its covariance describes lie within
-        // the tracking tolerance); bunny 100%, 100%, none.
-        assert!(share(s.right) >= 0.6, "{}: {} of {} right", s.id, s.right, s.scored);
+        // Measured: dog_skull 97% right (74% before the tracked frames' biweight), 100% right
+        // or flagged, no frame confidently wrong (a frame is `confident` when 95% of the
+        // errors its covariance describes lie within the tracking tolerance); bunny 100%,
+        // 100%, none.
+        assert!(share(s.right) >= 0.9, "{}: {} of {} right", s.id, s.right, s.scored);
         assert!(share(s.right_or_flagged) >= 0.97, "{}: {} right or flagged", s.id, s.right_or_flagged);
         assert!(s.confidently_wrong == 0, "{}: {} confidently wrong", s.id, s.confidently_wrong);
         assert!(s.confidently_wrong_2deg == 0, "{}: {} confidently wrong", s.id, s.confidently_wrong_2deg);
