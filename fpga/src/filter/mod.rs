@@ -12,8 +12,8 @@
 //!   vectors of `param_bank_rtl` are [`pf::run`]'s);
 //! - [`sequencer`]: the cycle-accurate model of the filter's RTL (`SequencerModel`) and its
 //!   clock formulas; its RTL twin `sequencer_rtl` (`PfSequencer`, its kernel's wiring in
-//!   `sequencer_signals_rtl.rs` and its states' arms in `sequencer_kernel_rtl.rs`, the twins of
-//!   the model's `signals.rs` and `states.rs`); [`seq_state`]: their one list of states;
+//!   `sequencer_signals_rtl.rs` and its states' arms in `sequencer_kernel_rtl.rs`, in the
+//!   order of the model's step: `signals.rs`, then `states.rs`); [`seq_state`]: their one list of states;
 //! - [`weights`]: the cycle-accurate reference of the weight stage (minimum cost, exp
 //!   table); its RTL twin `weights_rtl` (`WeightStage`).
 

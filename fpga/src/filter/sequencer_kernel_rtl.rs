@@ -1,7 +1,8 @@
 //! The sequencer's state machine: the states' arms of [`SeqState`] (the second part of the
 //! sequencer's kernel; the first, the children's wiring and the signals the arms read, is
 //! `sequencer_signals_rtl.rs`), then the multiplier and divider taking what the arms chose,
-//! and the reset. The model's twin of this part is `sequencer/model/states.rs`.
+//! and the reset. The model's step has them in the same order: `sequencer/model/states.rs`,
+//! then the end of `sequencer/model.rs`.
 
 use super::*;
 use crate::common::rtl::{logic_in_two_parts, KernelPart};

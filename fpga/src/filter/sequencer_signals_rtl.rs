@@ -2,7 +2,8 @@
 //! arms read (the PRNG's next value, the propagation's and the estimate's operands, the
 //! sign extensions), the pipeline's results taken in any state, the memories' defaults and
 //! the configuration writes (the first part of the sequencer's kernel; the arms follow in
-//! `sequencer_kernel_rtl.rs`). The model's twin of this part is `sequencer/model/signals.rs`.
+//! `sequencer_kernel_rtl.rs`). The model's step has it first too: `sequencer/model/signals.rs`
+//! and the configuration writes in `sequencer/model.rs`.
 
 use super::*;
 use crate::common::rtl::KernelPart;
