@@ -32,3 +32,12 @@ def test_the_example_reads_files(model1):
     model, scan, _ = model1
     out = run(model, scan)
     assert out.startswith("verdict ") and "transformation" in out, out
+
+
+def test_the_package_imports_from_every_folder_of_the_checkout():
+    # python -c "import pficp" puts the working folder first on sys.path: a source folder
+    # named pficp there (one without the built extension) would shadow the installed package.
+    for folder in (REPO, REPO / "python", REPO / "examples"):
+        out = subprocess.run([sys.executable, "-c", "import pficp; print(pficp.register.__doc__ is not None)"],
+                             cwd=folder, capture_output=True, text=True)
+        assert out.returncode == 0 and out.stdout.strip() == "True", (folder, out.stderr)
