@@ -139,8 +139,8 @@ pub(crate) struct PfArgs {
     #[arg(long, value_name = "LO,HI", value_delimiter = ',', num_args = 1, allow_hyphen_values = true)]
     pub(crate) scale_range: Vec<f64>,
     /// Where the sensor was, in the scan's coordinates (a depth camera's scans: the origin,
-    /// 0,0,0): model surface that would face it inside the scan's view but has no scan point
-    /// near it counts against a pose.
+    /// 0,0,0): scan points that the model's surface would hide from it count against a pose,
+    /// and the search starts from the side of the model it faces.
     #[arg(long, value_name = "X,Y,Z", value_delimiter = ',', num_args = 1, allow_hyphen_values = true)]
     pub(crate) viewpoint: Vec<f64>,
     /// No rescue search: when the evidence rules out the first search's answer, PF-ICP
