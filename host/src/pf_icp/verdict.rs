@@ -60,6 +60,12 @@ pub const MAX_SIGMA_DIAG: f64 = 0.01;
 /// Widest one-sigma relative scale.
 pub const MAX_SIGMA_SCALE: f64 = 0.005;
 
+/// Added to the reason when only the scale's one sigma is too wide: most right results at
+/// an unknown scale are `unreliable` for that alone (docs/benchmarks.md), and a scale the
+/// user knows removes it.
+pub const SCALE_HINT: &str =
+    " (the view does not pin the scale: give it with --scale S if it is known, 1 for a metric sensor and a model in its units)";
+
 /// What the conclusion measured for the verdict.
 #[derive(Clone, Debug, Serialize)]
 pub struct Checks {
@@ -114,8 +120,10 @@ pub fn judge(c: &Checks) -> (Verdict, Vec<String>) {
     }
     let [r, t, s] = c.widest_sigma;
     if r > MAX_SIGMA_DEG || t > MAX_SIGMA_DIAG || s > MAX_SIGMA_SCALE {
+        // Only the scale loose: the view does not pin it, and a user who knows it can say so.
+        let hint = if r <= MAX_SIGMA_DEG && t <= MAX_SIGMA_DIAG { SCALE_HINT } else { "" };
         unreliable.push(format!(
-            "the pose is loosely determined: one sigma {r:.2} deg, {:.2}% of the diagonal, {:.2}% in scale",
+            "the pose is loosely determined: one sigma {r:.2} deg, {:.2}% of the diagonal, {:.2}% in scale{hint}",
             100.0 * t,
             100.0 * s
         ));
@@ -175,6 +183,11 @@ mod tests {
         // The poses the evidence rules do not rule out: those a verdict's own evidence passes.
         assert!(not_ruled_out(MIN_EXPLAINED, Some(MAX_HIDDEN)) && not_ruled_out(0.95, None));
         assert!(!not_ruled_out(MIN_EXPLAINED - 0.01, None) && !not_ruled_out(0.95, Some(MAX_HIDDEN + 0.01)));
+        // Only the scale loose: the reason says how to give it; with the rotation loose too, not.
+        let scale_only = judge(&Checks { widest_sigma: [0.1, 0.001, 0.01], ..good() }).1;
+        assert!(scale_only[0].ends_with(SCALE_HINT), "{scale_only:?}");
+        let both = judge(&Checks { widest_sigma: [3.0, 0.001, 0.01], ..good() }).1;
+        assert!(!both[0].contains("--scale S"), "{both:?}");
         // Without a viewpoint there is no visibility check.
         assert_eq!(judge(&Checks { hidden: None, ..good() }).0, Verdict::Confident);
     }
