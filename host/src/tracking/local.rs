@@ -16,14 +16,13 @@
 
 use crate::board::{BoardClient, BoardError};
 use crate::geometry::{Pose, ScaleBounds};
-use crate::pf_icp::conclusion::{
-    fit_of, paired_excess, uncertainty_of, widest_sigma, Fit, Uncertainty, ALTERNATIVE_SIGMAS,
-};
+use crate::pf_icp::conclusion::{fit_of, paired_excess, uncertainty_of, widest_sigma, Fit, Uncertainty};
 use crate::pf_icp::evidence::Evidence;
 use crate::pf_icp::hypotheses::same_pose;
 use crate::pf_icp::particle_filter::{self, FilterSettings, Objective};
 use crate::pf_icp::surface::{Surface, Weights, COST_CAP};
 use crate::pf_icp::verdict::{judge, Checks, Verdict};
+use crate::tracking::alternatives::{Carried, Decision, Tally};
 use crate::tracking::board::{BoardFrame, BoardModel, FrameRequest, BOARD_POLISH_POINTS};
 use crate::tracking::motion::{after, LocalDelta};
 use nalgebra::{Point3, SMatrix};
@@ -117,9 +116,9 @@ pub struct Local {
     pub verdict: Verdict,
     /// Its reasons.
     pub reasons: Vec<String>,
-    /// The carried alternatives still as good as the answer, as model-frame maps `G`
-    /// (the alternative is `G T`).
-    pub alternatives: Vec<Pose>,
+    /// The carried alternatives not ruled out, as model-frame maps `G` (the alternative
+    /// is `G T`) with their evidence.
+    pub alternatives: Vec<Carried>,
     /// A carried alternative became the answer: the answer is another pose of a
     /// near-symmetric part, not the predicted one moved.
     pub swapped: bool,
@@ -151,7 +150,7 @@ pub fn track_frame(
     bounds: &ScaleBounds,
     user_bounds: &ScaleBounds,
     evidence: &Evidence,
-    symmetries: &[Pose],
+    symmetries: &[Carried],
     budget: &FrameBudget,
     frame_seconds: f64,
     seed: u64,
@@ -218,36 +217,45 @@ pub fn track_frame(
     }
 
     // The carried alternatives: each `G T`, polished as the answer is, against the answer
-    // over the same points (the conclusion's paired test).
+    // over the same points (the conclusion's paired test), the evidence summed over the
+    // frames ([`super::alternatives`]).
     let tight = |p: &Pose| evidence.tight_costs(surface, &polished_on, p);
     let mut costs = tight(&pose);
-    let mut maps: Vec<Pose> = symmetries.to_vec();
-    let mut kept = Vec::new();
+    let mut maps: Vec<Carried> = symmetries.to_vec();
+    let mut kept: Vec<Carried> = Vec::new();
     let mut swaps = 0;
-    // An alternative the scan now clearly prefers becomes the answer (the old answer, clearly
+    // An alternative the frames clearly prefer becomes the answer (the old answer, clearly
     // behind, is dropped); one clearly behind the answer is dropped.
     while let Some(g) = maps.pop() {
-        let other = polish(&g.compose(&pose));
+        let other = polish(&g.map.compose(&pose));
         // (An alternative that polishes into the answer, or into one already kept, is no
         // other pose.)
         if same_pose(&other, &pose, &centroid, diag)
-            || kept.iter().any(|h: &Pose| same_pose(&other, &h.compose(&pose), &centroid, diag))
+            || kept.iter().any(|h| same_pose(&other, &h.map.compose(&pose), &centroid, diag))
         {
             continue;
         }
         let c = tight(&other);
-        if paired_excess(&c, &costs) > ALTERNATIVE_SIGMAS && swaps < symmetries.len() {
-            swaps += 1;
-            // The others relative to the new answer: an alternative `H T` is `(H B) T'`,
-            // `B` the map from the new answer `T'` back to the old one.
-            let back = pose.compose(&other.inverse());
-            maps = maps.iter().chain(&kept).map(|h: &Pose| h.compose(&back)).collect();
-            kept.clear();
-            pose = other;
-            costs = c;
-        } else if paired_excess(&costs, &c) < ALTERNATIVE_SIGMAS {
+        let (tally, decision) = g.tally.after(paired_excess(&costs, &c));
+        match decision {
+            Decision::Swap if swaps < symmetries.len() => {
+                swaps += 1;
+                // The others relative to the new answer: an alternative `H T` is `(H B) T'`,
+                // `B` the map from the new answer `T'` back to the old one; their evidence
+                // was against the old answer, so it starts again.
+                let back = pose.compose(&other.inverse());
+                maps = maps
+                    .iter()
+                    .chain(&kept)
+                    .map(|h| Carried { map: h.map.compose(&back), tally: Tally::default() })
+                    .collect();
+                kept.clear();
+                pose = other;
+                costs = c;
+            }
+            Decision::Drop => {}
             // (Kept as the map to the polished alternative.)
-            kept.push(other.compose(&pose.inverse()));
+            _ => kept.push(Carried { map: other.compose(&pose.inverse()), tally }),
         }
     }
     let alternatives = kept;
