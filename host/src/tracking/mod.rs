@@ -19,8 +19,9 @@
 //!   [`SCALE_SETTLING`] of the acquisition's (and the user's `--scale-range`), and from
 //!   then on it is fixed at their median, for re-acquisitions as well.
 //! - **Ambiguity**: a near-symmetric part's alternatives at acquisition are carried as
-//!   model-frame maps, polished and weighed on every frame; one the scan comes to prefer
-//!   becomes the answer, one that falls behind is dropped. A track acquired `ambiguous`
+//!   model-frame maps, polished and weighed on every frame; one the frames come to prefer
+//!   becomes the answer, one that falls behind is dropped, each by the evidence summed over
+//!   the frames ([`alternatives`]). A track acquired `ambiguous`
 //!   stays at best `ambiguous` on every frame until a global registration (after a loss)
 //!   is `confident`: on the benchmark's near-symmetric flange the per-frame test dropped
 //!   the truth and the track slid along the part's near-symmetry while its frames said
@@ -370,8 +371,8 @@ impl<'a> Tracker<'a> {
         };
         if held {
             self.evidence = Some(Evidence::new(&self.surface, scan, c.pose.scale, settings.viewpoint));
-            // (The track carries the poses that fit as well; those only not ruled out fit
-            // worse on this view, and a tracked frame's paired test would drop them.)
+            // (The track carries every alternative, those that fit as well and those only
+            // not ruled out: the frames' evidence decides, `alternatives`.)
             let maps =
                 c.alternatives.iter().map(|a| alternatives::Carried::new(a.pose.compose(&c.pose.inverse()))).collect();
             if self.scale.working.fixed_value().is_none() {
